@@ -1,0 +1,3 @@
+"""visnav: vision-based navigation, guidance and control for UAVs without GPS."""
+
+__version__ = "0.1.0"

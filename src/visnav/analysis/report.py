@@ -1,0 +1,123 @@
+"""Self-contained HTML report of a run: plots inline as base64 PNG, metrics beside the seed's figures."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+from pathlib import Path
+
+import numpy as np
+
+from visnav.analysis.metrics import PALACE_PUBLISHED, interp_rows
+
+
+def _fig_to_img(fig) -> str:
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    return '<img src="data:image/png;base64,' + base64.b64encode(buf.getvalue()).decode() + '"/>'
+
+
+def _mode_spans(ax, log):
+    modes = log.get("mode")
+    if not modes:
+        return
+    colors = {"descend_gps": "#dde8ff", "verify": "#ffe9c6", "hold": "#e2ffd8", "descend_mpe": "#d8ffe9",
+              "final": "#f3d8ff", "abort": "#ffd0d0"}
+    t = list(modes["t"]) + [np.inf]
+    for i, m in enumerate(modes["mode"]):
+        if m in colors:
+            ax.axvspan(t[i], min(t[i + 1], ax.get_xlim()[1]), color=colors[m], alpha=0.6, lw=0)
+
+
+def plots(log, point=None) -> list[tuple[str, str]]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = []
+    tr, es, rf = log.get("truth"), log.get("estimate"), log.get("reference")
+    if not tr:
+        return out
+    t = tr["t"]
+    # side view along the approach and top view
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
+    ax[0].plot(tr["position"][:, 0], -tr["position"][:, 2], label="truth")
+    ax[0].plot(es["position"][:, 0], -es["position"][:, 2], "--", label="estimate")
+    ax[0].plot(rf["position"][:, 0], -rf["position"][:, 2], ":", label="reference (white rabbit)")
+    ax[0].set_xlabel("north [m]"), ax[0].set_ylabel("height AGL [m]"), ax[0].set_title("Side view")
+    ax[0].legend()
+    ax[1].plot(tr["position"][:, 1], tr["position"][:, 0], label="truth")
+    ax[1].plot(es["position"][:, 1], es["position"][:, 0], "--", label="estimate")
+    if point is not None:
+        ax[1].plot(point[1], point[0], "r+", ms=14, label="designated point")
+    ax[1].set_xlabel("east [m]"), ax[1].set_ylabel("north [m]"), ax[1].set_title("Top view")
+    ax[1].axis("equal"), ax[1].legend()
+    out.append(("Trajectory", _fig_to_img(fig)))
+
+    mpe = log.get("mpe")
+    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True)
+    err = es["position"] - tr["position"]
+    ax[0].plot(t, np.linalg.norm(err[:, :2], axis=1), label="navigation estimate - truth (horizontal)")
+    if mpe:
+        me = mpe["position"] - interp_rows(mpe["t"], t, tr["position"])
+        ax[0].plot(mpe["t"], np.linalg.norm(me[:, :2], axis=1), ".", ms=2, label="MPE fix - truth")
+    ax[0].set_ylabel("error [m]"), ax[0].legend(), ax[0].set_title("Position error")
+    ax[1].plot(t, -tr["position"][:, 2], label="height AGL (truth)")
+    ax[1].set_ylabel("m"), ax[1].set_xlabel("t [s]"), ax[1].legend()
+    for a in ax:
+        _mode_spans(a, log)
+    out.append(("Errors and modes", _fig_to_img(fig)))
+
+    trk, st = log.get("tracker"), log.get("status")
+    if trk:
+        fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
+        ax[0].plot(trk["t"], trk["coherence"], ".", ms=2)
+        ax[0].set_ylabel("coherence (eq. 2.3)"), ax[0].set_ylim(-0.1, 1.05)
+        ax[1].plot(trk["t"], trk["x"], label="x"), ax[1].plot(trk["t"], trk["y"], label="y")
+        ax[1].set_ylabel("tracked point [px]"), ax[1].set_xlabel("t [s]"), ax[1].legend()
+        out.append(("Tracker", _fig_to_img(fig)))
+
+    cmd = log.get("command")
+    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
+    ax[0].plot(t, np.rad2deg(tr["euler"][:, 0]), label="roll")
+    ax[0].plot(t, np.rad2deg(tr["euler"][:, 1]), label="pitch")
+    ax[0].set_ylabel("deg"), ax[0].legend(), ax[0].set_title("Attitude (truth)")
+    for k in ("ail", "ele", "rud", "thr"):
+        ax[1].plot(cmd["t"], cmd[k], label=k)
+    ax[1].axhline(500, color="k", lw=0.5), ax[1].axhline(-500, color="k", lw=0.5)
+    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend()
+    for a in ax:
+        _mode_spans(a, log)
+    out.append(("Attitude and YACS commands", _fig_to_img(fig)))
+    return out
+
+
+def write_report(result, path: Path) -> None:
+    sc, log, m = result.scenario, result.log, result.metrics
+    rows = []
+    for k, v in m.items():
+        pub = PALACE_PUBLISHED.get(k, "")
+        vs = f"{v:.3f}" if isinstance(v, float) else html.escape(str(v))
+        rows.append(f"<tr><td>{html.escape(k)}</td><td>{vs}</td><td>{html.escape(pub)}</td></tr>")
+    point = np.array(sc.mission.landing_point_m + [0.0])
+    figs = "".join(f"<h2>{html.escape(title)}</h2>{img}" for title, img in plots(log, point))
+    modes = log.get("mode")
+    timeline = ""
+    if modes:
+        timeline = "<h2>Mission timeline</h2><table><tr><th>t [s]</th><th>mode</th><th>why</th></tr>" + "".join(
+            f"<tr><td>{t:.1f}</td><td>{html.escape(str(a))}</td><td>{html.escape(str(r))}</td></tr>"
+            for t, a, r in zip(modes["t"], modes["mode"], modes["reason"])
+        ) + "</table>"
+    err = f"<p style='color:#b00'><b>Run error:</b> {html.escape(result.error)}</p>" if result.error else ""
+    doc = f"""<!doctype html><html><head><meta charset="utf-8"><title>visnav run: {html.escape(sc.run.name)}</title>
+<style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td,th{{padding:2px 10px;border-bottom:1px solid #ddd}}
+img{{max-width:100%}}</style></head><body>
+<h1>{html.escape(sc.run.name)} (seed {sc.run.seed})</h1><p>{html.escape(sc.run.description)}</p>{err}
+<h2>Metrics</h2><table><tr><th>metric</th><th>this run</th><th>seed 000 (Hubbard 2007)</th></tr>{''.join(rows)}</table>
+{timeline}{figs}</body></html>"""
+    Path(path).write_text(doc)

@@ -1,0 +1,116 @@
+"""Attitude: ZYX Euler angles, direction cosine matrices and angular rates.
+
+Convention (seed 002 §3.4): Euler angles are (roll φ, pitch θ, yaw ψ) in radians and
+``C_b^n = Rz(ψ) Ry(θ) Rx(φ)`` maps body FRD vectors to NED (seed 002 eq. 3.1-3.2);
+``C_n^b = (C_b^n)^T`` (eq. 3.3). Every function accepts a leading batch axis (``...``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+__all__ = [
+    "euler_to_dcm",
+    "dcm_to_euler",
+    "body_rates_to_euler_rates",
+    "euler_rates_to_body_rates",
+    "skew",
+    "wrap_angle",
+]
+
+_GIMBAL_EPS = 1e-12
+
+
+def _vec3(x, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float)
+    if a.ndim < 1 or a.shape[-1] != 3:
+        raise ValueError(f"{name} must have shape (..., 3), got shape {a.shape}")
+    return a
+
+
+def wrap_angle(a):
+    """Wrap angle(s) in radians to the interval (-pi, pi]."""
+    a = np.asarray(a, dtype=float)
+    w = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+    w = np.where(w <= -np.pi, w + 2.0 * np.pi, w)
+    return w if w.ndim else float(w)
+
+
+def skew(v) -> np.ndarray:
+    """Cross-product matrix: ``skew(v) @ u == np.cross(v, u)``; shape (..., 3, 3)."""
+    v = _vec3(v, "v")
+    z = np.zeros(v.shape[:-1])
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack(
+        [
+            np.stack([z, -w, y], axis=-1),
+            np.stack([w, z, -x], axis=-1),
+            np.stack([-y, x, z], axis=-1),
+        ],
+        axis=-2,
+    )
+
+
+def euler_to_dcm(euler) -> np.ndarray:
+    """``C_b^n`` (body -> NED) from (roll, pitch, yaw) [rad], seed 002 eq. 3.2; shape (..., 3, 3)."""
+    e = _vec3(euler, "euler")
+    if not np.all(np.isfinite(e)):
+        raise ValueError(f"euler must be finite, got {e}")
+    flat = e.reshape(-1, 3)
+    # Intrinsic Z-Y-X (yaw, then pitch, then roll) == Rz(yaw) @ Ry(pitch) @ Rx(roll).
+    C = Rotation.from_euler("ZYX", flat[:, ::-1]).as_matrix()
+    return C.reshape(e.shape[:-1] + (3, 3))
+
+
+def dcm_to_euler(C) -> np.ndarray:
+    """(roll, pitch, yaw) [rad] from ``C_b^n``, inverse of seed 002 eq. 3.2; yaw in (-pi, pi].
+
+    Pitch is in [-pi/2, pi/2]; at gimbal lock (pitch = +-pi/2) roll is set to 0.
+    """
+    C = np.asarray(C, dtype=float)
+    if C.ndim < 2 or C.shape[-2:] != (3, 3):
+        raise ValueError(f"C must have shape (..., 3, 3), got shape {C.shape}")
+    # Read the angles off eq. 3.2: C31 = -sinθ, C32 = sinφ cosθ, C33 = cosφ cosθ,
+    # C21 = cosθ sinψ, C11 = cosθ cosψ.
+    pitch = -np.arcsin(np.clip(C[..., 2, 0], -1.0, 1.0))
+    locked = np.hypot(C[..., 2, 1], C[..., 2, 2]) < 1e-9
+    roll = np.where(locked, 0.0, np.arctan2(C[..., 2, 1], C[..., 2, 2]))
+    # At gimbal lock only yaw -+ roll is defined: take it from the second row / column.
+    yaw_locked = np.arctan2(-C[..., 0, 1], C[..., 1, 1])
+    yaw = np.where(locked, yaw_locked, np.arctan2(C[..., 1, 0], C[..., 0, 0]))
+    return np.stack([roll, pitch, wrap_angle(yaw)], axis=-1)
+
+
+def _check_pitch(cos_theta: np.ndarray, euler: np.ndarray) -> None:
+    if np.any(np.abs(cos_theta) < _GIMBAL_EPS):
+        raise ValueError(f"euler pitch is +-pi/2 (gimbal lock), Euler rates undefined: euler={euler}")
+
+
+def body_rates_to_euler_rates(euler, pqr) -> np.ndarray:
+    """Euler angle rates (φ̇, θ̇, ψ̇) from body rates (p, q, r), seed 002 eq. 3.7."""
+    e = _vec3(euler, "euler")
+    w = _vec3(pqr, "pqr")
+    phi, theta = e[..., 0], e[..., 1]
+    sphi, cphi, cth = np.sin(phi), np.cos(phi), np.cos(theta)
+    _check_pitch(cth, e)
+    tth = np.tan(theta)
+    p, q, r = w[..., 0], w[..., 1], w[..., 2]
+    phi_dot = p + q * sphi * tth + r * cphi * tth
+    theta_dot = q * cphi - r * sphi
+    psi_dot = (q * sphi + r * cphi) / cth
+    return np.stack(np.broadcast_arrays(phi_dot, theta_dot, psi_dot), axis=-1)
+
+
+def euler_rates_to_body_rates(euler, euler_dot) -> np.ndarray:
+    """Body rates (p, q, r) from Euler angle rates, the inverse of seed 002 eq. 3.7."""
+    e = _vec3(euler, "euler")
+    d = _vec3(euler_dot, "euler_dot")
+    phi, theta = e[..., 0], e[..., 1]
+    sphi, cphi = np.sin(phi), np.cos(phi)
+    sth, cth = np.sin(theta), np.cos(theta)
+    phi_dot, theta_dot, psi_dot = d[..., 0], d[..., 1], d[..., 2]
+    p = phi_dot - psi_dot * sth
+    q = theta_dot * cphi + psi_dot * sphi * cth
+    r = -theta_dot * sphi + psi_dot * cphi * cth
+    return np.stack(np.broadcast_arrays(p, q, r), axis=-1)

@@ -1,0 +1,135 @@
+"""Typed messages that flow between blocks: measurements, truth, estimates, commands.
+
+Every field is SI (metres, seconds, radians) unless its name carries a unit suffix
+(YACS commands are in YACS units, +-500). Frames: world = local NED tangent plane,
+body = FRD, camera = OpenCV (x right, y down, z along the optical axis).
+
+Every measurement carries ``t``: the instant it *describes* (not the instant it was
+delivered). The simulator delivers it at ``t + latency``; replay front ends deliver
+it when the log says it arrived.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def _arr(x) -> np.ndarray:
+    a = np.asarray(x, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True)
+class VehicleState:
+    """Ground truth of a rigid vehicle (never given to a navigator)."""
+
+    t: float
+    position: np.ndarray  # NED of the vehicle reference point [m]
+    velocity: np.ndarray  # NED [m/s]
+    euler: np.ndarray  # roll, pitch, yaw [rad] (ZYX, body -> NED)
+    body_rates: np.ndarray  # p, q, r [rad/s]
+    specific_force: np.ndarray  # body FRD, what an ideal accelerometer reads [m/s^2]
+    on_ground: bool = False
+
+    @property
+    def height_agl(self) -> float:
+        """Height above the flat ground plane z = 0 [m]."""
+        return float(-self.position[2])
+
+
+@dataclass(frozen=True)
+class ImuSample:
+    t: float
+    accel: np.ndarray  # specific force, body FRD [m/s^2]
+    gyro: np.ndarray  # body rates [rad/s]
+
+
+@dataclass(frozen=True)
+class AttitudeSample:
+    """Attitude solution of the vehicle's AHRS / flight computer (the thesis' 'IMU attitude')."""
+
+    t: float
+    euler: np.ndarray  # roll, pitch, yaw [rad]
+
+
+@dataclass(frozen=True)
+class GpsSample:
+    t: float
+    position: np.ndarray  # NED [m]
+    velocity: np.ndarray  # NED [m/s]
+    sigma: float = 0.02  # 1-sigma horizontal position noise [m]
+
+
+@dataclass(frozen=True)
+class RangeSample:
+    """A range along a known direction of the sensor (laser along the camera axis, sonar down).
+
+    ``range`` is NaN when there was no return. ``beam_offset`` is the angle of the beam
+    that produced the return relative to the sensor's nominal axis (the PALACE laser
+    searches +-3 deg for a return), positive towards the camera's image-down direction.
+    """
+
+    t: float
+    range: float
+    sensor: str = "laser"
+    beam_offset: float = 0.0
+
+
+@dataclass(frozen=True)
+class Frame:
+    t: float
+    image: np.ndarray  # uint8 HxW
+    index: int = 0
+
+
+@dataclass(frozen=True)
+class NavEstimate:
+    t: float
+    position: np.ndarray
+    velocity: np.ndarray
+    attitude: np.ndarray  # roll, pitch, yaw [rad]
+    covariance: np.ndarray = field(default_factory=lambda: np.full((6, 6), np.nan))
+    valid: bool = True
+    source: str = "gps"  # gps | mpe | inertial
+
+
+@dataclass
+class Health:
+    """What a navigator reports about itself besides its estimate."""
+
+    source: str = "gps"
+    tracking: bool = False
+    coherence: float = float("nan")
+    tracked_px: tuple[float, float] = (float("nan"), float("nan"))
+    mpe_rate_hz: float = 0.0
+    mpe_jump: bool = False
+    laser_ok: bool = True
+    rejected_ranges: int = 0
+    rejected_samples: int = 0
+    reinitializations: int = 0
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class YacsCommand:
+    """Inputs of the YACS-augmented R-MAX (seed 002 eq. 3.4), increments from trim, +-500."""
+
+    t: float
+    ail: float = 0.0
+    ele: float = 0.0
+    rud: float = 0.0
+    thr: float = 0.0
+
+
+@dataclass(frozen=True)
+class PositionReference:
+    """The 'white rabbit' (seed 000 §2.1.2): where the vehicle should be now."""
+
+    t: float
+    position: np.ndarray
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    yaw: float = 0.0
+    source: str = "gps"  # which position source the controller must fly on

@@ -1,0 +1,177 @@
+"""PALACE mission manager (seed 000 Fig. 1.1, §3.1.2, §3.2, §4.1).
+
+GPS at the start height on the 60 deg glide slope to the designated point -> start tracking it
+(Förstner near the point) -> descend on GPS with MPE running open loop -> at the switch height
+hold until the tracker has been coherent for 2 s and MPE updates at 10 Hz -> switch to MPE
+(ground reference re-based on the last GPS fix, as the thesis' mission manager did) -> descend on
+MPE, re-initialising on a point near the image centre when the tracked point nears the image edge
+(each re-init carries its drift, §4.1) -> below 1 m finish on inertial + sonar to touchdown.
+
+Safety (§3.2): back to GPS when MPE jumps or stops updating at 10 Hz (then re-verify before
+switching again); soft abort (climb 5 m on GPS) when the laser return is lost above 1 m.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.measurements import Health, NavEstimate, PositionReference
+
+
+class PalaceMission:
+    def __init__(self, cfg, navigator, yaw: float = 0.0, image_size=(640, 480), recorder=None):
+        self.cfg = cfg
+        self.nav = navigator
+        self.yaw = float(yaw)
+        self.W, self.H = image_size
+        self.point = np.array([cfg.landing_point_m[0], cfg.landing_point_m[1], 0.0])
+        g = np.deg2rad(cfg.glide_slope_deg)
+        self.back = -np.array([np.cos(yaw), np.sin(yaw), 0.0]) / np.tan(g) if g < np.pi / 2 - 1e-9 else np.zeros(3)
+        self.sin_g = np.sin(g)
+        self.h_ref = cfg.start_height_m
+        self.mode = "settle"
+        self.t_mode = 0.0
+        self.good_since: float | None = None
+        self.bad_since: float | None = None
+        self.laser_lost_since: float | None = None
+        self.abort_hold = None
+        self.reinitializations = 0
+        self.fallbacks = 0
+        self.switch_time: float | None = None
+        self.vision_time = 0.0
+        self.done = False
+        self.aborted = False
+        self.record = recorder or (lambda *a, **k: None)
+        self._last_t: float | None = None
+        self._vz_ref = 0.0
+
+    def start_position(self) -> np.ndarray:
+        return self.slope_point(self.cfg.start_height_m)
+
+    def slope_point(self, h: float) -> np.ndarray:
+        """Point of the glide slope at height ``h`` above the designated point."""
+        return self.point + self.back * max(h, 0.0) + np.array([0.0, 0.0, -h])
+
+    def _set(self, mode: str, t: float, why: str = "") -> None:
+        self.record("mode", t, mode=mode, previous=self.mode, reason=why)
+        self.mode = mode
+        self.t_mode = t
+
+    # ------------------------------------------------------------------------------------
+    def step(self, t: float, nav: NavEstimate, health: Health) -> tuple[PositionReference, str]:
+        dt = 0.0 if self._last_t is None else t - self._last_t
+        self._last_t = t
+        c = self.cfg
+        h_est = -float(nav.position[2])
+        descent_rate = 0.0
+        if self.nav.source == "mpe":
+            self.vision_time += dt
+
+        if self.mode == "settle":
+            if t - self.t_mode >= c.settle_s:
+                self.nav.request_tracking(self.point, init_from="gps")
+                self._set("acquire", t, "start tracking the designated point")
+        elif self.mode == "acquire":
+            if health.tracking and not self.nav.tracking_pending:
+                self._set("descend_gps", t, "tracking")
+        elif self.mode == "descend_gps":
+            descent_rate = c.descent_speed_mps * self.sin_g
+            if self.h_ref <= c.switch_height_m:
+                self.h_ref = c.switch_height_m
+                descent_rate = 0.0
+                self.good_since = None
+                self._set("verify", t, "at switch height")
+        elif self.mode == "verify":
+            good = (health.tracking and health.coherence >= c.coherence_threshold and health.mpe_rate_hz >= 8.0
+                    and health.laser_ok and not self.nav.tracking_pending)
+            if not good:
+                self.good_since = None
+            elif self.good_since is None:
+                self.good_since = t
+            elif t - self.good_since >= c.coherence_time_s:
+                self.nav.request_tracking_rebase("gps")
+                self.nav.set_source("mpe")
+                self.switch_time = t
+                self._set("hold" if c.hold_s > 0 else "descend_mpe", t, "2 s of good coherence: switch to MPE")
+        elif self.mode == "hold":
+            if self._vision_checks(t, health, h_est) and t - self.t_mode >= c.hold_s:
+                self._set("descend_mpe", t, "hold complete")
+        elif self.mode == "descend_mpe":
+            descent_rate = c.descent_speed_mps * self.sin_g
+            if self._vision_checks(t, health, h_est) and h_est <= c.inertial_height_m:
+                self.nav.set_source("inertial")
+                self.record("mpe_end", t)
+                self.nav.stop_tracking()
+                self._set("final", t, "below 1 m: inertial + sonar")
+        elif self.mode == "final":
+            descent_rate = c.final_descent_mps
+        elif self.mode == "abort":
+            if self.abort_hold is not None and t - self.t_mode > 8.0:
+                self.done = True
+        elif self.mode == "landed":
+            self.done = True
+
+        if self.mode == "abort":
+            pos = self.abort_hold
+            vel = np.zeros(3)
+        else:
+            floor = -0.3 if self.mode == "final" else c.inertial_height_m * 0.5
+            self.h_ref = max(self.h_ref - descent_rate * dt, floor)
+            pos = self.slope_point(self.h_ref)
+            moving = descent_rate > 0 and self.h_ref > floor
+            vel = (self.back * -1.0 + np.array([0.0, 0.0, 1.0])) * descent_rate if moving else np.zeros(3)
+            if self.mode == "final":
+                vel = np.array([0.0, 0.0, descent_rate])
+        ref = PositionReference(t=t, position=pos, velocity=vel, yaw=self.yaw, source=self.nav.source)
+        return ref, self.mode
+
+    def _vision_checks(self, t: float, health: Health, h_est: float) -> bool:
+        """Safety rules while flying on MPE; returns False when the mode changed."""
+        c = self.cfg
+        # laser lost above 1 m -> soft abort (after the +-3 deg search failed for laser_loss_s)
+        if not health.laser_ok and h_est > 1.0:
+            if self.laser_lost_since is None:
+                self.laser_lost_since = t
+            elif t - self.laser_lost_since >= c.laser_loss_s:
+                self._abort(t, "laser return lost above 1 m")
+                return False
+        else:
+            self.laser_lost_since = None
+        if self.nav.tracking_pending:
+            return True
+        # MPE jumps or stops updating at 10 Hz -> back to GPS, re-verify
+        bad = health.mpe_jump or (t - (self.switch_time or t) > 1.0 and health.mpe_rate_hz < 8.0)
+        if bad:
+            if self.bad_since is None:
+                self.bad_since = t
+            elif t - self.bad_since >= 0.3 or health.mpe_jump:
+                self.fallbacks += 1
+                self.nav.set_source("gps")
+                self.nav.request_tracking(None, init_from="gps")
+                self.reinitializations += 1
+                self.bad_since = None
+                self.h_ref = h_est
+                self._set("verify", t, "MPE jump or rate below 10 Hz: back to GPS")
+                return False
+        else:
+            self.bad_since = None
+        # tracked point near the image edge -> re-initialise near the image centre (from MPE)
+        x, y = health.tracked_px
+        m = c.edge_margin_px
+        if np.isfinite(x) and not (m <= x <= self.W - 1 - m and m <= y <= self.H - 1 - m):
+            self.nav.request_tracking(None, init_from="estimate")
+            self.reinitializations += 1
+            self.record("reinit", t, x=x, y=y)
+        return True
+
+    def _abort(self, t: float, why: str) -> None:
+        self.nav.set_source("gps")
+        self.nav.stop_tracking()
+        self.aborted = True
+        self.abort_hold = self.slope_point(self.h_ref) + np.array([0.0, 0.0, -self.cfg.abort_climb_m])
+        self._set("abort", t, why)
+
+    def on_touchdown(self, t: float) -> None:
+        if self.mode != "landed":
+            self._set("landed", t, "weight on wheels")
+            self.done = True

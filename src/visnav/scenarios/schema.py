@@ -1,0 +1,280 @@
+"""Scenario files: TOML validated by pydantic models.
+
+A scenario has the sections ``[run] [world] [vehicle] [sensors.*] [navigation] [mission]``.
+Unknown keys are errors (``extra="forbid"``); every number has its allowed range, so a bad
+value is reported with its dotted key, the value and the range, in one line.
+"""
+
+from __future__ import annotations
+
+import copy
+import sys
+from pathlib import Path
+from typing import Any, Literal, Optional
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+BUILTIN_DIR = Path(__file__).resolve().parent
+
+
+class ScenarioError(ValueError):
+    """A scenario file or override is invalid; the message is one line for the user."""
+
+
+class _M(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+class RunConfig(_M):
+    name: str = "unnamed"
+    description: str = ""
+    duration_s: float = Field(240.0, gt=0, le=7200)
+    seed: int = Field(1, ge=0)
+    dt_s: float = Field(0.01, gt=0.0005, le=0.02, description="dynamics / IMU step")
+
+
+class WorldConfig(_M):
+    surface: Literal["concrete", "asphalt", "grass", "gravel"] = "asphalt"
+    field_size_m: float = Field(80.0, ge=10, le=400)
+    map_resolution_m: float = Field(0.02, ge=0.002, le=1.0)
+    detail_texture: bool = True
+    map_file: Optional[str] = None
+    wind_speed_mps: float = Field(3.0, ge=0, le=25)
+    wind_from_deg: float = Field(0.0, ge=-360, le=360, description="relative to the initial heading")
+    turbulence: Literal["none", "light", "moderate", "severe"] = "light"
+
+
+class VehicleConfig(_M):
+    model: Literal["rmax"] = "rmax"
+    yaw_deg: float = Field(0.0, ge=-360, le=360)
+
+
+class ImuConfig(_M):
+    rate_hz: float = Field(100.0, ge=10, le=1000)
+    accel_noise: float = Field(0.02, ge=0, le=5, description="m/s^2 per sample, 1 sigma")
+    gyro_noise: float = Field(0.002, ge=0, le=1, description="rad/s per sample")
+    accel_bias: float = Field(0.01, ge=0, le=2, description="m/s^2, 1 sigma of the constant bias")
+    gyro_bias: float = Field(0.0005, ge=0, le=0.5)
+    attitude_noise_deg: float = Field(0.03, ge=0, le=5)
+    latency_s: float = Field(0.0, ge=0, le=1.0, description="known transport delay (correctly time-stamped)")
+    delay_s: float = Field(0.0, ge=0, le=1.0, description="UNKNOWN delay: data stamped delay_s too late")
+
+
+class GpsConfig(_M):
+    rate_hz: float = Field(10.0, ge=1, le=50)
+    sigma_m: float = Field(0.02, ge=0, le=20)
+    velocity_sigma_mps: float = Field(0.02, ge=0, le=5)
+    latency_s: float = Field(0.05, ge=0, le=1.0)
+    jam_start_s: Optional[float] = Field(None, ge=0)
+    jam_end_s: Optional[float] = Field(None, ge=0)
+
+
+class LaserConfig(_M):
+    rate_hz: float = Field(10.0, ge=1, le=100)
+    sigma0_m: float = Field(0.01, ge=0, le=1)
+    sigma_per_m: float = Field(0.002, ge=0, le=0.1, description="sigma grows with range (seed 000 Fig. 3.4)")
+    min_range_m: float = Field(0.7, ge=0, le=10)
+    max_range_m: float = Field(80.0, ge=1, le=500)
+    dropout: float = Field(0.02, ge=0, le=1, description="probability that one beam gives no return")
+    search_deg: float = Field(3.0, ge=0, le=10)
+    latency_s: float = Field(0.0, ge=0, le=1.0)
+    delay_s: float = Field(0.0, ge=0, le=1.0)
+
+
+class SonarConfig(_M):
+    rate_hz: float = Field(20.0, ge=1, le=100)
+    sigma_m: float = Field(0.01, ge=0, le=1)
+    max_range_m: float = Field(5.0, ge=0.5, le=20)
+    latency_s: float = Field(0.0, ge=0, le=1.0)
+
+
+class CameraConfig(_M):
+    width: int = Field(640, ge=64, le=4096)
+    height: int = Field(480, ge=48, le=4096)
+    focal_px: float = Field(1073.0, gt=10, le=20000)
+    depression_deg: float = Field(60.0, ge=0, le=90, description="optical axis below the body x axis")
+    lever_arm_m: list[float] = Field(default_factory=lambda: [0.8, 0.0, -0.6])
+    capture_hz: float = Field(30.0, ge=1, le=120)
+    noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
+    latency_s: float = Field(0.0, ge=0, le=1.0)
+
+
+class SensorsConfig(_M):
+    imu: ImuConfig = ImuConfig()
+    gps: GpsConfig = GpsConfig()
+    laser: LaserConfig = LaserConfig()
+    sonar: SonarConfig = SonarConfig()
+    camera: CameraConfig = CameraConfig()
+
+
+class TrackerConfig(_M):
+    template_px: int = Field(21, ge=5, le=101)
+    search_radius_px: int = Field(30, ge=2, le=200)
+    subpixel: bool = False
+    mode: Literal["thesis", "anchored"] = "thesis"
+    min_coherence: float = Field(0.5, ge=-1, le=1)
+    feature_size: int = Field(7, ge=1, le=31)
+    min_isotropy: float = Field(0.2, ge=0, le=1)
+
+
+class MpeConfig(_M):
+    model: Literal["thesis", "plane"] = "plane"
+    attitude_delay_s: float = Field(0.0, ge=0, le=1.0, description="compensation applied to attitude lookups")
+    laser_delay_s: float = Field(0.0, ge=0, le=1.0)
+    rate_hz: float = Field(10.0, ge=1, le=30)
+    jump_limit_m: float = Field(1.5, gt=0, le=50)
+
+
+class NavigationConfig(_M):
+    tracker: TrackerConfig = TrackerConfig()
+    mpe: MpeConfig = MpeConfig()
+    accel_noise: float = Field(0.3, ge=0, le=10, description="process noise of the position filter, m/s^2")
+
+
+class MissionConfig(_M):
+    type: Literal["palace"] = "palace"
+    landing_point_m: list[float] = Field(default_factory=lambda: [0.0, 0.0])
+    start_height_m: float = Field(30.0, ge=2, le=200)
+    glide_slope_deg: float = Field(60.0, ge=20, le=90)
+    descent_speed_mps: float = Field(0.6, gt=0, le=5)
+    settle_s: float = Field(3.0, ge=0, le=60)
+    switch_height_m: float = Field(12.0, ge=1, le=100)
+    coherence_threshold: float = Field(0.7, ge=-1, le=1)
+    coherence_time_s: float = Field(2.0, ge=0, le=30)
+    hold_s: float = Field(0.0, ge=0, le=600, description="hover under MPE at the switch height before descending")
+    inertial_height_m: float = Field(1.0, ge=0.1, le=10)
+    abort_climb_m: float = Field(5.0, ge=0, le=50)
+    laser_loss_s: float = Field(0.5, ge=0, le=10, description="no laser return this long above 1 m -> soft abort")
+    edge_margin_px: int = Field(60, ge=0, le=300)
+    final_descent_mps: float = Field(0.3, gt=0, le=3)
+
+
+class Scenario(_M):
+    run: RunConfig = RunConfig()
+    world: WorldConfig = WorldConfig()
+    vehicle: VehicleConfig = VehicleConfig()
+    sensors: SensorsConfig = SensorsConfig()
+    navigation: NavigationConfig = NavigationConfig()
+    mission: MissionConfig = MissionConfig()
+
+
+# ---------------------------------------------------------------------------------------------
+def _model_at(path: list[str]) -> type[BaseModel] | None:
+    model: Any = Scenario
+    for p in path:
+        if not (isinstance(model, type) and issubclass(model, BaseModel)) or p not in model.model_fields:
+            return None
+        model = model.model_fields[p].annotation
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
+def _describe_field(loc: list[str]) -> str:
+    parent = _model_at(loc[:-1])
+    if parent is None or loc[-1] not in parent.model_fields:
+        return ""
+    f = parent.model_fields[loc[-1]]
+    bounds = []
+    for m in f.metadata:
+        for attr, sym in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
+            v = getattr(m, attr, None)
+            if v is not None:
+                bounds.append(f"{sym} {v}")
+    ann = f.annotation
+    args = getattr(ann, "__args__", None)
+    if getattr(ann, "__origin__", None) is Literal or (args and all(isinstance(a, str) for a in args)):
+        return "allowed: " + ", ".join(repr(a) for a in args)
+    return ("allowed: " + " and ".join(bounds)) if bounds else ""
+
+
+def _format_error(err: ValidationError, data: dict) -> str:
+    e = err.errors()[0]
+    loc = [str(x) for x in e["loc"]]
+    key = ".".join(loc)
+    if e["type"] == "extra_forbidden":
+        parent = _model_at(loc[:-1])
+        allowed = ", ".join(parent.model_fields) if parent else ""
+        return f"unknown scenario key '{key}'; allowed keys here: {allowed}"
+    value = e.get("input")
+    desc = _describe_field(loc)
+    msg = f"invalid value for '{key}': {value!r} ({e['msg']})"
+    return msg + (f"; {desc}" if desc else "")
+
+
+def _parse_value(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text  # bare string
+
+
+def apply_overrides(data: dict, overrides: list[str]) -> dict:
+    """Apply ``key.path=value`` overrides (values parsed as TOML, else kept as strings)."""
+    data = copy.deepcopy(data)
+    for ov in overrides:
+        if "=" not in ov:
+            raise ScenarioError(f"override '{ov}' is not of the form key.path=value")
+        key, text = ov.split("=", 1)
+        parts = [p for p in key.strip().split(".") if p]
+        if not parts:
+            raise ScenarioError(f"override '{ov}' has an empty key")
+        node = data
+        for p in parts[:-1]:
+            nxt = node.setdefault(p, {})
+            if not isinstance(nxt, dict):
+                raise ScenarioError(f"override '{ov}': '{p}' is a value, not a section")
+            node = nxt
+        node[parts[-1]] = _parse_value(text.strip())
+    return data
+
+
+def validate(data: dict) -> Scenario:
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as err:
+        raise ScenarioError(_format_error(err, data)) from None
+
+
+def builtin_names() -> list[str]:
+    return sorted(p.stem for p in BUILTIN_DIR.glob("*.toml"))
+
+
+def resolve_path(name_or_path: str) -> Path:
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.exists():
+        if not p.exists():
+            raise ScenarioError(f"scenario file not found: {p}")
+        return p
+    cand = BUILTIN_DIR / f"{name_or_path}.toml"
+    if not cand.exists():
+        raise ScenarioError(
+            f"unknown scenario '{name_or_path}'; built-in scenarios: {', '.join(builtin_names())}"
+        )
+    return cand
+
+
+def load_scenario(name_or_path: str, overrides: list[str] | None = None, seed: int | None = None) -> Scenario:
+    path = resolve_path(name_or_path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    data = apply_overrides(data, list(overrides or []))
+    if seed is not None:
+        data.setdefault("run", {})["seed"] = int(seed)
+    return validate(data)
+
+
+def to_toml(sc: Scenario) -> str:
+    import tomli_w
+
+    def clean(x):
+        if isinstance(x, dict):
+            return {k: clean(v) for k, v in x.items() if v is not None}
+        return x
+
+    return tomli_w.dumps(clean(sc.model_dump()))

@@ -1,0 +1,155 @@
+"""Camera that renders frames of the textured ground plane (DESIGN §5).
+
+A frame is the plane-induced homography from map pixels to image pixels, applied with
+``cv2.warpPerspective`` on the map pyramid level nearest the camera's ground sample distance
+(no aliasing); a wrapped fine-detail tile adds millimetre texture at low altitude; lens distortion
+(``cv2.remap``) when the camera has any; then sensor noise. Rays that miss the ground show sky.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from visnav.geometry.camera import PinholeCamera
+from visnav.geometry.mounts import FixedMount
+from visnav.geometry.rotations import euler_to_dcm
+from visnav.measurements import Frame
+from visnav.sensors.base import TruthAt
+
+
+def ground_homography(K: np.ndarray, cam_pos: np.ndarray, C_cn: np.ndarray, affine: np.ndarray) -> np.ndarray:
+    """Homography from map pixels [col, row, 1] to image pixels for the ground plane z = 0.
+
+    ``affine`` maps [col, row, 1] to [north, east, 1]. A ground point p = (n, e, 0) projects to
+    K C_cn^T (p - c); with p - c = M [col, row, 1]^T the homography is K C_cn^T M.
+    """
+    M = np.array(
+        [
+            [affine[0, 0], affine[0, 1], affine[0, 2] - cam_pos[0]],
+            [affine[1, 0], affine[1, 1], affine[1, 2] - cam_pos[1]],
+            [0.0, 0.0, -cam_pos[2]],
+        ]
+    )
+    return K @ C_cn.T @ M
+
+
+class CameraRenderer:
+    """Renders ideal-pinhole frames, then distortion and noise."""
+
+    def __init__(self, camera: PinholeCamera, noise_sigma: float, rng: np.random.Generator):
+        self.camera = camera
+        self.size = (camera.width, camera.height)
+        self.K = camera.K
+        self.Kinv = np.linalg.inv(self.K)
+        pad = 32
+        self._pad = pad
+        self.rng = rng
+        self._noise = None
+        if noise_sigma > 0:
+            bank = rng.normal(0.0, noise_sigma, (4, camera.height + pad, camera.width + pad))
+            self._noise = np.clip(np.round(bank), -127, 127).astype(np.int16)
+        self._undistort_maps = None
+        if camera.has_distortion:
+            u, v = np.meshgrid(np.arange(camera.width, dtype=float), np.arange(camera.height, dtype=float))
+            xy = camera.pixel_to_normalized(np.column_stack([u.ravel(), v.ravel()]))
+            mx = (camera.fx * xy[:, 0] + camera.cx).reshape(u.shape).astype(np.float32)
+            my = (camera.fy * xy[:, 1] + camera.cy).reshape(u.shape).astype(np.float32)
+            self._undistort_maps = (mx, my)
+        self._tile_levels: dict[int, np.ndarray] = {}
+
+    # -- pieces ----------------------------------------------------------------------------
+    def _sky_mask(self, C_cn: np.ndarray) -> np.ndarray | None:
+        """Pixels whose ray does not point down at the ground (None when every ray hits)."""
+        w, h = self.size
+        # d_z(u, v) = row 2 of C_cn K^-1 [u v 1]^T is affine in (u, v)
+        c = C_cn[2] @ self.Kinv
+        corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], dtype=float)
+        if np.all(corners @ c > 1e-6):
+            return None
+        u, v = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+        return (c[0] * u + c[1] * v + c[2]) <= 1e-6
+
+    def _border_value(self, ground) -> int:
+        """Ground beyond the map's edge is drawn in the map's mean grey."""
+        if getattr(self, "_border_for", None) is not ground:
+            self._border_for = ground
+            self._border = int(np.mean(ground.level(0)[::8, ::8]))
+        return self._border
+
+    def _tile_level(self, tile: np.ndarray, level: int) -> np.ndarray:
+        if level not in self._tile_levels:
+            img = tile
+            for _ in range(level):
+                img = cv2.resize(img, (img.shape[1] // 2, img.shape[0] // 2), interpolation=cv2.INTER_AREA)
+            self._tile_levels[level] = img
+        return self._tile_levels[level]
+
+    def render(self, cam_pos: np.ndarray, C_cn: np.ndarray, world) -> np.ndarray:
+        w, h = self.size
+        height = -float(cam_pos[2])
+        axis_down = float(C_cn[2, 2])
+        depth = height / max(axis_down, 0.05)
+        gsd = max(depth, 1e-3) / self.camera.fx
+        ground = world.ground
+        L = ground.level_for_gsd(gsd)
+        Hm = ground_homography(self.K, cam_pos, C_cn, ground.affine(L))
+        img = cv2.warpPerspective(
+            ground.level(L), Hm, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+            borderValue=self._border_value(ground),
+        )
+        if world.detail is not None and gsd < 0.03:
+            tres = world.detail_resolution_m
+            Lt = 0
+            while tres * 2 ** (Lt + 1) <= gsd and Lt < 4:
+                Lt += 1
+            tile = self._tile_level(world.detail, Lt)
+            r = tres * 2**Lt
+            # tile pixel (c, r) -> (n, e) = (-row * r, col * r): north up like every map
+            At = np.array([[0.0, -r, 0.0], [r, 0.0, 0.0], [0.0, 0.0, 1.0]])
+            Ht = ground_homography(self.K, cam_pos, C_cn, At)
+            det = cv2.warpPerspective(tile, Ht, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
+            # fade the detail in as the ground sample distance shrinks below 3 cm
+            wgt = float(np.clip((0.03 - gsd) / 0.02, 0.0, 1.0))
+            img = cv2.addWeighted(img, 1.0, det, wgt, -128.0 * wgt)
+        sky = self._sky_mask(C_cn)
+        if sky is not None:
+            img[sky] = world.sky_level
+        if self._undistort_maps is not None:
+            img = cv2.remap(img, *self._undistort_maps, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        if self._noise is not None:
+            k = int(self.rng.integers(0, self._noise.shape[0]))
+            dy, dx = (int(x) for x in self.rng.integers(0, self._pad, 2))
+            img = cv2.add(img, self._noise[k, dy : dy + h, dx : dx + w], dtype=cv2.CV_8U)
+        return img
+
+
+class Camera:
+    """Camera sensor on a mount: captures at ``capture_hz``; the vision pipeline consumes every
+    ``decimation``-th frame, and only those are rendered (the others would be discarded)."""
+
+    def __init__(
+        self,
+        camera: PinholeCamera,
+        mount: FixedMount,
+        rng: np.random.Generator,
+        capture_hz: float = 30.0,
+        process_hz: float = 10.0,
+        noise_sigma: float = 2.0,
+        latency_s: float = 0.0,
+    ):
+        self.camera = camera
+        self.mount = mount
+        self.capture_hz = capture_hz
+        self.decimation = max(1, int(round(capture_hz / process_hz)))
+        self.rate_hz = capture_hz / self.decimation
+        self.latency_s = latency_s
+        self.renderer = CameraRenderer(camera, noise_sigma, rng)
+        self.frames = 0
+
+    def sample(self, t: float, truth_at: TruthAt, world) -> Frame:
+        s = truth_at(t)
+        cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
+        img = self.renderer.render(cam_pos, C_cn, world)
+        self.frames += 1
+        return Frame(t=t, image=img, index=self.frames * self.decimation)

@@ -1,0 +1,50 @@
+"""Strap-down IMU with its attitude solution (the R-MAX Crossbow IMU + flight computer filter)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.measurements import AttitudeSample, ImuSample
+from visnav.sensors.base import TruthAt
+
+
+class Imu:
+    """Accelerometers and gyros (white noise + constant bias) and an attitude output.
+
+    ``delay_s`` is the *unknown* delay of seed 000 §5.2: every sample describes the state
+    ``delay_s`` earlier than its time stamp says. ``latency_s`` is a known transport delay
+    (the sample is delivered late but stamped correctly).
+    """
+
+    def __init__(
+        self,
+        rng: np.random.Generator,
+        rate_hz: float = 100.0,
+        accel_noise: float = 0.02,
+        gyro_noise: float = 0.002,
+        accel_bias: float = 0.01,
+        gyro_bias: float = 0.0005,
+        attitude_noise_deg: float = 0.03,
+        latency_s: float = 0.0,
+        delay_s: float = 0.0,
+    ):
+        self.rng = rng
+        self.rate_hz = rate_hz
+        self.accel_noise = accel_noise
+        self.gyro_noise = gyro_noise
+        self.attitude_noise = np.deg2rad(attitude_noise_deg)
+        self.latency_s = latency_s
+        self.delay_s = delay_s
+        self.accel_bias = rng.normal(0.0, accel_bias, 3) if accel_bias > 0 else np.zeros(3)
+        self.gyro_bias = rng.normal(0.0, gyro_bias, 3) if gyro_bias > 0 else np.zeros(3)
+
+    def sample(self, t: float, truth_at: TruthAt) -> tuple[ImuSample, AttitudeSample]:
+        s = truth_at(t - self.delay_s)
+        n = self.rng.standard_normal(9)
+        imu = ImuSample(
+            t=t,
+            accel=s.specific_force + self.accel_bias + self.accel_noise * n[0:3],
+            gyro=s.body_rates + self.gyro_bias + self.gyro_noise * n[3:6],
+        )
+        att = AttitudeSample(t=t, euler=s.euler + self.attitude_noise * n[6:9])
+        return imu, att

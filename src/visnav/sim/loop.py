@@ -1,0 +1,168 @@
+"""The closed-loop simulation: sensors -> navigator -> mission -> controller -> vehicle.
+
+One fixed dynamics step (``run.dt_s``, 100 Hz); every other block runs at its own rate as an
+integer divisor of it: IMU 100 Hz, mission + position loop 10 Hz, GPS and laser 10 Hz, sonar
+20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered). Each
+measurement is stamped with the instant it describes and delivered after its sensor's latency.
+Truth reaches only the sensors (through ``TruthHistory``) and the log.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from visnav.control.rmax import RmaxPositionController
+from visnav.geometry.camera import PinholeCamera
+from visnav.geometry.mounts import FixedMount
+from visnav.measurements import VehicleState, YacsCommand
+from visnav.mission.palace import PalaceMission
+from visnav.navigation.palace import PalaceNavigator
+from visnav.scenarios.schema import Scenario
+from visnav.sensors.base import TruthHistory
+from visnav.sensors.camera import Camera
+from visnav.sensors.gps import Gps
+from visnav.sensors.imu import Imu
+from visnav.sensors.rangefinder import LaserRangeFinder, Sonar
+from visnav.sim.log import FlightLog
+from visnav.vehicles.rmax import RmaxModel
+from visnav.world.scene import build_world
+
+
+def _divisor(rate_hz: float, dt: float) -> int:
+    return max(1, int(round(1.0 / (rate_hz * dt))))
+
+
+@dataclass
+class RunResult:
+    scenario: Scenario
+    log: FlightLog
+    metrics: dict = field(default_factory=dict)
+    error: str | None = None
+
+
+class Simulation:
+    def __init__(self, scenario: Scenario):
+        self.sc = sc = scenario
+        self.dt = sc.run.dt_s
+        self.log = FlightLog()
+        seeds = np.random.SeedSequence(sc.run.seed).spawn(8)
+        rng = [np.random.default_rng(s) for s in seeds]
+        self.yaw = np.deg2rad(sc.vehicle.yaw_deg)
+        self.world = build_world(sc.world, rng[0], heading_rad=self.yaw)
+
+        c = sc.sensors.camera
+        self.camera_model = PinholeCamera.ideal(c.width, c.height, c.focal_px)
+        self.mount = FixedMount.depressed(c.depression_deg, lever_arm=tuple(c.lever_arm_m))
+        s = sc.sensors
+        self.imu = Imu(rng[1], **s.imu.model_dump())
+        self.gps = Gps(rng[2], **s.gps.model_dump())
+        self.laser = LaserRangeFinder(rng[3], self.mount, surface=sc.world.surface, **s.laser.model_dump())
+        self.sonar = Sonar(rng[4], **s.sonar.model_dump())
+        self.camera = Camera(self.camera_model, self.mount, rng[5], capture_hz=c.capture_hz,
+                             process_hz=sc.navigation.mpe.rate_hz, noise_sigma=c.noise_sigma, latency_s=c.latency_s)
+
+        self.nav = PalaceNavigator(sc.navigation, self.camera_model, self.mount, recorder=self.log.record)
+        self.mission = PalaceMission(sc.mission, self.nav, yaw=self.yaw, image_size=(c.width, c.height),
+                                     recorder=self.log.record)
+        start = self.mission.start_position()
+        init = VehicleState(t=0.0, position=start, velocity=np.zeros(3), euler=np.array([0.0, 0.0, self.yaw]),
+                            body_rates=np.zeros(3), specific_force=np.array([0.0, 0.0, -9.81]))
+        self.vehicle = RmaxModel(dt=self.dt, initial=init)
+        self.controller = RmaxPositionController()
+        self.history = TruthHistory(self.dt, horizon_s=2.5)
+
+        self._queue: list = []
+        self._seq = itertools.count()
+
+    # ------------------------------------------------------------------------------------
+    def _emit(self, m, latency: float) -> None:
+        if m is None:
+            return
+        heapq.heappush(self._queue, (m.t + latency, next(self._seq), m))
+
+    def run(self, progress=None) -> RunResult:
+        sc, dt, log = self.sc, self.dt, self.log
+        n = int(round(sc.run.duration_s / dt))
+        d_imu = _divisor(self.imu.rate_hz, dt)
+        d_gps = _divisor(self.gps.rate_hz, dt)
+        d_laser = _divisor(self.laser.rate_hz, dt)
+        d_sonar = _divisor(self.sonar.rate_hz, dt)
+        d_cam = _divisor(self.camera.rate_hz, dt)
+        d_pos = _divisor(10.0, dt)
+        cmd = YacsCommand(t=0.0)
+        ref = None
+        truth = self.vehicle.state
+        wall0 = time.perf_counter()
+        touchdown = None
+        error = None
+        nav_est = None
+        try:
+            for k in range(n):
+                t = k * dt
+                truth = self.vehicle.state
+                self.history.push(truth)
+                h = self.history
+                # sensors -> latency queues
+                if k % d_imu == 0:
+                    imu, att = self.imu.sample(t, h)
+                    self._emit(imu, self.imu.latency_s)
+                    self._emit(att, self.imu.latency_s)
+                if k % d_gps == 0:
+                    self._emit(self.gps.sample(t, h), self.gps.latency_s)
+                if k % d_laser == 0:
+                    self._emit(self.laser.sample(t, h), self.laser.latency_s)
+                if k % d_sonar == 0:
+                    self._emit(self.sonar.sample(t, h), self.sonar.latency_s)
+                if k % d_cam == 0 and self.mission.mode not in ("final", "landed", "abort"):
+                    self._emit(self.camera.sample(t, h, self.world), self.camera.latency_s)
+                # deliveries -> navigator
+                q = self._queue
+                while q and q[0][0] <= t + 1e-9:
+                    self.nav.update(heapq.heappop(q)[2])
+                # mission manager and position loop (10 Hz)
+                if k % d_pos == 0:
+                    nav_est = self.nav.estimate(t)
+                    health = self.nav.health(t)
+                    ref, mode = self.mission.step(t, nav_est, health)
+                    cmd = self.controller.command(t, nav_est, ref)
+                    self._log_step(t, truth, nav_est, ref, cmd, mode, health)
+                    if self.mission.done:
+                        break
+                    if progress is not None:
+                        progress(t, n * dt)
+                # vehicle dynamics with wind
+                wind = self.world.wind.velocity_ned(t, dt, max(truth.height_agl, 0.5),
+                                                    float(np.linalg.norm(truth.velocity)))
+                self.vehicle.step(cmd, dt, wind)
+                if self.vehicle.state.on_ground and touchdown is None and t > 1.0:
+                    touchdown = self.vehicle.state
+                    self.mission.on_touchdown(t + dt)
+                    log.record("touchdown", t + dt, position=touchdown.position,
+                               speed=float(getattr(self.vehicle, "touchdown_speed", np.nan)))
+                    self._log_step(t + dt, touchdown, self.nav.estimate(t + dt), ref, cmd, "landed",
+                                   self.nav.health(t + dt))
+                    break
+        except Exception as exc:  # keep what we have: the run directory is still written
+            error = f"{type(exc).__name__} at t={t:.2f}s: {exc}"
+            log.record("error", t, message=error)
+        wall = time.perf_counter() - wall0
+        from visnav.analysis.metrics import palace_metrics
+
+        metrics = palace_metrics(self, wall_time_s=wall, error=error)
+        return RunResult(scenario=sc, log=log, metrics=metrics, error=error)
+
+    def _log_step(self, t, truth, est, ref, cmd, mode, health) -> None:
+        log = self.log
+        log.record("truth", t, position=truth.position, velocity=truth.velocity, euler=truth.euler,
+                   body_rates=truth.body_rates)
+        log.record("estimate", t, position=est.position, velocity=est.velocity, euler=est.attitude,
+                   source=est.source, valid=est.valid)
+        log.record("reference", t, position=ref.position, velocity=ref.velocity, yaw=ref.yaw)
+        log.record("command", t, ail=cmd.ail, ele=cmd.ele, rud=cmd.rud, thr=cmd.thr)
+        log.record("status", t, mode=mode, source=health.source, coherence=health.coherence,
+                   mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking)

@@ -1,0 +1,251 @@
+"""Moravec pseudo-normalized correlation (PNCC) and the PALACE point tracker (seed 000 §2.2.2).
+
+Coherence of a template b (T_W x T_H = N pixels) placed over a window a of the search image,
+eq. 2.3 with its sums normalised by N (Algorithm 2, whose step 3 is garbled in the seed text):
+
+    coherence = (mean(a b) - μ_a μ_b) / ((σ_a^2 + σ_b^2) / 2),   σ^2 = mean(x^2) - μ^2.
+
+The numerator is the covariance, the denominator the arithmetic mean of the two variances
+(Moravec's replacement for the geometric mean of NCC, eq. 2.2). So coherence is 1 for identical
+patches, always in [-1, 1] (|cov| <= σ_a σ_b <= (σ_a^2 + σ_b^2)/2), and, unlike NCC, it drops
+with a contrast change: b = k a gives 2k / (1 + k^2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+__all__ = ["pncc", "TrackResult", "PnccTracker"]
+
+_FLAT_RTOL = 1e-8  # (σ_a^2 + σ_b^2)/2 below this * (data range)^2 counts as "both flat"
+
+
+def _gray(name: str, a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a)
+    if a.ndim != 2 or a.size == 0:
+        raise ValueError(f"{name} must be a non-empty 2-D grayscale array, got shape {a.shape}")
+    return a
+
+
+def pncc(search: np.ndarray, template: np.ndarray) -> np.ndarray:
+    """Coherence (eq. 2.3, Alg. 2 steps 2-3) of ``template`` at every valid placement in ``search``.
+
+    Output shape ``(H_s - T_H + 1, W_s - T_W + 1)`` (like ``cv2.matchTemplate``); entry (v, u)
+    scores the template's top-left corner at column u, row v. Where both patches are flat the
+    coherence is 0.
+    """
+    s = _gray("search", search)
+    t = _gray("template", template)
+    th, tw = t.shape
+    if th > s.shape[0] or tw > s.shape[1]:
+        raise ValueError(f"template {t.shape} must fit inside search {s.shape}")
+    n = float(th * tw)
+    # Centre both (removes the large common mean before float32 products; coherence is unchanged).
+    a = s.astype(np.float32)
+    a -= np.float32(a.mean())
+    b64 = t.astype(np.float64)
+    b64 -= b64.mean()
+    b = b64.astype(np.float32)
+    var_b = float(np.mean(b64 * b64))
+    # Σ a b' with b' = b - μ_b equals Σ a b - N μ_a μ_b: numerator of eq. 2.3 times N.
+    cov = cv2.matchTemplate(a, b, cv2.TM_CCORR).astype(np.float64) / n
+    s1, s2 = cv2.integral2(a, sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
+
+    def window_sum(ii: np.ndarray) -> np.ndarray:
+        return ii[th:, tw:] - ii[:-th, tw:] - ii[th:, :-tw] + ii[:-th, :-tw]
+
+    mu_a = window_sum(s1) / n
+    var_a = np.maximum(window_sum(s2) / n - mu_a * mu_a, 0.0)
+    den = 0.5 * (var_a + var_b)
+    scale = max(float(np.ptp(s)), float(np.ptp(t)))
+    flat = den <= _FLAT_RTOL * scale * scale
+    out = np.divide(cov, den, out=np.zeros_like(den), where=~flat)
+    return np.clip(out, -1.0, 1.0).astype(np.float32)
+
+
+@dataclass
+class TrackResult:
+    """One tracking step: position (pixels, x right, y down), its coherence, and whether it held.
+
+    ``reason`` is "" on success, else "edge" (the point is leaving or has left the image) or
+    "low coherence" (best match below ``min_coherence``); then x, y are the old position.
+    """
+
+    x: float
+    y: float
+    coherence: float
+    ok: bool
+    reason: str = ""
+
+
+def _parabola(c_m: float, c_0: float, c_p: float) -> float:
+    """Vertex offset of the parabola through (-1, c_m), (0, c_0), (1, c_p), clamped to +-0.5."""
+    curv = c_m - 2.0 * c_0 + c_p
+    if not curv < 0.0:
+        return 0.0
+    return float(np.clip(0.5 * (c_m - c_p) / curv, -0.5, 0.5))
+
+
+class PnccTracker:
+    """Frame-to-frame PNCC point tracker (seed 000 §2.2.2, Algorithm 2).
+
+    ``mode="thesis"``: every frame the template (``template_size`` square, 21 in PALACE) is
+    searched for at the candidate centres within +-``search_radius`` px of the last point (the
+    61x61 "search window"), the argmax of coherence is the new point (Alg. 2 step 4) and the
+    template is replaced by the pixels there. With integer positions this drifts by
+    discretisation (§4.2). ``subpixel=True`` refines the peak with a separable parabola on its
+    3x3 neighbourhood (clamped to +-0.5 px) and re-extracts the template there
+    (``cv2.getRectSubPix``). ``mode="anchored"`` also keeps the first template as an anchor
+    and, when it still matches with coherence >= ``min_coherence`` within ``anchor_radius`` px
+    of the frame-to-frame match, takes the anchor's match: the random walk stops.
+
+    The search window is clipped to where the template fits in the image; a failed step
+    (``ok=False``) keeps the old position and template.
+    """
+
+    def __init__(
+        self,
+        template_size: int = 21,
+        search_radius: int = 30,
+        subpixel: bool = False,
+        min_coherence: float = 0.5,
+        mode: str = "thesis",
+        anchor_radius: int = 2,
+    ) -> None:
+        if int(template_size) != template_size or template_size < 3 or template_size % 2 == 0:
+            raise ValueError(f"template_size must be an odd integer >= 3, got {template_size!r}")
+        if int(search_radius) != search_radius or search_radius < 1:
+            raise ValueError(f"search_radius must be an integer >= 1, got {search_radius!r}")
+        if not -1.0 <= min_coherence <= 1.0:
+            raise ValueError(f"min_coherence must be in [-1, 1], got {min_coherence!r}")
+        if mode not in ("thesis", "anchored"):
+            raise ValueError(f"mode must be 'thesis' or 'anchored', got {mode!r}")
+        if int(anchor_radius) != anchor_radius or anchor_radius < 1:
+            raise ValueError(f"anchor_radius must be an integer >= 1, got {anchor_radius!r}")
+        self.template_size = int(template_size)
+        self.search_radius = int(search_radius)
+        self.subpixel = bool(subpixel)
+        self.min_coherence = float(min_coherence)
+        self.mode = mode
+        self.anchor_radius = int(anchor_radius)
+        self._half = self.template_size // 2
+        self._template: np.ndarray | None = None
+        self._anchor: np.ndarray | None = None
+        self.x = float("nan")
+        self.y = float("nan")
+        self.coherence = float("nan")
+        self.frames = 0
+        self.used_anchor = False
+
+    @property
+    def template(self) -> np.ndarray | None:
+        """The current template (float32, read-only view), None before :meth:`init`."""
+        if self._template is None:
+            return None
+        v = self._template.view()
+        v.flags.writeable = False
+        return v
+
+    @property
+    def initialized(self) -> bool:
+        return self._template is not None
+
+    def _extract(self, img: np.ndarray, x: float, y: float) -> np.ndarray:
+        """Template centred on (x, y): a plain copy at integer positions, else bilinear."""
+        h = self._half
+        xi, yi = int(round(x)), int(round(y))
+        if xi == x and yi == y:
+            return img[yi - h : yi + h + 1, xi - h : xi + h + 1].astype(np.float32)
+        # Bilinear samples need one more pixel around the template: convert only that crop.
+        x0, y0 = max(xi - h - 1, 0), max(yi - h - 1, 0)
+        crop = img[y0 : yi + h + 2, x0 : xi + h + 2].astype(np.float32)
+        size = (self.template_size, self.template_size)
+        return cv2.getRectSubPix(crop, size, (float(x) - x0, float(y) - y0))
+
+    def _fits(self, shape: tuple[int, int], x: float, y: float) -> bool:
+        h = self._half
+        return h <= x <= shape[1] - 1 - h and h <= y <= shape[0] - 1 - h
+
+    def init(self, image: np.ndarray, x: float, y: float) -> None:
+        """Start a track at pixel (x, y); rounded to integers unless ``subpixel``."""
+        img = _gray("image", image)
+        if not self.subpixel:
+            x, y = float(round(x)), float(round(y))
+        if not (np.isfinite(x) and np.isfinite(y) and self._fits(img.shape, x, y)):
+            raise ValueError(
+                f"point (x={x}, y={y}) must leave room for the {self.template_size}x{self.template_size}"
+                f" template inside the {img.shape[1]}x{img.shape[0]} image"
+            )
+        self._template = self._extract(img, x, y)
+        self._anchor = self._template.copy() if self.mode == "anchored" else None
+        self.x, self.y, self.coherence = float(x), float(y), 1.0
+        self.frames = 0
+        self.used_anchor = False
+
+    def _match(self, img: np.ndarray, template: np.ndarray, cx: int, cy: int, radius: int, origin=(0, 0)):
+        """Best centre for ``template`` within +-radius of (cx, cy), clipped to the image.
+
+        ``img`` may be a crop whose pixel (0, 0) is ``origin`` (x, y) of the full image.
+        Returns (x, y, coherence, clipped_hit) or None when no centre fits; ``clipped_hit`` says
+        the best match lies on a side of the window that the image edge cut off.
+        """
+        h = self._half
+        ox, oy = origin
+        hh, ww = img.shape
+        cx, cy = cx - ox, cy - oy
+        x0, x1 = max(cx - radius, h), min(cx + radius, ww - 1 - h)
+        y0, y1 = max(cy - radius, h), min(cy + radius, hh - 1 - h)
+        if x1 < x0 or y1 < y0:
+            return None
+        crop = img[y0 - h : y1 + h + 1, x0 - h : x1 + h + 1]  # converted once, inside pncc
+        c = pncc(crop, template)
+        j = int(np.argmax(c))
+        v, u = divmod(j, c.shape[1])
+        best = float(c[v, u])
+        clipped_hit = (
+            (u == 0 and x0 > cx - radius)
+            or (u == c.shape[1] - 1 and x1 < cx + radius)
+            or (v == 0 and y0 > cy - radius)
+            or (v == c.shape[0] - 1 and y1 < cy + radius)
+        )
+        fx = fy = 0.0
+        if self.subpixel:
+            if 0 < u < c.shape[1] - 1:
+                fx = _parabola(float(c[v, u - 1]), best, float(c[v, u + 1]))
+            if 0 < v < c.shape[0] - 1:
+                fy = _parabola(float(c[v - 1, u]), best, float(c[v + 1, u]))
+        return ox + x0 + u + fx, oy + y0 + v + fy, best, clipped_hit
+
+    def _fail(self, coherence: float, reason: str) -> TrackResult:
+        return TrackResult(self.x, self.y, coherence, False, reason)
+
+    def track(self, image: np.ndarray) -> TrackResult:
+        """Find the template in ``image`` near the last point (Alg. 2); update the track."""
+        if self._template is None:
+            raise RuntimeError("PnccTracker.track() called before init()")
+        img = _gray("image", image)
+        self.frames += 1
+        self.used_anchor = False
+        cx, cy = int(round(self.x)), int(round(self.y))
+        m = self._match(img, self._template, cx, cy, self.search_radius)
+        if m is None:
+            return self._fail(float("nan"), "edge")
+        x, y, coh, clipped_hit = m
+        if clipped_hit or coh < self.min_coherence:
+            return self._fail(coh, "edge" if (clipped_hit or self._clipped(img.shape, cx, cy)) else "low coherence")
+        if self._anchor is not None:
+            a = self._match(img, self._anchor, int(round(x)), int(round(y)), self.anchor_radius)
+            if a is not None and not a[3] and a[2] >= self.min_coherence:
+                x, y, coh, _ = a
+                self.used_anchor = True
+        self._template = self._extract(img, x, y)
+        self.x, self.y, self.coherence = float(x), float(y), float(coh)
+        return TrackResult(self.x, self.y, self.coherence, True, "")
+
+    def _clipped(self, shape: tuple[int, int], cx: int, cy: int) -> bool:
+        """Whether the image edge cut the search window around (cx, cy)."""
+        r, h = self.search_radius, self._half
+        return cx - r < h or cy - r < h or cx + r > shape[1] - 1 - h or cy + r > shape[0] - 1 - h

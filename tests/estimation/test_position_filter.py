@@ -1,0 +1,56 @@
+"""The per-axis position filter equals a textbook 6-state Kalman filter (filterpy) on the same data."""
+
+import numpy as np
+from filterpy.kalman import KalmanFilter
+
+from visnav.estimation.position_filter import PositionFilter, accel_ned
+
+
+def _filterpy_reference(q, p0, v0, sp, sv):
+    kf = KalmanFilter(dim_x=6, dim_z=3)
+    kf.x = np.r_[p0, v0].astype(float)
+    kf.P = np.diag([sp**2] * 3 + [sv**2] * 3)
+    return kf
+
+
+def test_matches_filterpy_kalman_filter():
+    rng = np.random.default_rng(3)
+    q = 0.4
+    pf = PositionFilter(accel_noise=q)
+    pf.reset(0.0, [1.0, 2.0, -10.0], [0.1, 0.0, 0.0], sigma_p=0.5, sigma_v=0.2)
+    kf = _filterpy_reference(q, [1.0, 2.0, -10.0], [0.1, 0.0, 0.0], 0.5, 0.2)
+    dt = 0.01
+    t = 0.0
+    for k in range(1, 501):
+        t = k * dt
+        a = rng.normal(0, 0.5, 3)
+        pf.predict(t, a)
+        F = np.eye(6)
+        F[:3, 3:] = np.eye(3) * dt
+        B = np.vstack([np.eye(3) * 0.5 * dt * dt, np.eye(3) * dt])
+        Q1 = q * q * np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
+        Q = np.kron(Q1, np.eye(3))
+        kf.predict(u=a, B=B, F=F, Q=Q)
+        if k % 10 == 0:
+            z = rng.normal(0, 0.1, 3) + kf.x[:3]
+            pf.update_position(z, 0.1)
+            kf.update(z, R=np.eye(3) * 0.01, H=np.hstack([np.eye(3), np.zeros((3, 3))]))
+        if k % 50 == 0:
+            zv = rng.normal(0, 0.05, 3)
+            pf.update_velocity(zv, 0.05)
+            kf.update(zv, R=np.eye(3) * 0.0025, H=np.hstack([np.zeros((3, 3)), np.eye(3)]))
+    np.testing.assert_allclose(np.r_[pf.p, pf.v], kf.x, atol=1e-9)
+    np.testing.assert_allclose(pf.covariance(), kf.P, atol=1e-12)
+
+
+def test_single_axis_update_and_gate():
+    pf = PositionFilter(accel_noise=0.1)
+    pf.reset(0.0, [0.0, 0.0, -5.0], [0.0, 0.0, 0.0], sigma_p=1.0, sigma_v=0.1)
+    assert pf.update_position(np.array([0.0, 0.0, -4.0]), 1.0, axes=(2,))
+    assert abs(pf.p[2] - (-4.5)) < 1e-12 and pf.p[0] == 0.0  # equal weights: half way
+    assert not pf.update_position(np.array([100.0, 0.0, -4.5]), 0.1, gate=5.0)
+    assert pf.p[0] == 0.0
+
+
+def test_accel_ned_hover_is_zero():
+    np.testing.assert_allclose(accel_ned(np.eye(3), np.array([0.0, 0.0, -9.81])), 0.0, atol=1e-12)
