@@ -56,7 +56,7 @@ class CameraRenderer:
             mx = (camera.fx * xy[:, 0] + camera.cx).reshape(u.shape).astype(np.float32)
             my = (camera.fy * xy[:, 1] + camera.cy).reshape(u.shape).astype(np.float32)
             self._undistort_maps = (mx, my)
-        self._tile_levels: dict[int, np.ndarray] = {}
+        self._tile_levels: dict[int, tuple[np.ndarray, int]] = {}
 
     # -- pieces ----------------------------------------------------------------------------
     def _sky_mask(self, C_cn: np.ndarray) -> np.ndarray | None:
@@ -77,13 +77,23 @@ class CameraRenderer:
             self._border = int(np.mean(ground.level(0)[::8, ::8]))
         return self._border
 
-    def _tile_level(self, tile: np.ndarray, level: int) -> np.ndarray:
+    def _tile_level(self, tile: np.ndarray, level: int) -> tuple[np.ndarray, int]:
+        """The detail tile reduced ``level`` times, repeated to about 2048 px; and its period in px."""
         if level not in self._tile_levels:
             img = tile
             for _ in range(level):
                 img = cv2.resize(img, (img.shape[1] // 2, img.shape[0] // 2), interpolation=cv2.INTER_AREA)
-            self._tile_levels[level] = img
+            m = max(1, int(np.ceil(2048 / img.shape[0])))
+            self._tile_levels[level] = (np.ascontiguousarray(np.tile(img, (m, m))), img.shape[0])
         return self._tile_levels[level]
+
+    @staticmethod
+    def _ground_centre(cam_pos: np.ndarray, C_cn: np.ndarray) -> np.ndarray:
+        """Where the optical axis meets the ground (or the point below the camera if it does not)."""
+        d = C_cn[:, 2]
+        if d[2] > 1e-3:
+            return cam_pos + d * (-cam_pos[2] / d[2])
+        return cam_pos
 
     def render(self, cam_pos: np.ndarray, C_cn: np.ndarray, world) -> np.ndarray:
         w, h = self.size
@@ -103,10 +113,16 @@ class CameraRenderer:
             Lt = 0
             while tres * 2 ** (Lt + 1) <= gsd and Lt < 4:
                 Lt += 1
-            tile = self._tile_level(world.detail, Lt)
-            r = tres * 2**Lt
-            # tile pixel (c, r) -> (n, e) = (-row * r, col * r): north up like every map
-            At = np.array([[0.0, -r, 0.0], [r, 0.0, 0.0], [0.0, 0.0, 1.0]])
+            tile, period = self._tile_level(world.detail, Lt)
+            r = tres * world.detail.shape[0] / period  # exact even when the size is not divisible by 2^Lt
+            # Shift the (periodic) tile by whole periods so the view's centre lands mid-tile: the
+            # warp then rarely needs BORDER_WRAP, whose per-pixel modulo is the slow path.
+            centre = self._ground_centre(cam_pos, C_cn)
+            c0 = centre[1] / r - tile.shape[1] / 2
+            r0 = -centre[0] / r - tile.shape[0] / 2
+            sc, sr = np.floor(c0 / period) * period, np.floor(r0 / period) * period
+            # tile pixel (c, r) -> (n, e) = (-(row + sr) * r, (col + sc) * r): north up like every map
+            At = np.array([[0.0, -r, -sr * r], [r, 0.0, sc * r], [0.0, 0.0, 1.0]])
             Ht = ground_homography(self.K, cam_pos, C_cn, At)
             det = cv2.warpPerspective(tile, Ht, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
             # fade the detail in as the ground sample distance shrinks below 3 cm

@@ -20,6 +20,7 @@ import numpy as np
 
 __all__ = ["pncc", "TrackResult", "PnccTracker"]
 
+_BACK_RADIUS = 2  # px, search radius of the backward match (subpixel mode)
 _FLAT_RTOL = 1e-8  # (σ_a^2 + σ_b^2)/2 below this * (data range)^2 counts as "both flat"
 
 
@@ -28,6 +29,14 @@ def _gray(name: str, a: np.ndarray) -> np.ndarray:
     if a.ndim != 2 or a.size == 0:
         raise ValueError(f"{name} must be a non-empty 2-D grayscale array, got shape {a.shape}")
     return a
+
+
+def _window_sums(ii: np.ndarray, th: int, tw: int) -> np.ndarray:
+    """Sums over every th x tw window from an integral image (valid placements)."""
+    w = ii[th:, tw:] - ii[:-th, tw:]
+    w -= ii[th:, :-tw]
+    w += ii[:-th, :-tw]
+    return w
 
 
 def pncc(search: np.ndarray, template: np.ndarray) -> np.ndarray:
@@ -44,26 +53,30 @@ def pncc(search: np.ndarray, template: np.ndarray) -> np.ndarray:
         raise ValueError(f"template {t.shape} must fit inside search {s.shape}")
     n = float(th * tw)
     # Centre both (removes the large common mean before float32 products; coherence is unchanged).
+    # cv2 reductions: on these small arrays numpy's per-call overhead dominates.
     a = s.astype(np.float32)
-    a -= np.float32(a.mean())
-    b64 = t.astype(np.float64)
-    b64 -= b64.mean()
-    b = b64.astype(np.float32)
-    var_b = float(np.mean(b64 * b64))
-    # Σ a b' with b' = b - μ_b equals Σ a b - N μ_a μ_b: numerator of eq. 2.3 times N.
-    cov = cv2.matchTemplate(a, b, cv2.TM_CCORR).astype(np.float64) / n
+    a -= np.float32(cv2.mean(a)[0])
+    b = t.astype(np.float64)
+    b -= cv2.mean(b)[0]
+    sum_b2 = float(np.vdot(b, b))  # N σ_b²
+    # Σ a b' with b' = b - μ_b equals Σ a b - N μ_a μ_b: N times the numerator of eq. 2.3.
+    num = cv2.matchTemplate(a, b.astype(np.float32), cv2.TM_CCORR)
     s1, s2 = cv2.integral2(a, sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
-
-    def window_sum(ii: np.ndarray) -> np.ndarray:
-        return ii[th:, tw:] - ii[:-th, tw:] - ii[th:, :-tw] + ii[:-th, :-tw]
-
-    mu_a = window_sum(s1) / n
-    var_a = np.maximum(window_sum(s2) / n - mu_a * mu_a, 0.0)
-    den = 0.5 * (var_a + var_b)
-    scale = max(float(np.ptp(s)), float(np.ptp(t)))
-    flat = den <= _FLAT_RTOL * scale * scale
-    out = np.divide(cov, den, out=np.zeros_like(den), where=~flat)
-    return np.clip(out, -1.0, 1.0).astype(np.float32)
+    sum_a, sum_a2 = (_window_sums(ii, th, tw) for ii in (s1, s2))
+    # N (σ_a² + σ_b²) = Σa² - (Σa)²/N + N σ_b²; coherence = 2 Σab' / that.
+    sum_a *= sum_a
+    sum_a *= 1.0 / n
+    den = sum_a2
+    den -= sum_a
+    np.maximum(den, 0.0, out=den)
+    den += sum_b2
+    lo_s, hi_s = cv2.minMaxLoc(a)[:2]
+    lo_t, hi_t = cv2.minMaxLoc(b)[:2]
+    scale = max(hi_s - lo_s, hi_t - lo_t)  # data range, for the "both flat" test
+    out = np.zeros(den.shape, np.float32)
+    np.divide(num, den, out=out, where=den > (2.0 * _FLAT_RTOL * n) * scale * scale)
+    out *= 2.0
+    return np.clip(out, -1.0, 1.0, out=out)
 
 
 @dataclass
@@ -89,6 +102,41 @@ def _parabola(c_m: float, c_0: float, c_p: float) -> float:
     return float(np.clip(0.5 * (c_m - c_p) / curv, -0.5, 0.5))
 
 
+_U = np.array([[-1.0, 0.0, 1.0]] * 3)  # column offset of each 3x3 neighbour
+_V = _U.T  # row offset
+
+
+def _quadratic_peak(c3: np.ndarray) -> tuple[float, float] | None:
+    """Vertex of the least-squares quadratic a + b u + c v + d u^2 + e v^2 + f u v on a 3x3 patch.
+
+    Unlike two separable parabolas it follows a peak elongated along a diagonal. Returns None
+    unless the fit has a maximum; offsets clamped to +-0.5 px.
+    """
+    b = float((_U * c3).sum()) / 6.0
+    c = float((_V * c3).sum()) / 6.0
+    f = float((_U * _V * c3).sum()) / 4.0
+    d = float(((_U * _U - 2.0 / 3.0) * c3).sum()) / 2.0
+    e = float(((_V * _V - 2.0 / 3.0) * c3).sum()) / 2.0
+    det = 4.0 * d * e - f * f  # Hessian [[2d, f], [f, 2e]] must be negative definite
+    if not (d < 0.0 and det > 0.0):
+        return None
+    du = (-2.0 * e * b + f * c) / det
+    dv = (f * b - 2.0 * d * c) / det
+    return float(np.clip(du, -0.5, 0.5)), float(np.clip(dv, -0.5, 0.5))
+
+
+def _subpixel_peak(c: np.ndarray, u: int, v: int) -> tuple[float, float]:
+    """Sub-pixel offset of the coherence peak at (u, v): 2-D quadratic, else separable parabolas."""
+    rows, cols = c.shape
+    if 0 < u < cols - 1 and 0 < v < rows - 1:
+        q = _quadratic_peak(c[v - 1 : v + 2, u - 1 : u + 2].astype(np.float64))
+        if q is not None:
+            return q
+    fx = _parabola(float(c[v, u - 1]), float(c[v, u]), float(c[v, u + 1])) if 0 < u < cols - 1 else 0.0
+    fy = _parabola(float(c[v - 1, u]), float(c[v, u]), float(c[v + 1, u])) if 0 < v < rows - 1 else 0.0
+    return fx, fy
+
+
 class PnccTracker:
     """Frame-to-frame PNCC point tracker (seed 000 §2.2.2, Algorithm 2).
 
@@ -96,9 +144,14 @@ class PnccTracker:
     searched for at the candidate centres within +-``search_radius`` px of the last point (the
     61x61 "search window"), the argmax of coherence is the new point (Alg. 2 step 4) and the
     template is replaced by the pixels there. With integer positions this drifts by
-    discretisation (§4.2). ``subpixel=True`` refines the peak with a separable parabola on its
-    3x3 neighbourhood (clamped to +-0.5 px) and re-extracts the template there
-    (``cv2.getRectSubPix``). ``mode="anchored"`` also keeps the first template as an anchor
+    discretisation (§4.2). ``subpixel=True`` refines the peak with a quadratic fitted to its
+    3x3 neighbourhood (with the cross term, so that a diagonal ridge is followed; separable
+    parabolas as fallback; clamped to +-0.5 px) and re-extracts the template there
+    (``cv2.getRectSubPix``). On real texture the correlation peak is asymmetric, so any 3-point
+    fit is biased by ~0.01-0.03 px even at zero motion, and template replacement accumulates
+    that bias frame after frame; the sub-pixel step is therefore the mean of the forward match
+    and of the backward match (new template searched in the previous frame, +-2 px), which
+    cancels it. ``mode="anchored"`` also keeps the first template as an anchor
     and, when it still matches with coherence >= ``min_coherence`` within ``anchor_radius`` px
     of the frame-to-frame match, takes the anchor's match: the random walk stops.
 
@@ -133,6 +186,7 @@ class PnccTracker:
         self.anchor_radius = int(anchor_radius)
         self._half = self.template_size // 2
         self._template: np.ndarray | None = None
+        self._prev: tuple[np.ndarray, tuple[int, int]] | None = None  # (crop, origin), subpixel only
         self._anchor: np.ndarray | None = None
         self.x = float("nan")
         self.y = float("nan")
@@ -182,8 +236,18 @@ class PnccTracker:
         self._template = self._extract(img, x, y)
         self._anchor = self._template.copy() if self.mode == "anchored" else None
         self.x, self.y, self.coherence = float(x), float(y), 1.0
+        self._keep_previous(img)
         self.frames = 0
         self.used_anchor = False
+
+    def _keep_previous(self, img: np.ndarray) -> None:
+        """Subpixel mode: copy the part of this frame the backward match will search."""
+        if not self.subpixel:
+            return
+        m = self._half + _BACK_RADIUS + 1
+        cx, cy = int(round(self.x)), int(round(self.y))
+        x0, y0 = max(cx - m, 0), max(cy - m, 0)
+        self._prev = (img[y0 : cy + m + 1, x0 : cx + m + 1].copy(), (x0, y0))
 
     def _match(self, img: np.ndarray, template: np.ndarray, cx: int, cy: int, radius: int, origin=(0, 0)):
         """Best centre for ``template`` within +-radius of (cx, cy), clipped to the image.
@@ -211,12 +275,7 @@ class PnccTracker:
             or (v == 0 and y0 > cy - radius)
             or (v == c.shape[0] - 1 and y1 < cy + radius)
         )
-        fx = fy = 0.0
-        if self.subpixel:
-            if 0 < u < c.shape[1] - 1:
-                fx = _parabola(float(c[v, u - 1]), best, float(c[v, u + 1]))
-            if 0 < v < c.shape[0] - 1:
-                fy = _parabola(float(c[v - 1, u]), best, float(c[v + 1, u]))
+        fx, fy = _subpixel_peak(c, u, v) if self.subpixel else (0.0, 0.0)
         return ox + x0 + u + fx, oy + y0 + v + fy, best, clipped_hit
 
     def _fail(self, coherence: float, reason: str) -> TrackResult:
@@ -236,13 +295,21 @@ class PnccTracker:
         x, y, coh, clipped_hit = m
         if clipped_hit or coh < self.min_coherence:
             return self._fail(coh, "edge" if (clipped_hit or self._clipped(img.shape, cx, cy)) else "low coherence")
+        if self._prev is not None:  # forward-backward mean (see class docstring)
+            crop, origin = self._prev
+            b = self._match(crop, self._extract(img, x, y), cx, cy, _BACK_RADIUS, origin)
+            if b is not None and b[2] >= self.min_coherence:
+                x, y = x + 0.5 * (self.x - b[0]), y + 0.5 * (self.y - b[1])
         if self._anchor is not None:
             a = self._match(img, self._anchor, int(round(x)), int(round(y)), self.anchor_radius)
             if a is not None and not a[3] and a[2] >= self.min_coherence:
                 x, y, coh, _ = a
                 self.used_anchor = True
+        if not self._fits(img.shape, x, y):  # a sub-pixel correction pushed it past the edge
+            return self._fail(coh, "edge")
         self._template = self._extract(img, x, y)
         self.x, self.y, self.coherence = float(x), float(y), float(coh)
+        self._keep_previous(img)
         return TrackResult(self.x, self.y, self.coherence, True, "")
 
     def _clipped(self, shape: tuple[int, int], cx: int, cy: int) -> bool:

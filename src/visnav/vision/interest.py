@@ -40,6 +40,9 @@ DEFAULT_BORDER = 10 + 30
 #: C counts as singular (Alg. 1 step 3: "assign it a value 0") when λ2 <= this * λ1.
 _SINGULAR_RTOL = 1e-6
 
+#: Pixels never to pick: a boolean mask shaped like the image (True = excluded) or (x, y, radius) discs.
+Exclusion = np.ndarray | Iterable[tuple[float, float, float]] | None
+
 _GRAD_KERNEL = np.array([[1.0, 0.0, -1.0]], dtype=np.float32)  # I(x-1) - I(x+1) (Alg. 1)
 
 
@@ -89,17 +92,19 @@ def _eigen(img: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
     def box(a: np.ndarray) -> np.ndarray:  # window sum; gradients outside the image count 0
         return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_CONSTANT)
 
-    mxx = box(ix * ix).astype(np.float64)
-    myy = box(iy * iy).astype(np.float64)
-    mxy = box(ix * iy).astype(np.float64)
+    mxx, myy, mxy = box(ix * ix), box(iy * iy), box(ix * iy)
     # Alg. 1: λ1,2 = (Mxx + Myy +- sqrt(4 Mxy^2 + (Mxx - Myy)^2)) / 2. Same values, written
-    # without cancellation: λ1 from the + branch, λ2 = det(C) / λ1.
-    tr = mxx + myy
+    # without cancellation: λ1 from the + branch, λ2 = det(C) / λ1 (exactly 0 for a singular C
+    # with integer moments, e.g. an axis-aligned or diagonal straight edge in a uint8 image).
+    diff = mxx - myy
+    lam1 = mxx + myy
+    lam1 += np.sqrt(diff * diff + 4.0 * mxy * mxy)
+    lam1 *= 0.5
     det = mxx * myy - mxy * mxy
-    lam1 = 0.5 * (tr + np.sqrt(4.0 * mxy * mxy + (mxx - myy) ** 2))
-    lam2 = np.divide(det, lam1, out=np.zeros_like(lam1), where=lam1 > 0)
+    lam2 = np.zeros_like(lam1)
+    np.divide(det, lam1, out=lam2, where=lam1 > 0)
     np.maximum(lam2, 0.0, out=lam2)
-    return lam1.astype(np.float32), lam2.astype(np.float32)
+    return lam1, lam2
 
 
 def forstner_response(image: np.ndarray, feature_size: int = 7) -> tuple[np.ndarray, np.ndarray]:
@@ -139,7 +144,7 @@ def _bounds(shape: tuple[int, int], region: Sequence[int] | None, border: int) -
     return x0, y0, x1, y1
 
 
-def _exclusion_mask(exclude, shape: tuple[int, int]) -> np.ndarray | None:
+def _exclusion_mask(exclude: Exclusion, shape: tuple[int, int]) -> np.ndarray | None:
     """``exclude``: a boolean mask (True = not eligible) or an iterable of (x, y, radius) discs."""
     if exclude is None:
         return None
@@ -234,7 +239,7 @@ def forstner(
     region: Sequence[int] | None = None,
     min_isotropy: float = 0.2,
     border: int = DEFAULT_BORDER,
-    exclude=None,
+    exclude: Exclusion = None,
     refine: bool = False,
 ) -> InterestPoint | None:
     """Strongest feature: argmax of λ1 (seed 000 Alg. 1) among eligible pixels, or None.
@@ -244,7 +249,8 @@ def forstner(
     in ``region`` = (x0, y0, x1, y1) (half-open pixel rectangle, default the whole image), at
     least ``border`` px from every image edge (default: a 21x21 template and a +-30 px search
     fit), and not in ``exclude`` (boolean mask, True = excluded, or (x, y, radius) discs).
-    Returns None when nothing is eligible (e.g. a flat image).
+    Returns None when nothing is eligible (e.g. a flat image). ``refine=True`` moves the point to
+    the Förstner-Gülch sub-pixel corner in its feature window (λ1, λ2 stay the pixel's).
     """
     out = _scores(image, feature_size, region, min_isotropy, border, exclude)
     if out is None:
@@ -264,7 +270,7 @@ def forstner_top_k(
     region: Sequence[int] | None = None,
     min_isotropy: float = 0.2,
     border: int = DEFAULT_BORDER,
-    exclude=None,
+    exclude: Exclusion = None,
     min_distance: float = 10.0,
     refine: bool = False,
 ) -> list[InterestPoint]:

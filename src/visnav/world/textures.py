@@ -217,7 +217,9 @@ def detail_tile(
         raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
     n = int(round(period / res))
     if not 16 <= n <= 8192:
-        raise ValueError(f"period_m / resolution_m must give 16..8192 px, got {period_m}/{resolution_m} = {n}")
+        raise ValueError(
+            f"period_m / resolution_m must give 16..8192 px, got {period_m}/{resolution_m} = {n}"
+        )
     n += n % 2
     photo = np.asarray(_photo(surface))
     interp = cv2.INTER_AREA if n < photo.shape[0] else cv2.INTER_CUBIC

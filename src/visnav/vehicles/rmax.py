@@ -1,0 +1,295 @@
+"""YACS-augmented Yamaha RMAX model (seed 002 §3.5).
+
+Attitude, yaw rate and heave come from the identified YACS + helicopter transfer functions
+(seed 002 eq. 3.4, rebuilt from the garbled text):
+
+    φ/ail  = 2.3 (s² + 3.87 s + 53.3) / ((s² + 6.29 s + 16.2)(s² + 8.97 s + 168))   [deg / unit]
+    θ/ele  = 0.5 (s² + 9.76 s + 75.5) / ((s² + 3 s + 5.55)(s² + 2.06 s + 123.5))    [deg / unit]
+    r/rud  = 9.7 (s + 12.25) / ((s + 4.17)(s² + 3.5 s + 213.4))                    [deg/s / unit]
+    aZ/thr = 0.0828 s (s + 3.37) / ((s + 0.95)(s² + 13.1 s + 214.1))                [g / unit]
+
+p, q and ψ follow from the Euler kinematics (eq. 3.7) and the translation from eq. 3.9 with the
+thrust of eq. 3.10, T = −g − g·ΔaZ (positive thr = up). Drag acts on the air-relative body
+velocity. The hover roll of 4.5 deg that balances the tail rotor is not modelled (seed 002 §3.5.2).
+
+Heave note: aZ/thr has a zero at s = 0, so with the drag Zw the steady climb rate for a constant
+thr is zero; the climb rate is ḣ/thr = g s H(s)/(s − Zw) with aZ/thr = s H(s), and a thr step
+moves the height by g H(0)/(−Zw) m per unit (``heave_height_gain``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import signal
+
+from visnav.measurements import VehicleState, YacsCommand
+
+#: channel -> (numerator, denominator), highest power first; units in the module docstring.
+RMAX_TRANSFER_FUNCTIONS: dict[str, tuple[np.ndarray, np.ndarray]] = {
+    "roll": (2.3 * np.array([1.0, 3.87, 53.3]), np.polymul([1.0, 6.29, 16.2], [1.0, 8.97, 168.0])),
+    "pitch": (0.5 * np.array([1.0, 9.76, 75.5]), np.polymul([1.0, 3.0, 5.55], [1.0, 2.06, 123.5])),
+    "yaw_rate": (9.7 * np.array([1.0, 12.25]), np.polymul([1.0, 4.17], [1.0, 3.5, 213.4])),
+    "heave": (0.0828 * np.polymul([1.0, 0.0], [1.0, 3.37]), np.polymul([1.0, 0.95], [1.0, 13.1, 214.1])),
+}
+#: the YACS input that drives each channel
+CHANNEL_INPUTS: dict[str, str] = {"roll": "ail", "pitch": "ele", "yaw_rate": "rud", "heave": "thr"}
+_CHANNELS = ("roll", "pitch", "yaw_rate", "heave")
+
+
+def dc_gain(channel: str) -> float:
+    """Steady-state gain of one eq. 3.4 channel (0 for heave, which has a zero at s = 0)."""
+    num, den = RMAX_TRANSFER_FUNCTIONS[channel]
+    return float(num[-1] / den[-1])
+
+
+def heave_height_gain(zw: float = -0.6, g: float = 9.81) -> float:
+    """Height change per unit of a held thr step [m/unit]: g H(0)/(−Zw) (eq. 3.4, 3.9, 3.10)."""
+    if not zw < 0:
+        raise ValueError(f"zw must be negative, got {zw}")
+    num, den = RMAX_TRANSFER_FUNCTIONS["heave"]
+    h0 = num[-2] / den[-1]  # aZ = s H(s) thr, H(0) = coefficient of s over the constant term
+    return float(g * h0 / -zw)
+
+
+@dataclass(frozen=True)
+class ChannelModel:
+    """One eq. 3.4 channel: continuous (A, B, C) and its zero-order-hold discretisation at ``dt``."""
+
+    name: str
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    Ad: np.ndarray
+    Bd: np.ndarray
+    dt: float
+
+
+def rmax_state_space(dt: float) -> dict[str, ChannelModel]:
+    """The four eq. 3.4 channels as continuous and ZOH-discrete state space (inputs in YACS units)."""
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
+    out = {}
+    for name in _CHANNELS:
+        A, B, C, D = signal.tf2ss(*RMAX_TRANSFER_FUNCTIONS[name])
+        Ad, Bd, _, _, _ = signal.cont2discrete((A, B, C, D), dt, method="zoh")
+        out[name] = ChannelModel(name, A, B, C, Ad, Bd, float(dt))
+    return out
+
+
+def _block_diag_model(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """All four channels stacked: x+ = Ad x + Bd u, y = C x, ẏ = CA x (u = ail, ele, rud, thr)."""
+    ch = rmax_state_space(dt)
+    n = [ch[c].A.shape[0] for c in _CHANNELS]
+    N = sum(n)
+    Ad, Bd = np.zeros((N, N)), np.zeros((N, 4))
+    C, CA = np.zeros((4, N)), np.zeros((4, N))
+    i = 0
+    for k, c in enumerate(_CHANNELS):
+        m = ch[c]
+        s = slice(i, i + n[k])
+        Ad[s, s], Bd[s, k] = m.Ad, m.Bd[:, 0]
+        C[k, s], CA[k, s] = m.C[0], (m.C @ m.A)[0]
+        i += n[k]
+    return Ad, Bd, C, CA
+
+
+@dataclass
+class RmaxParams:
+    """Parameters of eq. 3.9-3.10. ``trim`` is the absolute YACS input at trim (ail, ele, rud, thr):
+    the commands are increments from it and trim + increment is saturated at ±``input_limit``."""
+
+    Xu: float = -0.025
+    Yv: float = -0.1
+    Zw: float = -0.6
+    g: float = 9.81
+    input_limit: float = 500.0
+    mass_kg: float = 94.0  # recorded only; eq. 3.9 is per unit mass
+    trim: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        for name in ("Xu", "Yv", "Zw"):
+            if not getattr(self, name) < 0:
+                raise ValueError(f"{name} must be negative (drag), got {getattr(self, name)}")
+        if not self.g > 0:
+            raise ValueError(f"g must be positive, got {self.g}")
+        if not self.input_limit > 0:
+            raise ValueError(f"input_limit must be positive, got {self.input_limit}")
+        if len(self.trim) != 4 or any(abs(x) >= self.input_limit for x in self.trim):
+            raise ValueError(f"trim must be 4 values inside ±input_limit, got {self.trim}")
+
+
+def _dcm_bn(phi: float, theta: float, psi: float) -> tuple[tuple[float, ...], ...]:
+    """C_bn of seed 002 eq. 3.2 (body -> NED), rows as tuples."""
+    cf, sf, ct, st, cp, sp = (math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta),
+                              math.cos(psi), math.sin(psi))
+    return ((ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp),
+            (ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp),
+            (-st, sf * ct, cf * ct))
+
+
+def _psi_rate(att: tuple) -> float:
+    """ψ̇ = (q sinφ + r cosφ)/cosθ (eq. 3.7)."""
+    phi, theta, _, q, r, _ = att
+    return (q * math.sin(phi) + r * math.cos(phi)) / math.cos(theta)
+
+
+class RmaxModel:
+    """The augmented RMAX of seed 002 §3.5; ``step`` advances by dt and returns the new truth.
+
+    The state position is the skid reference point; the ground is the plane z = 0 (NED).
+    """
+
+    def __init__(self, params: RmaxParams | None = None, dt: float = 0.01,
+                 initial: VehicleState | None = None, *, position: ArrayLike = (0.0, 0.0, 0.0),
+                 yaw: float = 0.0, t0: float = 0.0) -> None:
+        self.params = params if params is not None else RmaxParams()
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
+        self.dt = float(dt)
+        self._cache: dict[float, tuple[np.ndarray, ...]] = {}
+        _, _, self._C, self._CA, _, _ = self._matrices(self.dt)
+        self._x = np.zeros(self._C.shape[1])
+        if initial is not None:
+            if np.any(np.abs(initial.euler[:2]) > 1e-12) or np.any(np.abs(initial.body_rates) > 1e-12):
+                raise ValueError("initial: RmaxModel starts trimmed; roll, pitch and body_rates must be 0, "
+                                 f"got euler={initial.euler}, body_rates={initial.body_rates}")
+            pos, yaw, t0 = np.asarray(initial.position, float), float(initial.euler[2]), initial.t
+            vel_ned = np.asarray(initial.velocity, float)
+        else:
+            pos, vel_ned = np.asarray(position, float), np.zeros(3)
+        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
+            raise ValueError(f"position must be 3 finite NED values, got {pos}")
+        cb = np.array(_dcm_bn(0.0, 0.0, yaw))
+        self._y = np.concatenate([cb.T @ vel_ned, pos, [yaw]])  # u v w N E D psi
+        self._u = np.zeros(4)
+        self.t = float(t0)
+        self.on_ground = bool(pos[2] >= 0.0)
+        if self.on_ground:
+            self._y[2] = self._y[5] = 0.0
+            self._y[0:3] = 0.0
+        self.touchdown_speed = float("nan")
+        self.state = self._make_state(np.zeros(3))
+
+    # -- transfer-function part ------------------------------------------------------------------
+    def _matrices(self, dt: float) -> tuple[np.ndarray, ...]:
+        key = round(dt, 12)
+        if key not in self._cache:
+            Ad, Bd, C, CA = _block_diag_model(dt)
+            Ah, Bh, _, _ = _block_diag_model(dt / 2)
+            self._cache[key] = (Ad, Bd, C, CA, Ah, Bh)
+        return self._cache[key]
+
+    def _attitude(self, x: np.ndarray) -> tuple[float, float, float, float, float, float]:
+        """φ, θ [rad], p, q, r [rad/s] and ΔaZ [g] from the TF state (eq. 3.4, 3.7)."""
+        y, yd = self._C @ x, self._CA @ x
+        d2r = math.pi / 180.0
+        phi, theta, r, az = y[0] * d2r, y[1] * d2r, y[2] * d2r, y[3]
+        phid, thetad = yd[0] * d2r, yd[1] * d2r  # relative degree 2: CB = 0 (roll, pitch)
+        cf, sf, ct = math.cos(phi), math.sin(phi), math.cos(theta)
+        q = (thetad + r * sf) / cf
+        p = phid - (q * sf + r * cf) * math.tan(theta)
+        return phi, theta, p, q, r, az
+
+    @property
+    def yacs_outputs(self) -> dict[str, float]:
+        """Current eq. 3.4 outputs in their own units: roll/pitch [deg], yaw rate [deg/s], aZ [g]."""
+        y = self._C @ self._x
+        return {"roll_deg": float(y[0]), "pitch_deg": float(y[1]),
+                "yaw_rate_deg_s": float(y[2]), "az_g": float(y[3])}
+
+    # -- translational part ----------------------------------------------------------------------
+    def _deriv(self, y: np.ndarray, att: tuple, wind_ned: np.ndarray) -> tuple[np.ndarray, tuple]:
+        """Eq. 3.9 with T = −g(1 + ΔaZ) (eq. 3.10); returns d/dt of (u v w N E D ψ) and the
+        air-relative drag+thrust part (the specific force)."""
+        P = self.params
+        phi, theta, p, q, r, az = att
+        u, v, w, psi = y[0], y[1], y[2], y[6]
+        R = _dcm_bn(phi, theta, psi)
+        wx, wy, wz = wind_ned
+        ub = R[0][0] * wx + R[1][0] * wy + R[2][0] * wz  # C_nb wind = C_bn^T wind
+        vb = R[0][1] * wx + R[1][1] * wy + R[2][1] * wz
+        wb = R[0][2] * wx + R[1][2] * wy + R[2][2] * wz
+        fx, fy = P.Xu * (u - ub), P.Yv * (v - vb)
+        fz = P.Zw * (w - wb) - P.g * (1.0 + az)
+        g = P.g
+        ct, st, cf, sf = math.cos(theta), math.sin(theta), math.cos(phi), math.sin(phi)
+        du = fx - q * w + r * v - g * st
+        dv = fy - r * u + p * w + g * ct * sf
+        dw = fz - p * v + q * u + g * ct * cf
+        dpsi = _psi_rate(att)
+        d = np.array([du, dv, dw,
+                      R[0][0] * u + R[0][1] * v + R[0][2] * w,
+                      R[1][0] * u + R[1][1] * v + R[1][2] * w,
+                      R[2][0] * u + R[2][1] * v + R[2][2] * w, dpsi])
+        return d, (fx, fy, fz)
+
+    def _saturate(self, command: YacsCommand) -> np.ndarray:
+        raw = np.array([command.ail, command.ele, command.rud, command.thr], dtype=float)
+        if not np.all(np.isfinite(raw)):
+            raise ValueError(f"command must be finite, got {command}")
+        lim, trim = self.params.input_limit, np.asarray(self.params.trim)
+        return np.clip(trim + raw, -lim, lim) - trim
+
+    def step(self, command: YacsCommand, dt: float | None = None,
+             wind_ned: ArrayLike | None = None) -> VehicleState:
+        """Advance by ``dt`` (default: the model's dt) under a held command and a steady wind."""
+        dt = self.dt if dt is None else float(dt)
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
+        wind = np.zeros(3) if wind_ned is None else np.asarray(wind_ned, dtype=float)
+        if wind.shape != (3,) or not np.all(np.isfinite(wind)):
+            raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
+        Ad, Bd, _, _, Ah, Bh = self._matrices(dt)
+        u = self._saturate(command)
+        x0 = self._x
+        xh, x1 = Ah @ x0 + Bh @ u, Ad @ x0 + Bd @ u  # exact TF states at t, t + dt/2, t + dt
+        a0, ah, a1 = self._attitude(x0), self._attitude(xh), self._attitude(x1)
+        y = self._y
+        if self.on_ground and self._down_accel(y, a0, wind) < 0.0:  # net upward force: lift off
+            self.on_ground = False
+        if self.on_ground:  # skids hold the position; attitude still follows eq. 3.4
+            y1 = y.copy()
+            y1[6] += dt * (_psi_rate(a0) + 4 * _psi_rate(ah) + _psi_rate(a1)) / 6.0
+        else:
+            k1, _ = self._deriv(y, a0, wind)
+            k2, _ = self._deriv(y + 0.5 * dt * k1, ah, wind)
+            k3, _ = self._deriv(y + 0.5 * dt * k2, ah, wind)
+            k4, _ = self._deriv(y + dt * k3, a1, wind)
+            y1 = y + dt * (k1 + 2 * k2 + 2 * k3 + k4) / 6.0
+            row = _dcm_bn(a1[0], a1[1], y1[6])[2]
+            vd = row[0] * y1[0] + row[1] * y1[1] + row[2] * y1[2]
+            if y1[5] >= 0.0 and vd > 0.0:  # touchdown
+                self.touchdown_speed = float(vd)
+                self.on_ground = True
+        if self.on_ground:
+            y1[0:3] = 0.0
+            y1[5] = 0.0
+        self._x, self._y, self._u = x1, y1, u
+        self.t = round(self.t + dt, 12)  # no float drift over long runs
+        self.state = self._make_state(wind)
+        return self.state
+
+    def _down_accel(self, y: np.ndarray, att: tuple, wind: np.ndarray) -> float:
+        """NED down component of the acceleration the vehicle would have at rest."""
+        y0 = y.copy()
+        y0[0:3] = 0.0
+        d, _ = self._deriv(y0, att, wind)
+        row = _dcm_bn(att[0], att[1], y[6])[2]
+        return row[0] * d[0] + row[1] * d[1] + row[2] * d[2]
+
+    def _make_state(self, wind: np.ndarray) -> VehicleState:
+        phi, theta, p, q, r, _ = att = self._attitude(self._x)
+        y = self._y
+        R = np.array(_dcm_bn(phi, theta, y[6]))
+        if self.on_ground:  # the ground carries the weight
+            f = -R.T @ np.array([0.0, 0.0, self.params.g])
+        else:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
+            f = np.array(self._deriv(y, att, wind)[1])
+        psi = (y[6] + math.pi) % (2 * math.pi) - math.pi
+        return VehicleState(t=self.t, position=y[3:6].copy(), velocity=R @ y[0:3],
+                            euler=np.array([phi, theta, psi]), body_rates=np.array([p, q, r]),
+                            specific_force=f, on_ground=self.on_ground)

@@ -1,0 +1,48 @@
+"""The navigator rejects and counts bad samples instead of crashing (NaN, negative, out of order)."""
+
+import numpy as np
+
+from visnav.geometry.camera import PinholeCamera
+from visnav.geometry.mounts import FixedMount
+from visnav.measurements import AttitudeSample, GpsSample, ImuSample, RangeSample
+from visnav.navigation.palace import PalaceNavigator
+from visnav.scenarios.schema import NavigationConfig
+
+
+def _nav():
+    return PalaceNavigator(NavigationConfig(), PinholeCamera.ideal(), FixedMount.depressed(60.0))
+
+
+def test_bad_samples_are_counted_not_fatal():
+    nav = _nav()
+    nav.update(GpsSample(0.0, np.array([0.0, 0.0, -10.0]), np.zeros(3)))
+    nav.update(AttitudeSample(0.0, np.zeros(3)))
+    nav.update(ImuSample(0.01, np.array([0.0, 0.0, -9.81]), np.zeros(3)))
+    nav.update(ImuSample(0.02, np.array([np.nan, 0.0, -9.81]), np.zeros(3)))  # NaN
+    nav.update(ImuSample(0.005, np.array([0.0, 0.0, -9.81]), np.zeros(3)))  # out of order
+    nav.update(AttitudeSample(0.02, np.array([np.nan, 0.0, 0.0])))
+    nav.update(GpsSample(0.1, np.array([np.nan, 0.0, -10.0]), np.zeros(3)))
+    nav.update(RangeSample(0.1, -2.0, "laser"))
+    nav.update(RangeSample(0.1, float("nan"), "laser"))  # no return: not an error, but laser not ok
+    h = nav.health(0.1)
+    assert h.rejected_samples == 4
+    assert h.rejected_ranges == 1
+    assert h.laser_ok is False
+    est = nav.estimate(0.1)
+    assert np.all(np.isfinite(est.position)) and abs(est.position[2] + 10.0) < 1e-3
+
+
+def test_hover_prediction_keeps_position():
+    nav = _nav()
+    nav.update(GpsSample(0.0, np.array([1.0, 2.0, -10.0]), np.zeros(3)))
+    for k in range(1, 101):
+        t = k * 0.01
+        nav.update(AttitudeSample(t, np.zeros(3)))
+        nav.update(ImuSample(t, np.array([0.0, 0.0, -9.81]), np.zeros(3)))
+    np.testing.assert_allclose(nav.estimate(1.0).position, [1.0, 2.0, -10.0], atol=1e-9)
+    # a constant 1 m/s^2 northward specific force (level) integrates to 0.5 a t^2
+    for k in range(101, 201):
+        t = k * 0.01
+        nav.update(AttitudeSample(t, np.zeros(3)))
+        nav.update(ImuSample(t, np.array([1.0, 0.0, -9.81]), np.zeros(3)))
+    assert abs(nav.estimate(2.0).position[0] - 1.5) < 1e-9
