@@ -29,44 +29,45 @@ PLANT_TFS: dict[str, tuple[list[float], list[float]]] = {
     "yaw_rate": (list(9.7 * np.array([1.0, 12.25])), list(np.polymul([1, 4.17], [1, 3.5, 213.4]))),
     "heave": (list(0.0828 * np.polymul([1, 0], [1, 3.37])), list(np.polymul([1, 0.95], [1, 13.1, 214.1]))),
 }
-#: eq. 3.9 drag derivatives Xu, Yv, Zw [1/s]
-DRAG = {"x": -0.025, "y": -0.1, "z": -0.6}
+#: eq. 3.9 drag derivatives Xu, Yv and the effective heave damping [1/s]. The vehicle model's
+#: default acts Zw on the air mass only (the identified aZ/thr already holds a climb rate, see
+#: vehicles/rmax.py), so the heave plant seen by the controller has no own-motion damping: 0.
+DRAG = {"x": -0.025, "y": -0.1, "z": 0.0}
 
 
-def _tf(name: str) -> ct.TransferFunction:
-    return ct.tf(*PLANT_TFS[name])
+def _dc(name: str, order: int = 0) -> float:
+    num, den = PLANT_TFS[name]
+    return num[-1 - order] / den[-1]
 
 
-ROLL_DC = PLANT_TFS["roll"][0][-1] / PLANT_TFS["roll"][1][-1]  # deg per unit
-PITCH_DC = PLANT_TFS["pitch"][0][-1] / PLANT_TFS["pitch"][1][-1]
-YAW_RATE_DC = PLANT_TFS["yaw_rate"][0][-1] / PLANT_TFS["yaw_rate"][1][-1]  # deg/s per unit
-#: aZ/thr = s H(s); H(0) [g s per unit]. Without drag a thr step is a climb-rate step of g H(0).
-HEAVE_H0 = PLANT_TFS["heave"][0][-2] / PLANT_TFS["heave"][1][-1]
-CLIMB_GAIN = G * HEAVE_H0  # [m/s per unit], the YACS vertical-rate gain before the Zw washout
+ROLL_DC, PITCH_DC, YAW_RATE_DC = _dc("roll"), _dc("pitch"), _dc("yaw_rate")  # deg (/s) per unit
+#: aZ/thr = s H(s), H(0) [g s per unit]: without the Zw drag a thr step is a climb-rate step of g H(0)
+HEAVE_H0 = _dc("heave", 1)
+CLIMB_GAIN = G * HEAVE_H0  # [m/s per unit]; with Zw the steady climb rate of a held thr is 0
 
 
 def normalized_plant(axis: str, delay: float = 0.05, pade_order: int = 3) -> ct.TransferFunction:
     """Plant seen by the PID at the cyclic (or pedal, collective) actuator, per unit of PID output.
 
-    lateral:      a_y -> ail = deg(a_y/g)/φ_dc -> φ (eq. 3.4) -> v̇ = Yv v + gφ -> y:  Gφ/Gφ(0)/(s(s−Yv))
-    longitudinal: a_x -> ele = deg(−a_x/g)/θ_dc -> θ -> u̇ = Xu u − gθ -> x:         Gθ/Gθ(0)/(s(s−Xu))
-    vertical:     a -> thr = a/(g H(0)) -> aZ = s H(s) thr -> ḣ̇ = Zw ḣ + g aZ -> h:    H/H(0)/(s−Zw)
-    yaw:          ψ̇_c -> rud -> r (eq. 3.4) -> ψ:                                    Gr/Gr(0)/s
+    lateral:  a_y -> ail = deg(a_y/g)/φ_dc -> φ (eq. 3.4) -> v̇ = Yv v + gφ -> y: Gφ/Gφ(0)/(s(s−Yv))
+    longit.:  a_x -> ele = deg(−a_x/g)/θ_dc -> θ -> u̇ = Xu u − gθ -> x:        Gθ/Gθ(0)/(s(s−Xu))
+    vertical: a -> thr = a/(g H(0)) -> aZ = s H(s) thr -> ḧ = Zw ḣ + g aZ -> h:  H/H(0)/(s−Zw)
+    yaw:      ψ̇_c -> rud -> r (eq. 3.4) -> ψ:                                 Gr/Gr(0)/s
     times a Padé approximation of ``delay`` (half a controller sample + any sensor delay).
     """
     s = ct.tf("s")
     if axis == "lateral":
-        p = _tf("roll") / ROLL_DC / (s * (s - DRAG["y"]))
+        p = ct.tf(*PLANT_TFS["roll"]) / ROLL_DC / (s * (s - DRAG["y"]))
     elif axis == "longitudinal":
-        p = _tf("pitch") / PITCH_DC / (s * (s - DRAG["x"]))
+        p = ct.tf(*PLANT_TFS["pitch"]) / PITCH_DC / (s * (s - DRAG["x"]))
     elif axis == "vertical":
         num, den = PLANT_TFS["heave"]
         p = ct.tf(np.asarray(num[:-1]) / HEAVE_H0, den) / (s - DRAG["z"])  # num/s = H(s)
     elif axis == "yaw":
-        p = _tf("yaw_rate") / YAW_RATE_DC / s
+        p = ct.tf(*PLANT_TFS["yaw_rate"]) / YAW_RATE_DC / s
     else:
         raise ValueError(f"axis must be lateral, longitudinal, vertical or yaw, got {axis!r}")
-    if delay < 0:
+    if not delay >= 0:
         raise ValueError(f"delay must be >= 0 s, got {delay}")
     if delay > 0:
         p = p * ct.tf(*ct.pade(delay, pade_order))
@@ -187,7 +188,7 @@ def _design_pid(plant: ct.TransferFunction, pm_min: float, gm_min_db: float, ki_
 
 
 def _gains_at(plant: ct.TransferFunction, w_c: float, pm: float, ki_ratio: float) -> AxisDesign:
-    """PID (or P when pm is None-like) gains placing the crossover at w_c with phase margin pm."""
+    """PID gains placing the crossover at w_c with phase margin pm (on the locus of ``_pm_locus``)."""
     kp, kd, ki = (float(g[0]) for g in _pm_locus(_freq(plant, np.array([w_c])), np.array([w_c]),
                                                    pm, ki_ratio))
     if not (kp > 0 and kd >= 0):
@@ -218,26 +219,28 @@ class RmaxPositionGains:
     and the drag derivatives used for feed-forward. Defaults: ``design_position_loop()``."""
 
     kp_lon: float = 0.281020
-    kd_lon: float = 0.941655
-    ki_lon: float = 0.0167731
+    kd_lon: float = 0.945858
+    ki_lon: float = 0.0208732
     kp_lat: float = 0.544867
-    kd_lat: float = 1.360494
-    ki_lat: float = 0.0436430
-    kp_vert: float = 1.0
-    kd_vert: float = 0.0
-    ki_vert: float = 0.0
-    k_yaw: float = 1.0
+    kd_lat: float = 1.36656
+    ki_lat: float = 0.0543116
+    kp_vert: float = 1.37959
+    kd_vert: float = 0.770461
+    ki_vert: float = 0.617572
+    k_yaw: float = 1.02028
     max_tilt: float = math.radians(15.0)  # attitude command limit [rad]
     max_yaw_rate: float = math.radians(30.0)  # [rad/s]
     integral_limit: float = 1.0  # horizontal integral contribution [m/s²]
-    integral_zone: float = 0.5  # integrate while the horizontal error is below this [m] ...
-    integral_speed_zone: float = 0.2  # ... or the horizontal velocity error below this [m/s]
+    integral_zone: float = 0.5  # integrate while the horizontal error is below this [m], or ...
+    integral_speed_zone: float = 0.2  # ... the velocity error stayed below this [m/s] ...
+    integral_settle_time: float = 2.0  # ... for this long [s] (a steady offset, not a transient)
     drag: tuple[float, float, float] = (DRAG["x"], DRAG["y"], DRAG["z"])  # Xu, Yv, Zw [1/s]
     input_limit: float = 500.0
 
     def __post_init__(self) -> None:
         for name in ("kp_lon", "kd_lon", "ki_lon", "kp_lat", "kd_lat", "ki_lat", "kp_vert", "kd_vert",
-                     "ki_vert", "k_yaw", "integral_limit", "integral_zone", "integral_speed_zone"):
+                     "ki_vert", "k_yaw", "integral_limit", "integral_zone", "integral_speed_zone",
+                     "integral_settle_time"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
@@ -263,7 +266,7 @@ class DesignResult:
 
 
 def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_deg: float = 45.0,
-                         min_gm_db: float = 6.0, ki_ratio: float = 0.2, vertical_crossover: float = 1.0,
+                         min_gm_db: float = 6.0, ki_ratio: float = 0.25, vertical_crossover: float = 1.0,
                          vertical_pm_deg: float = 60.0, vertical_ki_ratio: float = 0.25,
                          yaw_crossover: float = 1.0, pade_order: int = 3,
                          base: RmaxPositionGains | None = None) -> DesignResult:
@@ -275,7 +278,8 @@ def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_
 
     Lateral and longitudinal: a PID C = Kp + Kd s + Ki/s with Ki = ki_ratio·Kp²/Kd. Putting the
     crossover at ω with phase margin φm fixes C(jω) = e^{j(φm−180°)}/P(jω), so Kp = Re C(jω)
-    whatever the Kd/Ki split, and Kd ω − Ki/ω = Im C(jω). The design takes the ω that maximises
+    whatever the Kd/Ki split, and Kd ω − Ki/ω = Im C(jω) (ki_ratio = 0.25 puts a double zero at
+    Kp/(2 Kd): C = Kd (s + Kp/(2Kd))²/s; 0 gives a PD). The design takes the ω that maximises
     Kp (the stiffest position loop) among those whose full loop keeps every crossover at >= φm
     and a gain margin >= min_gm_db, then reports the margins by ``control.stability_margins``.
     The highest crossover any PD could reach (pure velocity feedback, no position stiffness) is
@@ -293,22 +297,34 @@ def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_
         raise ValueError(f"ki_ratio must be >= 0, got {ki_ratio}")
     delay = 0.5 / rate_hz + delay_s
     w = np.geomspace(0.01, min(100.0, 20 * math.pi * rate_hz), 4000)
-    plants = {a: normalized_plant(a, delay, pade_order) for a in ("lateral", "longitudinal", "vertical", "yaw")}
+    axes = ("lateral", "longitudinal", "vertical", "yaw")
+    plants = {a: normalized_plant(a, delay, pade_order) for a in axes}
     lat = _design_pid(plants["lateral"], target_pm_deg, min_gm_db, ki_ratio, w)
     lon = _design_pid(plants["longitudinal"], target_pm_deg, min_gm_db, ki_ratio, w)
     vert = _gains_at(plants["vertical"], vertical_crossover, vertical_pm_deg, vertical_ki_ratio)
-    k_yaw = 1.0 / abs(_freq(plants["yaw"], np.array([yaw_crossover]))[0])
-    yaw_loop = k_yaw * plants["yaw"]
-    _check_stable(yaw_loop)
+    k_yaw = float(1.0 / abs(_freq(plants["yaw"], np.array([yaw_crossover]))[0]))
     gains = replace(base or RmaxPositionGains(), kp_lon=lon.kp, kd_lon=lon.kd, ki_lon=lon.ki,
                     kp_lat=lat.kp, kd_lat=lat.kd, ki_lat=lat.ki, kp_vert=vert.kp, kd_vert=vert.kd,
                     ki_vert=vert.ki, k_yaw=k_yaw)
-    loops = {"lateral": pid_tf(lat.kp, lat.kd, lat.ki) * plants["lateral"],
-             "longitudinal": pid_tf(lon.kp, lon.kd, lon.ki) * plants["longitudinal"],
-             "vertical": pid_tf(vert.kp, vert.kd, vert.ki) * plants["vertical"], "yaw": yaw_loop}
+    loops = {a: position_loop(a, gains, rate_hz, delay_s, pade_order) for a in plants}
+    _check_stable(loops["yaw"])
     limit = {a: _crossover_limit(plants[a], target_pm_deg, w) for a in ("lateral", "longitudinal")}
-    return DesignResult(gains, lat.margins, lon.margins, vert.margins, loop_margins(yaw_loop),
+    return DesignResult(gains, lat.margins, lon.margins, vert.margins, loop_margins(loops["yaw"]),
                         loops, limit, float(rate_hz), float(delay_s))
+
+
+def position_loop(axis: str, gains: RmaxPositionGains | None = None, rate_hz: float = 10.0,
+                  delay_s: float = 0.0, pade_order: int = 3) -> ct.TransferFunction:
+    """Loop transfer function of one axis broken at its actuator, for given gains and an extra
+    measurement delay (e.g. the 43 ms attitude delay of seed 000 §5.2)."""
+    k = gains or RmaxPositionGains()
+    pid = {"lateral": (k.kp_lat, k.kd_lat, k.ki_lat), "longitudinal": (k.kp_lon, k.kd_lon, k.ki_lon),
+           "vertical": (k.kp_vert, k.kd_vert, k.ki_vert), "yaw": (k.k_yaw, 0.0, 0.0)}
+    if axis not in pid:
+        raise ValueError(f"axis must be one of {sorted(pid)}, got {axis!r}")
+    if not (np.isfinite(rate_hz) and rate_hz > 0):
+        raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
+    return pid_tf(*pid[axis]) * normalized_plant(axis, 0.5 / rate_hz + delay_s, pade_order)
 
 
 def _wrap(a: float) -> float:
@@ -336,6 +352,7 @@ class RmaxPositionController:
         self._last_t: float | None = None
         self._held = YacsCommand(t=0.0)
         self._int_ne = np.zeros(2)  # world-frame horizontal integral [m/s²]
+        self._slow_time = 0.0  # how long the horizontal velocity error has been small [s]
         self._int_z = 0.0  # vertical integral [m/s² per unit of the normalised plant]
         self.attitude_command = np.zeros(2)  # φ_c, θ_c of the last update [rad]
 
@@ -369,7 +386,8 @@ class RmaxPositionController:
         theta_c = float(np.clip(-a_x / G, -k.max_tilt, k.max_tilt))
         phi_c = float(np.clip(a_y / G, -k.max_tilt, k.max_tilt))
         sat = np.array([abs(a_x / G) > k.max_tilt, abs(a_y / G) > k.max_tilt])
-        settled = np.hypot(*ep[:2]) < k.integral_zone or np.hypot(*ev[:2]) < k.integral_speed_zone
+        self._slow_time = self._slow_time + dt if np.hypot(*ev[:2]) < k.integral_speed_zone else 0.0
+        settled = np.hypot(*ep[:2]) < k.integral_zone or self._slow_time >= k.integral_settle_time
         if dt > 0 and settled:  # conditional integration (anti-windup)
             di_b = np.where(sat, 0.0, np.array([k.ki_lon * e_b[0], k.ki_lat * e_b[1]]) * dt)
             self._int_ne = self._int_ne + to_body.T @ di_b

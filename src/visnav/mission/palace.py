@@ -74,7 +74,12 @@ class PalaceMission:
         elif self.mode == "acquire":
             if health.tracking and not self.nav.tracking_pending:
                 self._set("descend_gps", t, "tracking")
-        elif self.mode == "descend_gps":
+        elif self.mode in ("descend_gps", "verify") and not health.tracking and not self.nav.tracking_pending:
+            # the correlation tracker reported a failure: repeat the initialisation (§4.1)
+            self.nav.request_tracking(self.point, init_from="gps")
+            self.record("reacquire", t)
+            self.good_since = None
+        if self.mode == "descend_gps":
             descent_rate = c.descent_speed_mps * self.sin_g
             if self.h_ref <= c.switch_height_m:
                 self.h_ref = c.switch_height_m

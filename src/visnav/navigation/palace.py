@@ -232,8 +232,9 @@ class PalaceNavigator:
         self.h.coherence = float(res.coherence)
         self.h.tracked_px = (float(res.x), float(res.y))
         self.recorder("tracker", f.t, x=res.x, y=res.y, coherence=res.coherence, ok=res.ok)
-        if not res.ok:
+        if not res.ok:  # track lost: the mission manager decides how to re-acquire
             self.h.notes.append(f"{f.t:.1f}s tracker: {res.reason}")
+            self.stop_tracking()
             return
         if not rng_ok:
             return

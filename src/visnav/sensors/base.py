@@ -56,6 +56,8 @@ class TruthHistory:
     def __call__(self, t: float) -> VehicleState:
         if self._k < 0:
             raise RuntimeError("TruthHistory is empty")
+        if self.latest is not None and abs(t - self.latest.t) < 1e-9:
+            return self.latest
         x = (t - self._t0) / self.dt
         oldest = max(0, self._k - self.n + 2)
         x = min(max(x, oldest), self._k)

@@ -37,8 +37,10 @@ def ground_homography(K: np.ndarray, cam_pos: np.ndarray, C_cn: np.ndarray, affi
 class CameraRenderer:
     """Renders ideal-pinhole frames, then distortion and noise."""
 
-    def __init__(self, camera: PinholeCamera, noise_sigma: float, rng: np.random.Generator):
+    def __init__(self, camera: PinholeCamera, noise_sigma: float, rng: np.random.Generator,
+                 lod_bias: float = 1.5):
         self.camera = camera
+        self.lod_bias = lod_bias  # > 1 samples a coarser level (less aliasing, more blur)
         self.size = (camera.width, camera.height)
         self.K = camera.K
         self.Kinv = np.linalg.inv(self.K)
@@ -95,6 +97,13 @@ class CameraRenderer:
             return cam_pos + d * (-cam_pos[2] / d[2])
         return cam_pos
 
+    def _warp_level(self, ground, L: int, cam_pos, C_cn) -> np.ndarray:
+        Hm = ground_homography(self.K, cam_pos, C_cn, ground.affine(L))
+        return cv2.warpPerspective(
+            ground.level(L), Hm, self.size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+            borderValue=self._border_value(ground),
+        )
+
     def render(self, cam_pos: np.ndarray, C_cn: np.ndarray, world) -> np.ndarray:
         w, h = self.size
         height = -float(cam_pos[2])
@@ -102,12 +111,16 @@ class CameraRenderer:
         depth = height / max(axis_down, 0.05)
         gsd = max(depth, 1e-3) / self.camera.fx
         ground = world.ground
-        L = ground.level_for_gsd(gsd)
-        Hm = ground_homography(self.K, cam_pos, C_cn, ground.affine(L))
-        img = cv2.warpPerspective(
-            ground.level(L), Hm, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-            borderValue=self._border_value(ground),
-        )
+        # trilinear ("mip-mapped") sampling: blend the two pyramid levels around the ground sample
+        # distance, so the image statistics change smoothly with height (no jump at a level switch,
+        # which would break a correlation tracker) and the map is never sampled below Nyquist.
+        lf = float(np.log2(gsd * self.lod_bias / ground.resolution_m))
+        L0 = int(np.clip(np.floor(lf), 0, max(ground.max_level - 1, 0)))
+        wgt1 = float(np.clip(lf - L0, 0.0, 1.0)) if ground.max_level > 0 else 0.0
+        img = self._warp_level(ground, L0, cam_pos, C_cn)
+        if wgt1 > 0.02:
+            img1 = self._warp_level(ground, L0 + 1, cam_pos, C_cn)
+            img = cv2.addWeighted(img, 1.0 - wgt1, img1, wgt1, 0.0)
         if world.detail is not None and gsd < 0.03:
             tres = world.detail_resolution_m
             Lt = 0

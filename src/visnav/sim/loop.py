@@ -85,41 +85,53 @@ class Simulation:
             return
         heapq.heappush(self._queue, (m.t + latency, next(self._seq), m))
 
+    def _sensor_schedule(self) -> list[tuple[float, float, object]]:
+        """(period, next time, sample function) of every sensor; each samples truth at its own
+        instants (interpolated between dynamics steps), so its rate need not divide the step."""
+        h, w = self.history, self.world
+
+        def imu(t):
+            a, b = self.imu.sample(t, h)
+            self._emit(a, self.imu.latency_s)
+            self._emit(b, self.imu.latency_s)
+
+        def camera(t):
+            if self.mission.mode not in ("final", "landed", "abort"):
+                self._emit(self.camera.sample(t, h, w), self.camera.latency_s)
+
+        items = [
+            (self.imu.rate_hz, imu),
+            (self.gps.rate_hz, lambda t: self._emit(self.gps.sample(t, h), self.gps.latency_s)),
+            (self.laser.rate_hz, lambda t: self._emit(self.laser.sample(t, h), self.laser.latency_s)),
+            (self.sonar.rate_hz, lambda t: self._emit(self.sonar.sample(t, h), self.sonar.latency_s)),
+            (self.camera.rate_hz, camera),
+        ]
+        return [[1.0 / r, 0.0, f] for r, f in items]
+
     def run(self, progress=None) -> RunResult:
+        """Fly the scenario; on an exception the run stops and keeps what it has."""
         sc, dt, log = self.sc, self.dt, self.log
         n = int(round(sc.run.duration_s / dt))
-        d_imu = _divisor(self.imu.rate_hz, dt)
-        d_gps = _divisor(self.gps.rate_hz, dt)
-        d_laser = _divisor(self.laser.rate_hz, dt)
-        d_sonar = _divisor(self.sonar.rate_hz, dt)
-        d_cam = _divisor(self.camera.rate_hz, dt)
-        d_pos = _divisor(10.0, dt)
+        d_pos = _divisor(10.0, dt)  # mission manager + position loop
+        d_wind = _divisor(20.0, dt)  # turbulence bandwidth is a few rad/s: 20 Hz updates suffice
+        schedule = self._sensor_schedule()
         cmd = YacsCommand(t=0.0)
         ref = None
-        truth = self.vehicle.state
+        wind = self.world.wind.steady.ned
         wall0 = time.perf_counter()
         touchdown = None
         error = None
-        nav_est = None
+        t = 0.0
         try:
             for k in range(n):
                 t = k * dt
                 truth = self.vehicle.state
                 self.history.push(truth)
-                h = self.history
-                # sensors -> latency queues
-                if k % d_imu == 0:
-                    imu, att = self.imu.sample(t, h)
-                    self._emit(imu, self.imu.latency_s)
-                    self._emit(att, self.imu.latency_s)
-                if k % d_gps == 0:
-                    self._emit(self.gps.sample(t, h), self.gps.latency_s)
-                if k % d_laser == 0:
-                    self._emit(self.laser.sample(t, h), self.laser.latency_s)
-                if k % d_sonar == 0:
-                    self._emit(self.sonar.sample(t, h), self.sonar.latency_s)
-                if k % d_cam == 0 and self.mission.mode not in ("final", "landed", "abort"):
-                    self._emit(self.camera.sample(t, h, self.world), self.camera.latency_s)
+                # sensors (each at its own instants up to now) -> latency queues
+                for item in schedule:
+                    while item[1] <= t + 1e-9:
+                        item[2](item[1])
+                        item[1] += item[0]
                 # deliveries -> navigator
                 q = self._queue
                 while q and q[0][0] <= t + 1e-9:
@@ -135,9 +147,10 @@ class Simulation:
                         break
                     if progress is not None:
                         progress(t, n * dt)
-                # vehicle dynamics with wind
-                wind = self.world.wind.velocity_ned(t, dt, max(truth.height_agl, 0.5),
-                                                    float(np.linalg.norm(truth.velocity)))
+                # vehicle dynamics in the wind
+                if k % d_wind == 0:
+                    wind = self.world.wind.velocity_ned(t, d_wind * dt, max(truth.height_agl, 0.5),
+                                                        float(np.linalg.norm(truth.velocity)))
                 self.vehicle.step(cmd, dt, wind)
                 if self.vehicle.state.on_ground and touchdown is None and t > 1.0:
                     touchdown = self.vehicle.state

@@ -12,9 +12,12 @@ p, q and ψ follow from the Euler kinematics (eq. 3.7) and the translation from 
 thrust of eq. 3.10, T = −g − g·ΔaZ (positive thr = up). Drag acts on the air-relative body
 velocity. The hover roll of 4.5 deg that balances the tail rotor is not modelled (seed 002 §3.5.2).
 
-Heave note: aZ/thr has a zero at s = 0, so with the drag Zw the steady climb rate for a constant
-thr is zero; the climb rate is ḣ/thr = g s H(s)/(s − Zw) with aZ/thr = s H(s), and a thr step
-moves the height by g H(0)/(−Zw) m per unit (``heave_height_gain``).
+Heave note: aZ/thr = s H(s) has a zero at s = 0: the YACS holds a climb rate, and the identified
+response already includes the vehicle's own heave damping. By default (``heave_damping="yacs"``)
+Zw damps the departure from the YACS-held climb velocity -g H(s) thr, so a held thr climbs at
+g H(0) m/s per unit and disturbances (updrafts, tilt) give bounded velocity errors. With ``heave_damping="full"`` (eq. 3.9 literally) the climb rate is ḣ/thr = g s H(s)/(s − Zw):
+zero in steady state, and a thr step moves the height by g H(0)/(−Zw) m per unit
+(``heave_height_gain``) — the +-500 range could not descend a 30 m approach.
 """
 
 from __future__ import annotations
@@ -109,6 +112,13 @@ class RmaxParams:
     input_limit: float = 500.0
     mass_kg: float = 94.0  # recorded only; eq. 3.9 is per unit mass
     trim: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    #: "yacs": the flight-identified aZ/thr (eq. 3.4) is the YACS' closed-loop heave response, which
+    #: holds a climb velocity w_yacs = -g * integral(aZ) (a held thr climbs at g H(0) = 0.0135 m/s per
+    #: unit, 6.7 m/s at full stick); Zw damps the departure from it: Zw (w - w_yacs - w_wind). In
+    #: still air w = w_yacs exactly; an updraft or a tilt's lift loss gives a bounded velocity error.
+    #: "full": eq. 3.9 literally, Zw (w - w_wind): the damping is counted twice, a held thr only
+    #: shifts the height by g H(0)/(-Zw) = 0.022 m per unit and +-500 cannot descend more than 11 m.
+    heave_damping: str = "yacs"
 
     def __post_init__(self) -> None:
         for name in ("Xu", "Yv", "Zw"):
@@ -116,6 +126,8 @@ class RmaxParams:
                 raise ValueError(f"{name} must be negative (drag), got {getattr(self, name)}")
         if not self.g > 0:
             raise ValueError(f"g must be positive, got {self.g}")
+        if self.heave_damping not in ("yacs", "full"):
+            raise ValueError(f"heave_damping must be 'yacs' or 'full', got {self.heave_damping!r}")
         if not self.input_limit > 0:
             raise ValueError(f"input_limit must be positive, got {self.input_limit}")
         if len(self.trim) != 4 or any(abs(x) >= self.input_limit for x in self.trim):
@@ -140,7 +152,12 @@ def _psi_rate(att: tuple) -> float:
 class RmaxModel:
     """The augmented RMAX of seed 002 §3.5; ``step`` advances by dt and returns the new truth.
 
-    The state position is the skid reference point; the ground is the plane z = 0 (NED).
+    The four eq. 3.4 channels run as ZOH-discrete state space (exact for a command held over the
+    step, also at the RK4 mid-point); u, v, w, N, E, D, ψ are integrated by RK4. The state position
+    is the skid reference point and the ground is the plane z = 0 (NED): a descending vehicle that
+    reaches it stops (``on_ground``, ``touchdown_speed`` = vertical speed at the last touchdown
+    [m/s], NaN before any) and lifts off when the net force points up again.
+    ``last_input`` holds the saturated increments (ail, ele, rud, thr) of the last step.
     """
 
     def __init__(self, params: RmaxParams | None = None, dt: float = 0.01,
@@ -161,15 +178,16 @@ class RmaxModel:
             vel_ned = np.asarray(initial.velocity, float)
         else:
             pos, vel_ned = np.asarray(position, float), np.zeros(3)
-        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
-            raise ValueError(f"position must be 3 finite NED values, got {pos}")
+        if pos.shape != (3,) or not np.all(np.isfinite(pos)) or pos[2] > 0:
+            raise ValueError(f"position must be 3 finite NED values with z <= 0 (ground), got {pos}")
         cb = np.array(_dcm_bn(0.0, 0.0, yaw))
-        self._y = np.concatenate([cb.T @ vel_ned, pos, [yaw]])  # u v w N E D psi
-        self._u = np.zeros(4)
+        w0 = (cb.T @ vel_ned)[2]
+        # u v w N E D psi, and w_yacs: the climb velocity the YACS holds, -g * integral of aZ
+        self._y = np.concatenate([cb.T @ vel_ned, pos, [yaw, w0]])
+        self.last_input = np.zeros(4)
         self.t = float(t0)
-        self.on_ground = bool(pos[2] >= 0.0)
+        self.on_ground = bool(pos[2] == 0.0)
         if self.on_ground:
-            self._y[2] = self._y[5] = 0.0
             self._y[0:3] = 0.0
         self.touchdown_speed = float("nan")
         self.state = self._make_state(np.zeros(3))
@@ -214,7 +232,8 @@ class RmaxModel:
         vb = R[0][1] * wx + R[1][1] * wy + R[2][1] * wz
         wb = R[0][2] * wx + R[1][2] * wy + R[2][2] * wz
         fx, fy = P.Xu * (u - ub), P.Yv * (v - vb)
-        fz = P.Zw * (w - wb) - P.g * (1.0 + az)
+        w_hold = y[7] if P.heave_damping == "yacs" else 0.0
+        fz = P.Zw * (w - w_hold - wb) - P.g * (1.0 + az)
         g = P.g
         ct, st, cf, sf = math.cos(theta), math.sin(theta), math.cos(phi), math.sin(phi)
         du = fx - q * w + r * v - g * st
@@ -224,7 +243,7 @@ class RmaxModel:
         d = np.array([du, dv, dw,
                       R[0][0] * u + R[0][1] * v + R[0][2] * w,
                       R[1][0] * u + R[1][1] * v + R[1][2] * w,
-                      R[2][0] * u + R[2][1] * v + R[2][2] * w, dpsi])
+                      R[2][0] * u + R[2][1] * v + R[2][2] * w, dpsi, -P.g * az])
         return d, (fx, fy, fz)
 
     def _saturate(self, command: YacsCommand) -> np.ndarray:
@@ -268,7 +287,8 @@ class RmaxModel:
         if self.on_ground:
             y1[0:3] = 0.0
             y1[5] = 0.0
-        self._x, self._y, self._u = x1, y1, u
+            y1[7] = 0.0
+        self._x, self._y, self.last_input = x1, y1, u
         self.t = round(self.t + dt, 12)  # no float drift over long runs
         self.state = self._make_state(wind)
         return self.state
