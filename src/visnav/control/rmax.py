@@ -224,9 +224,9 @@ class RmaxPositionGains:
     kp_lat: float = 0.544867
     kd_lat: float = 1.36656
     ki_lat: float = 0.0543116
-    kp_vert: float = 1.37959
-    kd_vert: float = 0.770461
-    ki_vert: float = 0.617572
+    kp_vert: float = 3.79614
+    kd_vert: float = 1.27653
+    ki_vert: float = 2.82224
     k_yaw: float = 1.02028
     max_tilt: float = math.radians(15.0)  # attitude command limit [rad]
     max_yaw_rate: float = math.radians(30.0)  # [rad/s]
@@ -266,7 +266,7 @@ class DesignResult:
 
 
 def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_deg: float = 45.0,
-                         min_gm_db: float = 6.0, ki_ratio: float = 0.25, vertical_crossover: float = 1.0,
+                         min_gm_db: float = 6.0, ki_ratio: float = 0.25, vertical_crossover: float = 2.0,
                          vertical_pm_deg: float = 60.0, vertical_ki_ratio: float = 0.25,
                          yaw_crossover: float = 1.0, pade_order: int = 3,
                          base: RmaxPositionGains | None = None) -> DesignResult:

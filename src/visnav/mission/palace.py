@@ -43,7 +43,7 @@ class PalaceMission:
         self.aborted = False
         self.record = recorder or (lambda *a, **k: None)
         self._last_t: float | None = None
-        self._vz_ref = 0.0
+        self.final_xy = self.point[:2].copy()
 
     def start_position(self) -> np.ndarray:
         return self.slope_point(self.cfg.start_height_m)
@@ -102,11 +102,12 @@ class PalaceMission:
             if self._vision_checks(t, health, h_est) and t - self.t_mode >= c.hold_s:
                 self._set("descend_mpe", t, "hold complete")
         elif self.mode == "descend_mpe":
-            descent_rate = c.descent_speed_mps * self.sin_g
+            descent_rate = self._flare(c.descent_speed_mps * self.sin_g)
             if self._vision_checks(t, health, h_est) and h_est <= c.inertial_height_m:
                 self.nav.set_source("inertial")
                 self.record("mpe_end", t)
                 self.nav.stop_tracking()
+                self.final_xy = self.slope_point(self.h_ref)[:2].copy()
                 self._set("final", t, "below 1 m: inertial + sonar")
         elif self.mode == "final":
             descent_rate = c.final_descent_mps
@@ -119,16 +120,35 @@ class PalaceMission:
         if self.mode == "abort":
             pos = self.abort_hold
             vel = np.zeros(3)
+        elif self.mode in ("final", "landed"):
+            # last metre: slide over the point at the final rate, then settle vertically onto it
+            step = self.point[:2] - self.final_xy
+            dist = float(np.linalg.norm(step))
+            v_xy = np.zeros(2)
+            if dist > 1e-6:
+                move = min(dist, c.final_descent_mps * dt)
+                self.final_xy = self.final_xy + step / dist * move
+                v_xy = step / dist * c.final_descent_mps if dist > move else np.zeros(2)
+            # rate control on the way down: the height reference follows the (sonar) estimate, so
+            # no height error winds up and the sink rate is the commanded one at touchdown
+            self.h_ref = min(self.h_ref, h_est) - descent_rate * dt
+            pos = np.array([self.final_xy[0], self.final_xy[1], -self.h_ref])
+            vel = np.array([v_xy[0], v_xy[1], descent_rate])
         else:
-            floor = -0.3 if self.mode == "final" else c.inertial_height_m * 0.5
+            floor = c.inertial_height_m * 0.5
             self.h_ref = max(self.h_ref - descent_rate * dt, floor)
             pos = self.slope_point(self.h_ref)
             moving = descent_rate > 0 and self.h_ref > floor
             vel = (self.back * -1.0 + np.array([0.0, 0.0, 1.0])) * descent_rate if moving else np.zeros(3)
-            if self.mode == "final":
-                vel = np.array([0.0, 0.0, descent_rate])
         ref = PositionReference(t=t, position=pos, velocity=vel, yaw=self.yaw, source=self.nav.source)
         return ref, self.mode
+
+    def _flare(self, rate: float) -> float:
+        """Below ``flare_height_m`` the sink rate eases linearly to the final rate at 1 m AGL."""
+        c = self.cfg
+        lo, hi = c.inertial_height_m, max(c.flare_height_m, c.inertial_height_m + 1e-6)
+        f = float(np.clip((self.h_ref - lo) / (hi - lo), 0.0, 1.0))
+        return min(rate, c.final_descent_mps + f * (rate - c.final_descent_mps))
 
     def _vision_checks(self, t: float, health: Health, h_est: float) -> bool:
         """Safety rules while flying on MPE; returns False when the mode changed."""

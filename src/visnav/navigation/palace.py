@@ -289,7 +289,6 @@ class PalaceNavigator:
         self.h.tracking = True
         self.h.tracked_px = uv0
         self.h.coherence = 1.0
-        self._mpe_times.clear()
         self.recorder("track_init", f.t, x=uv0[0], y=uv0[1], init_position=pos, kind=0)
 
     # ---------------------------------------------------------------- outputs

@@ -152,6 +152,7 @@ class MissionConfig(_M):
     laser_loss_s: float = Field(0.5, ge=0, le=10, description="no laser return this long above 1 m -> soft abort")
     edge_margin_px: int = Field(60, ge=0, le=300)
     final_descent_mps: float = Field(0.3, gt=0, le=3)
+    flare_height_m: float = Field(3.0, ge=0, le=30, description="sink rate eases to the final rate below this")
 
 
 class Scenario(_M):
