@@ -52,27 +52,26 @@ def mpe_drift(log, horizontal: bool = True) -> tuple[float, np.ndarray]:
     return float(np.linalg.norm(total)), total
 
 
-def _segment(log, mode: str) -> tuple[float, float] | None:
+def _mode_mask(log, t: np.ndarray, mode: str, settle_s: float) -> np.ndarray:
+    """Samples at times ``t`` that lie in any segment of ``mode``, ``settle_s`` after it began."""
     modes = log.get("mode")
+    mask = np.zeros(t.shape, dtype=bool)
     if not modes:
-        return None
-    idx = np.nonzero(modes["mode"] == mode)[0]
-    if not idx.size:
-        return None
-    t0 = modes["t"][idx[0]]
-    later = modes["t"][modes["t"] > t0]
-    t1 = later[0] if later.size else np.inf
-    return float(t0), float(t1)
+        return mask
+    starts = list(modes["t"]) + [np.inf]
+    for i, m in enumerate(modes["mode"]):
+        if m == mode:
+            mask |= (t >= starts[i] + settle_s) & (t < starts[i + 1])
+    return mask
 
 
-def hover_oscillation(log, mode: str = "hold", settle_s: float = 2.0) -> dict:
-    """Horizontal RMS of truth about its mean, and roll/pitch RMS, during a mode (e.g. the MPE hold)."""
-    seg = _segment(log, mode)
+def hover_oscillation(log, mode: str = "hold", settle_s: float = 1.0) -> dict:
+    """Oscillation while hovering on MPE (the §5.1 delay experiment): horizontal RMS of truth about
+    its mean, roll/pitch RMS, over every segment of ``mode`` (the MPE hold at the switch height)."""
     truth = log.get("truth")
-    if seg is None or not truth:
+    if not truth:
         return {}
-    t = truth["t"]
-    sel = (t >= seg[0] + settle_s) & (t < seg[1])
+    sel = _mode_mask(log, truth["t"], mode, settle_s)
     if sel.sum() < 5:
         return {}
     p = truth["position"][sel, :2]
@@ -80,6 +79,7 @@ def hover_oscillation(log, mode: str = "hold", settle_s: float = 2.0) -> dict:
     return {
         "hover_pos_rms_m": float(np.sqrt(np.mean(np.sum((p - p.mean(0)) ** 2, axis=1)))),
         "hover_attitude_rms_deg": float(np.sqrt(np.mean(np.sum((e - e.mean(0)) ** 2, axis=1)))),
+        "hover_time_s": float(sel.sum() * np.median(np.diff(truth["t"]))),
     }
 
 

@@ -63,6 +63,7 @@ class PalaceMission:
         self._last_t = t
         c = self.cfg
         h_est = -float(nav.position[2])
+        self._last_pos = np.array(nav.position, dtype=float)
         descent_rate = 0.0
         if self.nav.source == "mpe":
             self.vision_time += dt
@@ -171,6 +172,9 @@ class PalaceMission:
                 self.bad_since = t
             elif t - self.bad_since >= 0.3 or health.mpe_jump:
                 self.fallbacks += 1
+                if self.fallbacks > c.max_fallbacks:
+                    self._abort(t, f"MPE failed {self.fallbacks} times: soft abort on GPS")
+                    return False
                 self.nav.set_source("gps")
                 self.nav.request_tracking(None, init_from="gps")
                 self.reinitializations += 1
@@ -193,7 +197,8 @@ class PalaceMission:
         self.nav.set_source("gps")
         self.nav.stop_tracking()
         self.aborted = True
-        self.abort_hold = self.slope_point(self.h_ref) + np.array([0.0, 0.0, -self.cfg.abort_climb_m])
+        # soft abort (§3.2): climb abort_climb_m straight up from where the vehicle is
+        self.abort_hold = self._last_pos + np.array([0.0, 0.0, -self.cfg.abort_climb_m])
         self._set("abort", t, why)
 
     def on_touchdown(self, t: float) -> None:

@@ -149,6 +149,7 @@ class MissionConfig(_M):
     hold_s: float = Field(0.0, ge=0, le=600, description="hover under MPE at the switch height before descending")
     inertial_height_m: float = Field(1.0, ge=0.1, le=10)
     abort_climb_m: float = Field(5.0, ge=0, le=50)
+    max_fallbacks: int = Field(3, ge=0, le=100, description="MPE -> GPS fallbacks before a soft abort")
     laser_loss_s: float = Field(0.5, ge=0, le=10, description="no laser return this long above 1 m -> soft abort")
     edge_margin_px: int = Field(60, ge=0, le=300)
     final_descent_mps: float = Field(0.3, gt=0, le=3)
