@@ -101,7 +101,7 @@ class CameraConfig(_M):
     lever_arm_m: list[float] = Field(default_factory=lambda: [0.8, 0.0, -0.6])
     capture_hz: float = Field(30.0, ge=1, le=120)
     noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
-    latency_s: float = Field(0.0, ge=0, le=1.0)
+    latency_s: float = Field(0.03, ge=0, le=1.0, description="exposure to memory (stamped correctly)")
 
 
 class SensorsConfig(_M):

@@ -182,3 +182,25 @@ class Camera:
         img = self.renderer.render(cam_pos, C_cn, world)
         self.frames += 1
         return Frame(t=t, image=img, index=self.frames * self.decimation)
+
+    def sample_async(self, t: float, truth_at: TruthAt, world, executor) -> "PendingFrame":
+        """Like ``sample`` but renders on ``executor`` (one worker: frames stay in order and the
+        noise draws stay reproducible); OpenCV releases the GIL, so the frame renders on the second
+        core while the simulation steps on through the camera's latency."""
+        s = truth_at(t)
+        cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
+        self.frames += 1
+        fut = executor.submit(self.renderer.render, cam_pos, C_cn, world)
+        return PendingFrame(t=t, future=fut, index=self.frames * self.decimation)
+
+
+class PendingFrame:
+    """A frame still being rendered; ``result()`` waits for it and returns the ``Frame``."""
+
+    def __init__(self, t: float, future, index: int):
+        self.t = t
+        self.future = future
+        self.index = index
+
+    def result(self) -> Frame:
+        return Frame(t=self.t, image=self.future.result(), index=self.index)

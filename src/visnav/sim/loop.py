@@ -12,8 +12,10 @@ from __future__ import annotations
 import heapq
 import itertools
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from visnav.control.rmax import RmaxPositionController
@@ -24,7 +26,7 @@ from visnav.mission.palace import PalaceMission
 from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import Scenario
 from visnav.sensors.base import TruthHistory
-from visnav.sensors.camera import Camera
+from visnav.sensors.camera import Camera, PendingFrame
 from visnav.sensors.gps import Gps
 from visnav.sensors.imu import Imu
 from visnav.sensors.rangefinder import LaserRangeFinder, Sonar
@@ -77,6 +79,7 @@ class Simulation:
         self.history = TruthHistory(self.dt, horizon_s=2.5)
 
         self._queue: list = []
+        self._render_pool: ThreadPoolExecutor | None = None
         self._seq = itertools.count()
 
     # ------------------------------------------------------------------------------------
@@ -97,7 +100,10 @@ class Simulation:
 
         def camera(t):
             if self.mission.mode not in ("final", "landed", "abort"):
-                self._emit(self.camera.sample(t, h, w), self.camera.latency_s)
+                if self._render_pool is not None:
+                    self._emit(self.camera.sample_async(t, h, w, self._render_pool), self.camera.latency_s)
+                else:
+                    self._emit(self.camera.sample(t, h, w), self.camera.latency_s)
 
         items = [
             (self.imu.rate_hz, imu),
@@ -114,6 +120,11 @@ class Simulation:
         n = int(round(sc.run.duration_s / dt))
         d_pos = _divisor(10.0, dt)  # mission manager + position loop
         d_wind = _divisor(20.0, dt)  # turbulence bandwidth is a few rad/s: 20 Hz updates suffice
+        # frames render on a second thread while the loop steps through the camera latency
+        self._render_pool = ThreadPoolExecutor(1) if self.camera.latency_s >= dt else None
+        cv_threads = cv2.getNumThreads()
+        if self._render_pool is not None:
+            cv2.setNumThreads(1)  # one core renders, the other steps the simulation
         schedule = self._sensor_schedule()
         cmd = YacsCommand(t=0.0)
         ref = None
@@ -135,7 +146,8 @@ class Simulation:
                 # deliveries -> navigator
                 q = self._queue
                 while q and q[0][0] <= t + 1e-9:
-                    self.nav.update(heapq.heappop(q)[2])
+                    m = heapq.heappop(q)[2]
+                    self.nav.update(m.result() if isinstance(m, PendingFrame) else m)
                 # mission manager and position loop (10 Hz)
                 if k % d_pos == 0:
                     nav_est = self.nav.estimate(t)
@@ -163,6 +175,11 @@ class Simulation:
         except Exception as exc:  # keep what we have: the run directory is still written
             error = f"{type(exc).__name__} at t={t:.2f}s: {exc}"
             log.record("error", t, message=error)
+        finally:
+            if self._render_pool is not None:
+                self._render_pool.shutdown(wait=True, cancel_futures=True)
+                self._render_pool = None
+            cv2.setNumThreads(cv_threads)
         wall = time.perf_counter() - wall0
         from visnav.analysis.metrics import palace_metrics
 
