@@ -12,6 +12,7 @@ laser samples that describe the frame's instant (its stamp plus the configured c
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from typing import Callable
 
@@ -145,7 +146,8 @@ class PalaceNavigator:
         self._process_frames()
 
     def _on_imu(self, m: ImuSample) -> None:
-        if not (np.all(np.isfinite(m.accel)) and np.all(np.isfinite(m.gyro))) or m.t <= self._last_imu_t:
+        a, g = m.accel, m.gyro
+        if not math.isfinite(a[0] + a[1] + a[2] + g[0] + g[1] + g[2]) or m.t <= self._last_imu_t:
             self.h.rejected_samples += 1
             return
         self._last_imu_t = m.t

@@ -59,6 +59,7 @@ class CameraRenderer:
             my = (camera.fy * xy[:, 1] + camera.cy).reshape(u.shape).astype(np.float32)
             self._undistort_maps = (mx, my)
         self._tile_levels: dict[int, tuple[np.ndarray, int]] = {}
+        self._blend_cache: dict[tuple, np.ndarray] = {}
 
     # -- pieces ----------------------------------------------------------------------------
     def _sky_mask(self, C_cn: np.ndarray) -> np.ndarray | None:
@@ -97,12 +98,24 @@ class CameraRenderer:
             return cam_pos + d * (-cam_pos[2] / d[2])
         return cam_pos
 
-    def _warp_level(self, ground, L: int, cam_pos, C_cn) -> np.ndarray:
-        Hm = ground_homography(self.K, cam_pos, C_cn, ground.affine(L))
+    def _warp(self, image, affine, cam_pos, C_cn, ground) -> np.ndarray:
+        Hm = ground_homography(self.K, cam_pos, C_cn, affine)
         return cv2.warpPerspective(
-            ground.level(L), Hm, self.size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+            image, Hm, self.size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
             borderValue=self._border_value(ground),
         )
+
+    def _blended_level(self, ground, L: int, q: int) -> np.ndarray:
+        """Level ``L`` blended with level ``L + 1`` (upsampled) at weight q/8, cached."""
+        if q == 0:
+            return ground.level(L)
+        key = (id(ground), L, q)
+        img = self._blend_cache.get(key)
+        if img is None:
+            lo = ground.level(L)
+            up = cv2.resize(ground.level(L + 1), (lo.shape[1], lo.shape[0]), interpolation=cv2.INTER_LINEAR)
+            img = self._blend_cache[key] = cv2.addWeighted(lo, 1.0 - q / 8.0, up, q / 8.0, 0.0)
+        return img
 
     def render(self, cam_pos: np.ndarray, C_cn: np.ndarray, world) -> np.ndarray:
         w, h = self.size
@@ -111,16 +124,17 @@ class CameraRenderer:
         depth = height / max(axis_down, 0.05)
         gsd = max(depth, 1e-3) / self.camera.fx
         ground = world.ground
-        # trilinear ("mip-mapped") sampling: blend the two pyramid levels around the ground sample
-        # distance, so the image statistics change smoothly with height (no jump at a level switch,
-        # which would break a correlation tracker) and the map is never sampled below Nyquist.
+        # trilinear ("mip-mapped") sampling: a blend of the two pyramid levels around the ground
+        # sample distance, so the image statistics change smoothly with height (no jump at a level
+        # switch, which would break a correlation tracker) and the map is never sampled below
+        # Nyquist. The blend weight is quantised to 1/8 and the blended levels are cached, so a
+        # frame costs one warp.
         lf = float(np.log2(gsd * self.lod_bias / ground.resolution_m))
         L0 = int(np.clip(np.floor(lf), 0, max(ground.max_level - 1, 0)))
-        wgt1 = float(np.clip(lf - L0, 0.0, 1.0)) if ground.max_level > 0 else 0.0
-        img = self._warp_level(ground, L0, cam_pos, C_cn)
-        if wgt1 > 0.02:
-            img1 = self._warp_level(ground, L0 + 1, cam_pos, C_cn)
-            img = cv2.addWeighted(img, 1.0 - wgt1, img1, wgt1, 0.0)
+        q = int(round(8 * float(np.clip(lf - L0, 0.0, 1.0)))) if ground.max_level > 0 else 0
+        if q == 8:
+            L0, q = min(L0 + 1, ground.max_level), 0
+        img = self._warp(self._blended_level(ground, L0, q), ground.affine(L0), cam_pos, C_cn, ground)
         if world.detail is not None and gsd < 0.03:
             tres = world.detail_resolution_m
             Lt = 0

@@ -15,7 +15,6 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 
 from visnav.control.rmax import RmaxPositionController
@@ -122,9 +121,6 @@ class Simulation:
         d_wind = _divisor(20.0, dt)  # turbulence bandwidth is a few rad/s: 20 Hz updates suffice
         # frames render on a second thread while the loop steps through the camera latency
         self._render_pool = ThreadPoolExecutor(1) if self.camera.latency_s >= dt else None
-        cv_threads = cv2.getNumThreads()
-        if self._render_pool is not None:
-            cv2.setNumThreads(1)  # one core renders, the other steps the simulation
         schedule = self._sensor_schedule()
         cmd = YacsCommand(t=0.0)
         ref = None
@@ -179,7 +175,6 @@ class Simulation:
             if self._render_pool is not None:
                 self._render_pool.shutdown(wait=True, cancel_futures=True)
                 self._render_pool = None
-            cv2.setNumThreads(cv_threads)
         wall = time.perf_counter() - wall0
         from visnav.analysis.metrics import palace_metrics
 

@@ -169,6 +169,7 @@ class RmaxModel:
         self.dt = float(dt)
         self._cache: dict[float, tuple[np.ndarray, ...]] = {}
         _, _, self._C, self._CA, _, _ = self._matrices(self.dt)
+        self._CCA = np.vstack([self._C, self._CA])
         self._x = np.zeros(self._C.shape[1])
         if initial is not None:
             if np.any(np.abs(initial.euler[:2]) > 1e-12) or np.any(np.abs(initial.body_rates) > 1e-12):
@@ -201,9 +202,17 @@ class RmaxModel:
             self._cache[key] = (Ad, Bd, C, CA, Ah, Bh)
         return self._cache[key]
 
+    def _attitudes(self, *xs: np.ndarray) -> list[tuple]:
+        """``_attitude`` of several TF states with one matrix product."""
+        Y = self._CCA @ np.column_stack(xs)
+        return [self._attitude_from(Y[:4, k], Y[4:, k]) for k in range(len(xs))]
+
     def _attitude(self, x: np.ndarray) -> tuple[float, float, float, float, float, float]:
         """φ, θ [rad], p, q, r [rad/s] and ΔaZ [g] from the TF state (eq. 3.4, 3.7)."""
-        y, yd = self._C @ x, self._CA @ x
+        return self._attitude_from(self._C @ x, self._CA @ x)
+
+    @staticmethod
+    def _attitude_from(y, yd) -> tuple[float, float, float, float, float, float]:
         d2r = math.pi / 180.0
         phi, theta, r, az = y[0] * d2r, y[1] * d2r, y[2] * d2r, y[3]
         phid, thetad = yd[0] * d2r, yd[1] * d2r  # relative degree 2: CB = 0 (roll, pitch)
@@ -247,26 +256,26 @@ class RmaxModel:
         return d, (fx, fy, fz)
 
     def _saturate(self, command: YacsCommand) -> np.ndarray:
-        raw = np.array([command.ail, command.ele, command.rud, command.thr], dtype=float)
-        if not np.all(np.isfinite(raw)):
+        raw = (float(command.ail), float(command.ele), float(command.rud), float(command.thr))
+        if not math.isfinite(raw[0] + raw[1] + raw[2] + raw[3]):
             raise ValueError(f"command must be finite, got {command}")
-        lim, trim = self.params.input_limit, np.asarray(self.params.trim)
-        return np.clip(trim + raw, -lim, lim) - trim
+        lim, trim = self.params.input_limit, self.params.trim
+        return np.array([min(max(tr + r, -lim), lim) - tr for r, tr in zip(raw, trim)])
 
     def step(self, command: YacsCommand, dt: float | None = None,
              wind_ned: ArrayLike | None = None) -> VehicleState:
         """Advance by ``dt`` (default: the model's dt) under a held command and a steady wind."""
         dt = self.dt if dt is None else float(dt)
-        if not (np.isfinite(dt) and dt > 0):
+        if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
         wind = np.zeros(3) if wind_ned is None else np.asarray(wind_ned, dtype=float)
-        if wind.shape != (3,) or not np.all(np.isfinite(wind)):
+        if wind.shape != (3,) or not math.isfinite(wind[0] + wind[1] + wind[2]):
             raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
         Ad, Bd, _, _, Ah, Bh = self._matrices(dt)
         u = self._saturate(command)
         x0 = self._x
         xh, x1 = Ah @ x0 + Bh @ u, Ad @ x0 + Bd @ u  # exact TF states at t, t + dt/2, t + dt
-        a0, ah, a1 = self._attitude(x0), self._attitude(xh), self._attitude(x1)
+        a0, ah, a1 = self._attitudes(x0, xh, x1)
         y = self._y
         if self.on_ground and self._down_accel(y, a0, wind) < 0.0:  # net upward force: lift off
             self.on_ground = False
@@ -290,7 +299,7 @@ class RmaxModel:
             y1[7] = 0.0
         self._x, self._y, self.last_input = x1, y1, u
         self.t = round(self.t + dt, 12)  # no float drift over long runs
-        self.state = self._make_state(wind)
+        self.state = self._make_state(wind, a1)
         return self.state
 
     def _down_accel(self, y: np.ndarray, att: tuple, wind: np.ndarray) -> float:
@@ -301,8 +310,10 @@ class RmaxModel:
         row = _dcm_bn(att[0], att[1], y[6])[2]
         return row[0] * d[0] + row[1] * d[1] + row[2] * d[2]
 
-    def _make_state(self, wind: np.ndarray) -> VehicleState:
-        phi, theta, p, q, r, _ = att = self._attitude(self._x)
+    def _make_state(self, wind: np.ndarray, att: tuple | None = None) -> VehicleState:
+        if att is None:
+            att = self._attitude(self._x)
+        phi, theta, p, q, r, _ = att
         y = self._y
         R = np.array(_dcm_bn(phi, theta, y[6]))
         if self.on_ground:  # the ground carries the weight

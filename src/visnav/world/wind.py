@@ -182,18 +182,18 @@ class DrydenTurbulence:
         return np.array([s * float(f.c @ x) for s, f, x in zip(sig, _UNITS, self._x)])
 
     def _discrete(self, i: int, h: float) -> tuple[np.ndarray, np.ndarray]:
-        """Discretisation for a step of ``h`` time constants, cached on a 0.5% log grid of h.
+        """Discretisation for a step of ``h`` time constants, cached on a 2% log grid of h.
 
-        Altitude and airspeed change every step in flight; snapping h to the grid (a 0.25% time
+        Altitude and airspeed change every step in flight; snapping h to the grid (a 1% time
         scale error at most, far below the model's own accuracy) keeps the cache small and the
         100 Hz loop free of matrix exponentials.
         """
-        key = (i, round(math.log(h) * 200.0))
+        key = (i, round(math.log(h) * 50.0))
         ent = self._cache.get(key)
         if ent is None:
             if len(self._cache) > 4096:
                 self._cache.clear()
-            ent = self._cache[key] = _UNITS[i].discretize(math.exp(key[1] / 200.0))
+            ent = self._cache[key] = _UNITS[i].discretize(math.exp(key[1] / 50.0))
         return ent
 
     def step(
