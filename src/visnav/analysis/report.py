@@ -47,12 +47,13 @@ def plots(log, point=None) -> list[tuple[str, str]]:
     # side view along the approach and top view
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
     ax[0].plot(tr["position"][:, 0], -tr["position"][:, 2], label="truth")
-    ax[0].plot(es["position"][:, 0], -es["position"][:, 2], "--", label="estimate")
+    v = es["valid"].astype(bool)
+    ax[0].plot(es["position"][v, 0], -es["position"][v, 2], "--", label="estimate")
     ax[0].plot(rf["position"][:, 0], -rf["position"][:, 2], ":", label="reference (white rabbit)")
     ax[0].set_xlabel("north [m]"), ax[0].set_ylabel("height AGL [m]"), ax[0].set_title("Side view")
     ax[0].legend()
     ax[1].plot(tr["position"][:, 1], tr["position"][:, 0], label="truth")
-    ax[1].plot(es["position"][:, 1], es["position"][:, 0], "--", label="estimate")
+    ax[1].plot(es["position"][v, 1], es["position"][v, 0], "--", label="estimate")
     if point is not None:
         ax[1].plot(point[1], point[0], "r+", ms=14, label="designated point")
     ax[1].set_xlabel("east [m]"), ax[1].set_ylabel("north [m]"), ax[1].set_title("Top view")
@@ -62,7 +63,8 @@ def plots(log, point=None) -> list[tuple[str, str]]:
     mpe = log.get("mpe")
     fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True)
     err = es["position"] - tr["position"]
-    ax[0].plot(t, np.linalg.norm(err[:, :2], axis=1), label="navigation estimate - truth (horizontal)")
+    valid = es["valid"].astype(bool)
+    ax[0].plot(t[valid], np.linalg.norm(err[valid, :2], axis=1), label="navigation estimate - truth (horizontal)")
     if mpe:
         me = mpe["position"] - interp_rows(mpe["t"], t, tr["position"])
         ax[0].plot(mpe["t"], np.linalg.norm(me[:, :2], axis=1), ".", ms=2, label="MPE fix - truth")

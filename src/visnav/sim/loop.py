@@ -149,7 +149,8 @@ class Simulation:
                     nav_est = self.nav.estimate(t)
                     health = self.nav.health(t)
                     ref, mode = self.mission.step(t, nav_est, health)
-                    cmd = self.controller.command(t, nav_est, ref)
+                    # no position solution yet (first GPS fix not in): hold the trim
+                    cmd = self.controller.command(t, nav_est, ref) if nav_est.valid else YacsCommand(t=t)
                     self._log_step(t, truth, nav_est, ref, cmd, mode, health)
                     if self.mission.done:
                         break
