@@ -74,3 +74,8 @@ def test_cli_missing_map_file_names_the_path(tmp_path):
     r = CliRunner().invoke(app, ["run", "palace-landing", "--set", "world.map_file='/no/such/map.png'"])
     assert r.exit_code == 2
     assert "/no/such/map.png" in r.output
+
+
+def test_cli_lists_scenarios():
+    r = CliRunner().invoke(app, ["scenarios"])
+    assert r.exit_code == 0 and "palace-landing" in r.output
