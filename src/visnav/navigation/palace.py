@@ -235,7 +235,7 @@ class PalaceNavigator:
         self.h.tracked_px = (float(res.x), float(res.y))
         self.recorder("tracker", f.t, x=res.x, y=res.y, coherence=res.coherence, ok=res.ok)
         if not res.ok:  # track lost: the mission manager decides how to re-acquire
-            self.h.notes.append(f"{f.t:.1f}s tracker: {res.reason}")
+            self._note(f"{f.t:.1f}s tracker: {res.reason}")
             self.stop_tracking()
             return
         if not rng_ok:
@@ -249,7 +249,7 @@ class PalaceNavigator:
         fix = self.mpe.estimate(f.t, (res.x, res.y), laser.range, C_bn, laser.beam_offset)
         self._mpe_times.append(f.t)
         pred = self._position_at(f.t, "estimate")
-        jump = pred is not None and np.linalg.norm(fix.position - pred) > cfg_jump(self.cfg)
+        jump = pred is not None and np.linalg.norm(fix.position - pred) > self.cfg.mpe.jump_limit_m
         self.h.mpe_jump = bool(jump)
         self.last_fix, self.last_fix_time = fix, f.t
         self.recorder("mpe", f.t, position=fix.position, camera_position=fix.camera_position,
@@ -281,7 +281,7 @@ class PalaceNavigator:
         tc = self.cfg.tracker
         pt = forstner(f.image, feature_size=tc.feature_size, region=(x0, y0, x1, y1), min_isotropy=tc.min_isotropy)
         if pt is None:
-            self.h.notes.append(f"{f.t:.1f}s Förstner found no point near {uv.round(0)}")
+            self._note(f"{f.t:.1f}s Förstner found no point near {uv.round(0)}")
             return
         self.tracker = PnccTracker(**self.tracker_kwargs)
         self.tracker.init(f.image, pt.x, pt.y)
@@ -292,6 +292,10 @@ class PalaceNavigator:
         self.h.tracked_px = uv0
         self.h.coherence = 1.0
         self.recorder("track_init", f.t, x=uv0[0], y=uv0[1], init_position=pos, kind=0)
+
+    def _note(self, text: str) -> None:
+        if len(self.h.notes) < 200:  # keep the first ones; counters carry the rest
+            self.h.notes.append(text)
 
     # ---------------------------------------------------------------- outputs
     def estimate(self, t: float) -> NavEstimate:
@@ -309,6 +313,3 @@ class PalaceNavigator:
         self.h.source = self.source
         return self.h
 
-
-def cfg_jump(cfg) -> float:
-    return float(cfg.mpe.jump_limit_m)
