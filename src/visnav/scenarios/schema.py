@@ -10,9 +10,9 @@ from __future__ import annotations
 import copy
 import sys
 from pathlib import Path
-from typing import Any, Literal, Optional
+from typing import Annotated, Any, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -136,7 +136,9 @@ class NavigationConfig(_M):
     accel_noise: float = Field(0.3, ge=0, le=10, description="process noise of the position filter, m/s^2")
 
 
-class MissionConfig(_M):
+class PalaceMissionConfig(_M):
+    """PALACE landing (seed 000 Fig. 1.1): ``mission.type = "palace"``."""
+
     type: Literal["palace"] = "palace"
     landing_point_m: list[float] = Field(default_factory=lambda: [0.0, 0.0])
     start_height_m: float = Field(30.0, ge=2, le=200)
@@ -156,27 +158,54 @@ class MissionConfig(_M):
     flare_height_m: float = Field(3.0, ge=0, le=30, description="sink rate eases to the final rate below this")
 
 
+# Every mission's config, told apart by its ``type`` (add new ones to this tuple).
+MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig,)
+MissionConfig = (
+    Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]
+    if len(MISSION_CONFIGS) > 1
+    else MISSION_CONFIGS[0]
+)
+MISSION_TYPES = {m.model_fields["type"].default: m for m in MISSION_CONFIGS}
+
+
 class Scenario(_M):
     run: RunConfig = RunConfig()
     world: WorldConfig = WorldConfig()
     vehicle: VehicleConfig = VehicleConfig()
     sensors: SensorsConfig = SensorsConfig()
     navigation: NavigationConfig = NavigationConfig()
-    mission: MissionConfig = MissionConfig()
+    mission: MissionConfig = PalaceMissionConfig()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_mission_type(cls, data):
+        if isinstance(data, dict) and isinstance(data.get("mission"), dict):
+            data["mission"].setdefault("type", "palace")
+        return data
 
 
 # ---------------------------------------------------------------------------------------------
-def _model_at(path: list[str]) -> type[BaseModel] | None:
+def _clean_loc(loc: list[str]) -> list[str]:
+    """Drop the discriminator tag pydantic puts in the path of a union member (mission.palace.x)."""
+    if len(loc) > 1 and loc[0] == "mission" and loc[1] in MISSION_TYPES:
+        return [loc[0]] + loc[2:]
+    return loc
+
+
+def _model_at(path: list[str], mission_type: str = "palace") -> type[BaseModel] | None:
     model: Any = Scenario
     for p in path:
+        if model is Scenario and p == "mission":
+            model = MISSION_TYPES.get(mission_type)
+            continue
         if not (isinstance(model, type) and issubclass(model, BaseModel)) or p not in model.model_fields:
             return None
         model = model.model_fields[p].annotation
     return model if isinstance(model, type) and issubclass(model, BaseModel) else None
 
 
-def _describe_field(loc: list[str]) -> str:
-    parent = _model_at(loc[:-1])
+def _describe_field(loc: list[str], mission_type: str = "palace") -> str:
+    parent = _model_at(loc[:-1], mission_type)
     if parent is None or loc[-1] not in parent.model_fields:
         return ""
     f = parent.model_fields[loc[-1]]
@@ -195,14 +224,19 @@ def _describe_field(loc: list[str]) -> str:
 
 def _format_error(err: ValidationError, data: dict) -> str:
     e = err.errors()[0]
-    loc = [str(x) for x in e["loc"]]
+    raw = [str(x) for x in e["loc"]]
+    mission_type = raw[1] if len(raw) > 1 and raw[0] == "mission" and raw[1] in MISSION_TYPES else "palace"
+    loc = _clean_loc(raw)
     key = ".".join(loc)
+    if e["type"] == "union_tag_invalid":
+        return f"invalid value for '{key}.type': {e.get('input', {}).get('type')!r}; allowed: " + ", ".join(
+            repr(k) for k in MISSION_TYPES)
     if e["type"] == "extra_forbidden":
-        parent = _model_at(loc[:-1])
+        parent = _model_at(loc[:-1], mission_type)
         allowed = ", ".join(parent.model_fields) if parent else ""
         return f"unknown scenario key '{key}'; allowed keys here: {allowed}"
     value = e.get("input")
-    desc = _describe_field(loc)
+    desc = _describe_field(loc, mission_type)
     msg = f"invalid value for '{key}': {value!r} ({e['msg']})"
     return msg + (f"; {desc}" if desc else "")
 

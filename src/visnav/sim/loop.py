@@ -17,11 +17,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from visnav.control.rmax import RmaxPositionController
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.measurements import VehicleState, YacsCommand
-from visnav.mission.palace import PalaceMission
 from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import Scenario
 from visnav.sensors.base import TruthHistory
@@ -30,6 +28,7 @@ from visnav.sensors.gps import Gps
 from visnav.sensors.imu import Imu
 from visnav.sensors.rangefinder import LaserRangeFinder, Sonar
 from visnav.sim.log import FlightLog
+from visnav.sim.missions import build as build_mission
 from visnav.vehicles.rmax import RmaxModel
 from visnav.world.scene import build_world
 
@@ -68,13 +67,13 @@ class Simulation:
                              process_hz=sc.navigation.mpe.rate_hz, noise_sigma=c.noise_sigma, latency_s=c.latency_s)
 
         self.nav = PalaceNavigator(sc.navigation, self.camera_model, self.mount, recorder=self.log.record)
-        self.mission = PalaceMission(sc.mission, self.nav, yaw=self.yaw, image_size=(c.width, c.height),
-                                     recorder=self.log.record)
-        start = self.mission.start_position()
-        init = VehicleState(t=0.0, position=start, velocity=np.zeros(3), euler=np.array([0.0, 0.0, self.yaw]),
-                            body_rates=np.zeros(3), specific_force=np.array([0.0, 0.0, -9.81]))
+        parts = build_mission(self)
+        self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
+        self.uses_camera = parts.uses_camera
+        init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
+                            euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
+                            specific_force=np.array([0.0, 0.0, -9.81]))
         self.vehicle = RmaxModel(dt=self.dt, initial=init)
-        self.controller = RmaxPositionController()
         self.history = TruthHistory(self.dt, horizon_s=2.5)
 
         self._queue: list = []
@@ -98,7 +97,7 @@ class Simulation:
             self._emit(b, self.imu.latency_s)
 
         def camera(t):
-            if self.mission.mode not in ("final", "landed", "abort"):
+            if self.uses_camera and self.mission.mode not in ("final", "landed", "abort"):
                 if self._render_pool is not None:
                     self._emit(self.camera.sample_async(t, h, w, self._render_pool), self.camera.latency_s)
                 else:
@@ -120,7 +119,7 @@ class Simulation:
         d_pos = _divisor(10.0, dt)  # mission manager + position loop
         d_wind = _divisor(20.0, dt)  # turbulence bandwidth is a few rad/s: 20 Hz updates suffice
         # frames render on a second thread while the loop steps through the camera latency
-        self._render_pool = ThreadPoolExecutor(1) if self.camera.latency_s >= dt else None
+        self._render_pool = ThreadPoolExecutor(1) if self.uses_camera and self.camera.latency_s >= dt else None
         schedule = self._sensor_schedule()
         cmd = YacsCommand(t=0.0)
         ref = None
@@ -177,9 +176,7 @@ class Simulation:
                 self._render_pool.shutdown(wait=True, cancel_futures=True)
                 self._render_pool = None
         wall = time.perf_counter() - wall0
-        from visnav.analysis.metrics import palace_metrics
-
-        metrics = palace_metrics(self, wall_time_s=wall, error=error)
+        metrics = self._metrics(self, wall_time_s=wall, error=error)
         return RunResult(scenario=sc, log=log, metrics=metrics, error=error)
 
     def _log_step(self, t, truth, est, ref, cmd, mode, health) -> None:

@@ -1,0 +1,54 @@
+"""Which mission manager, controller and metrics a scenario's ``mission.type`` flies with.
+
+Each builder receives the half-built ``Simulation`` (world, sensors, navigator ready) and returns
+the ``MissionParts``; a new mission registers itself here with ``@register("name")`` (and its
+pydantic config in ``scenarios/schema.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+Builder = Callable[[object], "MissionParts"]
+REGISTRY: dict[str, Builder] = {}
+
+
+@dataclass
+class MissionParts:
+    mission: object  # .step(t, nav, health) -> (reference, mode); .done; .mode; .on_touchdown(t)
+    controller: object  # .command(t, nav, reference) -> command
+    metrics: Callable  # metrics(sim, wall_time_s, error) -> dict
+    start_position: np.ndarray
+    start_yaw: float = 0.0
+    uses_camera: bool = True
+
+
+def register(name: str) -> Callable[[Builder], Builder]:
+    def deco(fn: Builder) -> Builder:
+        REGISTRY[name] = fn
+        return fn
+
+    return deco
+
+
+def build(sim) -> MissionParts:
+    kind = sim.sc.mission.type
+    if kind not in REGISTRY:
+        raise ValueError(f"mission.type {kind!r} has no builder; known: {', '.join(sorted(REGISTRY))}")
+    return REGISTRY[kind](sim)
+
+
+@register("palace")
+def _palace(sim) -> MissionParts:
+    from visnav.analysis.metrics import palace_metrics
+    from visnav.control.rmax import RmaxPositionController
+    from visnav.mission.palace import PalaceMission
+
+    c = sim.sc.sensors.camera
+    mission = PalaceMission(sim.sc.mission, sim.nav, yaw=sim.yaw, image_size=(c.width, c.height),
+                            recorder=sim.log.record)
+    return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=palace_metrics,
+                        start_position=mission.start_position(), start_yaw=sim.yaw, uses_camera=True)
