@@ -116,7 +116,8 @@ class Simulation:
         """Fly the scenario; on an exception the run stops and keeps what it has."""
         sc, dt, log = self.sc, self.dt, self.log
         n = int(round(sc.run.duration_s / dt))
-        d_pos = _divisor(10.0, dt)  # mission manager + position loop
+        d_pos = _divisor(10.0, dt)  # mission manager (and the PALACE position loop)
+        d_ctrl = _divisor(getattr(self.controller, "rate_hz", 10.0), dt)  # the controller's own rate
         d_wind = _divisor(20.0, dt)  # turbulence bandwidth is a few rad/s: 20 Hz updates suffice
         # frames render on a second thread while the loop steps through the camera latency
         self._render_pool = ThreadPoolExecutor(1) if self.uses_camera and self.camera.latency_s >= dt else None
@@ -143,13 +144,17 @@ class Simulation:
                 while q and q[0][0] <= t + 1e-9:
                     m = heapq.heappop(q)[2]
                     self.nav.update(m.result() if isinstance(m, PendingFrame) else m)
-                # mission manager and position loop (10 Hz)
-                if k % d_pos == 0:
+                # mission manager (10 Hz) and controller (its own rate)
+                mission_due, ctrl_due = k % d_pos == 0, k % d_ctrl == 0
+                if mission_due or ctrl_due:
                     nav_est = self.nav.estimate(t)
+                if mission_due:
                     health = self.nav.health(t)
                     ref, mode = self.mission.step(t, nav_est, health)
+                if ctrl_due:
                     # no position solution yet (first GPS fix not in): hold the trim
                     cmd = self.controller.command(t, nav_est, ref) if nav_est.valid else YacsCommand(t=t)
+                if mission_due:
                     self._log_step(t, truth, nav_est, ref, cmd, mode, health)
                     if self.mission.done:
                         break
@@ -157,8 +162,8 @@ class Simulation:
                         progress(t, n * dt)
                 # vehicle dynamics in the wind
                 if k % d_wind == 0:
-                    wind = self.world.wind.velocity_ned(t, d_wind * dt, max(truth.height_agl, 0.5),
-                                                        float(np.linalg.norm(truth.velocity)))
+                    airspeed = float(np.linalg.norm(truth.velocity - self.world.wind.steady.ned))
+                    wind = self.world.wind.velocity_ned(t, d_wind * dt, max(truth.height_agl, 0.5), airspeed)
                 self.vehicle.step(cmd, dt, wind)
                 if self.vehicle.state.on_ground and touchdown is None and t > 1.0:
                     touchdown = self.vehicle.state
