@@ -124,3 +124,30 @@ def palace_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
     if error:
         out["error"] = error
     return out
+
+
+def hover_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
+    """Metrics of a hover mission: the §4.2.1 drift of MPE (open or closed loop) during the hold."""
+    from visnav.analysis.drift import measure_drift
+
+    log, m, cfg = sim.log, sim.mission, sim.sc.mission
+    truth, mpe = log.get("truth"), log.get("mpe")
+    out: dict = {"altitude_m": float(cfg.altitude_m), "surface": sim.sc.world.surface,
+                 "source": cfg.source, "tracker_lost": m.mode in ("lost",) or any(
+                     x == "lost" for x in (log.get("mode") or {}).get("mode", []))}
+    if mpe and truth and m.t_hold is not None:
+        sel = mpe["t"] >= m.t_hold
+        if sel.sum() > 20:
+            t = mpe["t"][sel]
+            err = mpe["position"][sel] - interp_rows(t, truth["t"], truth["position"])
+            r = measure_drift(t, err[:, :2], mpe["range"][sel], sim.camera_model.fx)
+            out.update(drift_m=r.drift_m, drift_px=r.drift_px, drift_duration_s=r.duration_s,
+                       mpe_noise_sigma_m=r.noise_sigma_m, mean_range_m=float(np.mean(mpe["range"][sel])))
+    out.update(hover_oscillation(log))
+    sim_time = float(truth["t"][-1]) if truth else 0.0
+    out["sim_time_s"] = sim_time
+    out["wall_time_s"] = float(wall_time_s)
+    out["real_time_factor"] = float(sim_time / wall_time_s) if wall_time_s > 0 else float("nan")
+    if error:
+        out["error"] = error
+    return out

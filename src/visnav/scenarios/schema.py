@@ -136,6 +136,27 @@ class NavigationConfig(_M):
     accel_noise: float = Field(0.3, ge=0, le=10, description="process noise of the position filter, m/s^2")
 
 
+class HoverMissionConfig(_M):
+    """Hover on the glide slope at ``altitude_m`` with the tracker running (seed 000 §4.2, §5.2):
+    ``mission.type = "hover"``; optional chirp at a cyclic actuator for frequency sweeps."""
+
+    type: Literal["hover"] = "hover"
+    point_m: list[float] = Field(default_factory=lambda: [0.0, 0.0])
+    altitude_m: float = Field(12.0, ge=1, le=200)
+    look_angle_deg: float = Field(60.0, ge=20, le=90, description="hover on the camera's line of sight")
+    source: Literal["gps", "mpe"] = "gps"
+    settle_s: float = Field(3.0, ge=0, le=60)
+    coherence_threshold: float = Field(0.7, ge=-1, le=1)
+    coherence_time_s: float = Field(2.0, ge=0, le=30)
+    hold_s: float = Field(120.0, ge=0, le=3600)
+    sweep_axis: Literal["none", "lateral", "longitudinal"] = "none"
+    sweep_amplitude: float = Field(20.0, ge=0, le=500, description="YACS units")
+    sweep_f0_hz: float = Field(0.05, gt=0, le=10)
+    sweep_f1_hz: float = Field(3.0, gt=0, le=20)
+    sweep_start_s: float = Field(5.0, ge=0, le=600)
+    sweep_duration_s: float = Field(90.0, gt=0, le=3600)
+
+
 class PalaceMissionConfig(_M):
     """PALACE landing (seed 000 Fig. 1.1): ``mission.type = "palace"``."""
 
@@ -159,7 +180,7 @@ class PalaceMissionConfig(_M):
 
 
 # Every mission's config, told apart by its ``type`` (add new ones to this tuple).
-MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig,)
+MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig)
 MissionConfig = (
     Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]
     if len(MISSION_CONFIGS) > 1

@@ -122,6 +122,7 @@ class Simulation:
         # frames render on a second thread while the loop steps through the camera latency
         self._render_pool = ThreadPoolExecutor(1) if self.uses_camera and self.camera.latency_s >= dt else None
         schedule = self._sensor_schedule()
+        inject = getattr(self.mission, "actuator_injection", None)
         cmd = YacsCommand(t=0.0)
         ref = None
         wind = self.world.wind.steady.ned
@@ -164,7 +165,16 @@ class Simulation:
                 if k % d_wind == 0:
                     airspeed = float(np.linalg.norm(truth.velocity - self.world.wind.steady.ned))
                     wind = self.world.wind.velocity_ned(t, d_wind * dt, max(truth.height_agl, 0.5), airspeed)
-                self.vehicle.step(cmd, dt, wind)
+                applied = cmd
+                if inject is not None:
+                    d = inject(t)
+                    if d is not None:  # a sweep at the actuator (the loop broken where seed 000 broke it)
+                        applied = YacsCommand(t=t, ail=cmd.ail + d[0], ele=cmd.ele + d[1], rud=cmd.rud + d[2],
+                                              thr=cmd.thr + d[3])
+                        log.record("actuator", t, controller=np.array([cmd.ail, cmd.ele, cmd.rud, cmd.thr]),
+                                   injection=np.asarray(d, float),
+                                   applied=np.array([applied.ail, applied.ele, applied.rud, applied.thr]))
+                self.vehicle.step(applied, dt, wind)
                 if self.vehicle.state.on_ground and touchdown is None and t > 1.0:
                     touchdown = self.vehicle.state
                     self.mission.on_touchdown(t + dt)

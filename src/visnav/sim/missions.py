@@ -52,3 +52,14 @@ def _palace(sim) -> MissionParts:
                             recorder=sim.log.record)
     return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=palace_metrics,
                         start_position=mission.start_position(), start_yaw=sim.yaw, uses_camera=True)
+
+
+@register("hover")
+def _hover(sim) -> MissionParts:
+    from visnav.analysis.metrics import hover_metrics
+    from visnav.control.rmax import RmaxPositionController
+    from visnav.mission.hover import HoverMission
+
+    mission = HoverMission(sim.sc.mission, sim.nav, yaw=sim.yaw, recorder=sim.log.record)
+    return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=hover_metrics,
+                        start_position=mission.start_position(), start_yaw=sim.yaw, uses_camera=True)
