@@ -133,8 +133,10 @@ class PalaceNavigator:
         if isinstance(m, ImuSample):
             self._on_imu(m)
         elif isinstance(m, AttitudeSample):
-            if np.all(np.isfinite(m.euler)):
-                self.att.push(m.t, m.euler)
+            e = m.euler
+            if math.isfinite(e[0] + e[1] + e[2]):
+                self.att.push(m.t, e)
+                self.recorder("attitude_samples", m.t, euler=e)
             else:
                 self.h.rejected_samples += 1
         elif isinstance(m, RangeSample):
