@@ -67,6 +67,51 @@ def run(
 
 
 @app.command()
+def montecarlo(
+    scenario: str = typer.Argument(..., help="built-in scenario name or path to a .toml file"),
+    n: int = typer.Option(10, "-n", "--runs", help="number of seeds (1..N, or from --first-seed)"),
+    first_seed: int = typer.Option(1, help="first seed"),
+    workers: int = typer.Option(2, help="local worker processes"),
+    scheduler: Optional[str] = typer.Option(None, help="Dask scheduler address (tcp://host:8786)"),
+    set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
+    grid: List[str] = typer.Option([], "--grid", help="sweep a key: --grid mission.altitude_m=6,12,18"),
+    out: Optional[str] = typer.Option(None, help="campaign directory (default runs/<scenario>-mc-<time>)"),
+) -> None:
+    """Run N seeds (times every grid point); resumable: rerunning with --out skips finished runs."""
+    import time as _time
+
+    from visnav.analysis.montecarlo import Campaign, CampaignError, parse_grid
+
+    try:
+        if n < 1:
+            raise CampaignError(f"-n must be at least 1, got {n}")
+        g = parse_grid(grid)
+        out_dir = out or f"runs/{scenario.rsplit('/', 1)[-1].removesuffix('.toml')}-mc-{_time.strftime('%Y%m%d-%H%M%S')}"
+        camp = Campaign(scenario, list(range(first_seed, first_seed + n)), out_dir, list(set_), g, workers, scheduler)
+        with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
+                      TimeElapsedColumn(), console=console) as prog:
+            task = prog.add_task(f"campaign {scenario}", total=None, info="")
+
+            def progress(i, total, row):
+                prog.update(task, total=total, completed=i,
+                            info=f"{i}/{total} seed {row['seed']} {row.get('status')}")
+
+            summary = camp.run(progress)
+    except CampaignError as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2)
+    table = Table(title=f"{scenario}: {summary['count']} runs, {summary['failed']} failed")
+    for col in ("metric", "mean", "median", "p95", "min", "max"):
+        table.add_column(col, justify="left" if col == "metric" else "right")
+    for k, v in summary["metrics"].items():
+        table.add_row(k, *(f"{v[c]:.4g}" for c in ("mean", "median", "p95", "min", "max")))
+    console.print(table)
+    console.print(f"campaign directory: {camp.out}")
+    if summary["failed"]:
+        raise typer.Exit(1)
+
+
+@app.command()
 def scenarios() -> None:
     """List the built-in scenarios."""
     from visnav.scenarios.schema import builtin_names, load_scenario
