@@ -81,9 +81,12 @@ class PalaceNavigator:
         self.mount = mount
         self.mpe = MonocularPositionEstimator(camera, mount, model=cfg.mpe.model)
         tc = cfg.tracker
+        # "anchored-subpixel" (issue #3): re-correlate against the track's first template and
+        # refine the peak below a pixel: the two remedies for the drift the thesis names (§2.2.2, ch. 6)
+        anchored_sub = tc.mode == "anchored-subpixel"
         self.tracker_kwargs = dict(
-            template_size=tc.template_px, search_radius=tc.search_radius_px, subpixel=tc.subpixel,
-            min_coherence=tc.min_coherence, mode=tc.mode,
+            template_size=tc.template_px, search_radius=tc.search_radius_px, subpixel=tc.subpixel or anchored_sub,
+            min_coherence=tc.min_coherence, mode="anchored" if anchored_sub else tc.mode,
         )
         self.tracker: PnccTracker | None = None
         self.filter = PositionFilter(accel_noise=cfg.accel_noise)

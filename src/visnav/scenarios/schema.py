@@ -116,7 +116,7 @@ class TrackerConfig(_M):
     template_px: int = Field(21, ge=5, le=101)
     search_radius_px: int = Field(30, ge=2, le=200)
     subpixel: bool = False
-    mode: Literal["thesis", "anchored"] = "thesis"
+    mode: Literal["thesis", "anchored", "anchored-subpixel"] = "thesis"  # thesis = Alg. 2 as written
     min_coherence: float = Field(0.5, ge=-1, le=1)
     feature_size: int = Field(7, ge=1, le=31)
     min_isotropy: float = Field(0.2, ge=0, le=1)
