@@ -112,6 +112,59 @@ def montecarlo(
 
 
 @app.command()
+def margins(
+    scenario: str = typer.Argument("palace-sweep", help="a hover scenario (mission.type = hover)"),
+    altitudes: str = typer.Option("6,12,18,30,54", help="heights AGL [m], comma separated"),
+    delays: str = typer.Option("0,0.1", help="simulated IMU delays [s], comma separated"),
+    compensate: bool = typer.Option(False, help="also fly each delay compensated by the identified delay"),
+    seed: int = typer.Option(1),
+    workers: int = typer.Option(2),
+    set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
+    out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
+) -> None:
+    """Stability margins at the cyclic actuators from closed-loop chirps (seed 000 Tables 5.1/5.2)."""
+    import csv
+    import time as _time
+    from pathlib import Path
+
+    from visnav.analysis.frequency import margins_campaign
+    from visnav.scenarios.schema import ScenarioError, load_scenario
+
+    try:
+        alts = [float(a) for a in altitudes.split(",") if a.strip()]
+        dels = [float(d) for d in delays.split(",") if d.strip()]
+        if not alts or not dels:
+            raise ValueError("--altitudes and --delays need at least one value each")
+        load_scenario(scenario, list(set_))
+    except (ValueError, ScenarioError) as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2)
+    out_dir = Path(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), console=console) as prog:
+        task = prog.add_task("sweeps", total=None)
+        rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario,
+                                overrides=tuple(set_), workers=workers,
+                                progress=lambda *a, **k: prog.advance(task))
+    cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
+            "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]
+    extra = [k for r in rows for k in r if k not in cols]
+    cols += list(dict.fromkeys(extra))
+    with (out_dir / "margins.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=cols)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in cols})
+    table = Table(title="margins at the cyclic actuators")
+    for c in cols[:10]:
+        table.add_column(c.replace("_", " "), justify="right")
+    for r in rows:
+        table.add_row(*(_fmt(r.get(c)) if r.get(c) is not None else "" for c in cols[:10]))
+    console.print(table)
+    console.print(f"written: {out_dir / 'margins.csv'}")
+
+
+@app.command()
 def scenarios() -> None:
     """List the built-in scenarios."""
     from visnav.scenarios.schema import builtin_names, load_scenario
