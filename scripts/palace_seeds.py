@@ -24,7 +24,9 @@ def one(args):
 def main(argv: list[str]) -> dict:
     n = int(argv[0]) if argv and not argv[0].startswith("--") else 20
     sets = [argv[i + 1] for i, a in enumerate(argv) if a == "--set"]
-    with ProcessPoolExecutor(2) as ex:
+    import multiprocessing
+
+    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as ex:
         rows = list(ex.map(one, [(s, sets) for s in range(1, n + 1)]))
     keys = ["landed", "aborted", "touchdown_error_m", "touchdown_speed_mps", "mpe_drift_m",
             "time_under_vision_s", "reinitializations", "mpe_fallbacks", "real_time_factor"]

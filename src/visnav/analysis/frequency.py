@@ -585,8 +585,9 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         pool = executor
         own = pool is None and workers > 1
         if own:
+            import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
-            pool = ProcessPoolExecutor(workers)
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
         total = len(runs) + len(todo)
         try:
             futures = [pool.submit(_call, j) for j in jobs] if pool is not None else None

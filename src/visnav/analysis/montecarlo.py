@@ -248,9 +248,11 @@ class Campaign:
             for j in jobs:
                 yield run_job(j)
             return
+        import multiprocessing
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
-        with ProcessPoolExecutor(self.workers) as ex:
+        # spawn, not fork: forking a process that already runs OpenCV / render threads can deadlock
+        with ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn")) as ex:
             futs = [ex.submit(run_job, j) for j in jobs]
             for f in as_completed(futs):
                 yield f.result()
