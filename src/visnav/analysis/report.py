@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import html
+import importlib
 import io
 from pathlib import Path
 
@@ -99,15 +100,28 @@ def plots(log, point=None) -> list[tuple[str, str]]:
     return out
 
 
+#: mission type -> module with its own report: ``plots(log, scenario) -> [(title, img)]``,
+#: ``PUBLISHED`` (metric -> seed figure) and ``PUBLISHED_SOURCE``; other missions get the PALACE plots
+MISSION_REPORTS = {"pfcm": "visnav.analysis.path_metrics"}
+
+
 def write_report(result, path: Path) -> None:
     sc, log, m = result.scenario, result.log, result.metrics
+    own = MISSION_REPORTS.get(getattr(sc.mission, "type", ""))
+    mod = importlib.import_module(own) if own else None
+    published = mod.PUBLISHED if mod else PALACE_PUBLISHED
+    source = mod.PUBLISHED_SOURCE if mod else "seed 000 (Hubbard 2007)"
     rows = []
     for k, v in m.items():
-        pub = PALACE_PUBLISHED.get(k, "")
+        pub = published.get(k, "")
         vs = f"{v:.3f}" if isinstance(v, float) else html.escape(str(v))
         rows.append(f"<tr><td>{html.escape(k)}</td><td>{vs}</td><td>{html.escape(pub)}</td></tr>")
-    point = np.array(sc.mission.landing_point_m + [0.0])
-    figs = "".join(f"<h2>{html.escape(title)}</h2>{img}" for title, img in plots(log, point))
+    if mod is not None:
+        fig_list = mod.plots(log, sc)
+    else:
+        lp = getattr(sc.mission, "landing_point_m", None)
+        fig_list = plots(log, None if lp is None else np.array(list(lp) + [0.0]))
+    figs = "".join(f"<h2>{html.escape(title)}</h2>{img}" for title, img in fig_list)
     modes = log.get("mode")
     timeline = ""
     if modes:
@@ -120,6 +134,6 @@ def write_report(result, path: Path) -> None:
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td,th{{padding:2px 10px;border-bottom:1px solid #ddd}}
 img{{max-width:100%}}</style></head><body>
 <h1>{html.escape(sc.run.name)} (seed {sc.run.seed})</h1><p>{html.escape(sc.run.description)}</p>{err}
-<h2>Metrics</h2><table><tr><th>metric</th><th>this run</th><th>seed 000 (Hubbard 2007)</th></tr>{''.join(rows)}</table>
+<h2>Metrics</h2><table><tr><th>metric</th><th>this run</th><th>{html.escape(source)}</th></tr>{''.join(rows)}</table>
 {timeline}{figs}</body></html>"""
     Path(path).write_text(doc)

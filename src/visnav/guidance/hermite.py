@@ -65,10 +65,12 @@ class HermiteSegment:
         c.setflags(write=False)
         object.__setattr__(self, "coeffs", c)
         s = np.linspace(0.0, 1.0, 257)
-        speed = np.linalg.norm(self.tangent(s), axis=-1)
-        if speed.min() <= 1e-6 * max(speed.max(), 1e-12):
-            raise ValueError(f"{self.name}: the tangent vanishes at s = {s[np.argmin(speed)]:.3f} "
-                             "(cusp): degenerate segment")
+        t = self.tangent(s)
+        speed = np.linalg.norm(t, axis=-1)
+        turn = np.sum(t[:-1] * t[1:], axis=1)  # < 0: the tangent reverses between two samples
+        if speed.min() <= 1e-6 * max(speed.max(), 1e-12) or np.any(turn < 0):
+            k = int(np.argmin(speed)) if not np.any(turn < 0) else int(np.argmax(turn < 0))
+            raise ValueError(f"{self.name}: the tangent vanishes near s = {s[k]:.3f} (cusp): degenerate segment")
 
     # -- eq. 4.2-4.5, vectorized over s --------------------------------------------------------
     def position(self, s: ArrayLike) -> np.ndarray:
@@ -94,6 +96,19 @@ class HermiteSegment:
         t, q = self.tangent(s), self.second_derivative(s)
         n2 = np.sum(t * t, axis=-1)[..., None]
         return np.cross(np.cross(t, q), t) / (n2 * n2)
+
+    def frame_at(self, s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """p(s), t(s) and k(s) (eq. 4.1-4.5) at one scalar s, without the vector overhead."""
+        A, B, C, D = self.coeffs
+        p = ((A * s + B) * s + C) * s + D
+        t = (3.0 * A * s + 2.0 * B) * s + C
+        q = 6.0 * A * s + 2.0 * B
+        tx, ty, tz = t
+        qx, qy, qz = q
+        cx, cy, cz = ty * qz - tz * qy, tz * qx - tx * qz, tx * qy - ty * qx  # t × q
+        n2 = tx * tx + ty * ty + tz * tz
+        k = np.array([cy * tz - cz * ty, cz * tx - cx * tz, cx * ty - cy * tx]) / (n2 * n2)  # (t × q) × t
+        return p, t, k
 
     def arc_length(self, s: ArrayLike = 1.0, s0: ArrayLike = 0.0) -> np.ndarray | float:
         """Arc length from s0 to s [m] (16-point Gauss-Legendre per call, vectorized over s)."""
@@ -218,6 +233,15 @@ class HermitePath:
             best_d = np.where(better, d, best_d)
             best_l = np.where(better, L[a] + u * (L[a + 1] - L[a]), best_l)
         return best_d, best_l
+
+    @classmethod
+    def from_segments(cls, params: ArrayLike, **kwargs) -> "HermitePath":
+        """Path from the planner's 12 parameters per segment, rows (p0, p1, ṗ0, ṗ1) (eq. 4.2)."""
+        A = np.asarray(params, float)
+        if A.ndim != 2 or A.shape[1] != 12 or len(A) == 0:
+            raise ValueError(f"segment parameters must have shape (N, 12), got {A.shape}")
+        return cls([HermiteSegment(a[0:3], a[3:6], a[6:9], a[9:12], name=f"segment {i}") for i, a in enumerate(A)],
+                   **kwargs)
 
     @classmethod
     def from_waypoints(cls, points: ArrayLike, tangents: ArrayLike, scale: str = "arc",

@@ -14,10 +14,17 @@ Each call (50 Hz, like the WITAS control function) takes the navigation solution
    v_targ2 = u_max/τ_x^b with u_max = min(u1, u3, u4) of the trimmed turn (eq. 4.15-4.16, 4.21);
    v_targ3 = w_max/τ_z with w_max = 1.5 m/s for descent angles γ >= 30°, 3 m/s below (eq. 4.23).
    Beyond the thesis (which evaluates v_targ2/3 at the control point only and notes that abrupt
-   braking results): the same limits along the path ahead are met by braking at Acc in time,
-   and v_targ rises at most at Acc (no step when a limit ends).
+   braking results): the same limits along the path ahead are met by braking at Acc in time
+   (``brake_lead_s`` earlier, the pitch channel's lag), and v_targ rises at most at Acc. With
+   ``roll_headroom`` the roll the outer loop spends against the wind (``set_lateral_bias``) is
+   taken off φ_max in u3 (at the control point for this turn's direction, ahead its magnitude):
+   §3.5 reads roll-input saturation at 10 m/s (Fig. 3.8) as too fast for the curvature.
 3. Heading error δψ = atan2(t_y, t_x) − ψ (§4.3.3 item 3).
-4. Feed-forward r_ff = u/R_y^b, φ_ff = u²/(g R_y^b) (eq. 4.14, 4.24), u the along-path speed.
+4. Feed-forward r_ff = u/R_y^b, φ_ff = u²/(g R_y^b) (eq. 4.14, 4.24), u the along-path speed,
+   in their exact trimmed-turn form φ_ff = atan(u²/(g R)), r_ff = cos φ_ff u/R (eq. 4.14 is the
+   small-angle form: 2% more bank at 15°, a steady inward offset), with R_y^b taken a channel lag
+   ahead (``roll_lead_s``, ``yaw_lead_s``) and the lateral acceleration rate-limited
+   (``ff_roll_rate``): a curvature step at a joint becomes a ramp that ends when the turn starts.
 
 Frames: the "body" frame of eq. 4.18/4.24 is taken as the heading frame (x forward, y right,
 z down): the YACS attitude commands act there, and with |φ|, |θ| <= 15° the difference is cos 15°.
@@ -32,123 +39,24 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from visnav.guidance.hermite import HermitePath
+from visnav.guidance.speed_limits import (  # noqa: F401  (re-exported: the PFCM's public API)
+    PfcmLimits,
+    brake_speed,
+    descent_angle,
+    descent_speed_limit,
+    hover_induced_velocity,
+    kinematic_speed_limits,
+    max_descent_rate,
+    max_path_speed,
+    nz_max_for_mass,
+)
 from visnav.measurements import NavEstimate
 
 G = 9.81
 
 
-# ---------------------------------------------------------------------------------- limits
-def kinematic_speed_limits(radius_y: ArrayLike, r_max: float, phi_max: float, theta_max: float,
-                           nz_max: float, xu: float = -0.025, g: float = G) -> dict[str, np.ndarray]:
-    """u1..u4 of eq. 4.15 for the lateral curvature radius R_y^b [m] (trimmed level turn):
-    u1 = |R r_max| (yaw rate), u2 = |g θ_max/X_u| (pitch, drag), u3 = sqrt(|φ_max g R|) (roll),
-    u4 = |g (Nz_max − 1) g R²|^(1/4) (load factor, T_max = −Nz_max g). Vectorized over R."""
-    for name, v in (("r_max", r_max), ("phi_max", phi_max), ("theta_max", theta_max)):
-        if not (np.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be > 0, got {v}")
-    if not nz_max > 1:
-        raise ValueError(f"nz_max must be > 1 (load factor T_max/g), got {nz_max}")
-    if not xu < 0:
-        raise ValueError(f"xu must be < 0 (drag derivative), got {xu}")
-    R = np.abs(np.asarray(radius_y, float))
-    return {
-        "u1": R * r_max,
-        "u2": np.full(R.shape, abs(g * theta_max / xu)),
-        "u3": np.sqrt(phi_max * g * R),
-        "u4": (g * g * (nz_max - 1.0) * R * R) ** 0.25,
-    }
-
-
-def max_path_speed(radius_y: ArrayLike, r_max: float, phi_max: float, theta_max: float, nz_max: float,
-                   xu: float = -0.025, g: float = G, include_pitch: bool = False) -> np.ndarray:
-    """u_max = min(u1, u3, u4) (eq. 4.16); u2 joins only with ``include_pitch`` (the thesis leaves it
-    out: the planner's cruise speed is always below it). R = inf (straight) gives inf."""
-    u = kinematic_speed_limits(radius_y, r_max, phi_max, theta_max, nz_max, xu, g)
-    out = np.minimum(np.minimum(u["u1"], u["u3"]), u["u4"])
-    return np.minimum(out, u["u2"]) if include_pitch else out
-
-
-def nz_max_for_mass(mass_kg: float, max_takeoff_kg: float = 94.0) -> float:
-    """Load factor that keeps thrust within the maximum take-off weight (§4.3.3: 94 kg R-MAX)."""
-    if not 0 < mass_kg < max_takeoff_kg:
-        raise ValueError(f"mass_kg must be in (0, {max_takeoff_kg}), got {mass_kg}")
-    return max_takeoff_kg / mass_kg
-
-
-def hover_induced_velocity(mass_kg: float = 80.0, rotor_diameter_m: float = 3.115, rho: float = 1.225,
-                           g: float = G) -> float:
-    """V_i = sqrt(DL/(2ρ)) (eq. 4.22 in SI; the thesis' 60 sqrt(DL/2ρ) is the same in ft/min)."""
-    if not (mass_kg > 0 and rotor_diameter_m > 0 and rho > 0):
-        raise ValueError(f"mass, diameter and rho must be > 0, got {mass_kg}, {rotor_diameter_m}, {rho}")
-    disk_loading = mass_kg * g / (math.pi * rotor_diameter_m**2 / 4.0)  # N/m²
-    return math.sqrt(disk_loading / (2.0 * rho))
-
-
-def descent_angle(tau: ArrayLike) -> np.ndarray:
-    """γ = atan(τ_z/τ_x) (eq. 4.23) with τ_x the horizontal part; > 0 descending (NED z down)."""
-    t = np.asarray(tau, float)
-    return np.arctan2(t[..., 2], np.hypot(t[..., 0], t[..., 1]))
-
-
-def max_descent_rate(gamma: ArrayLike, steep_angle: float = math.radians(30.0), w_steep: float = 1.5,
-                     w_shallow: float = 3.0) -> np.ndarray:
-    """w_MAXdescent of eq. 4.23 / Fig. 4.8: w_steep for γ >= steep_angle, w_shallow below; inf when
-    not descending (γ <= 0)."""
-    g = np.asarray(gamma, float)
-    return np.where(g <= 0.0, np.inf, np.where(g >= steep_angle, w_steep, w_shallow))
-
-
-def descent_speed_limit(tau: ArrayLike, steep_angle: float = math.radians(30.0), w_steep: float = 1.5,
-                        w_shallow: float = 3.0) -> np.ndarray:
-    """v_targ3 = w_MAXdescent/τ_z (eq. 4.23) for unit tangents τ (..., 3); inf when not descending."""
-    t = np.asarray(tau, float)
-    tz = t[..., 2]
-    w = max_descent_rate(descent_angle(t), steep_angle, w_steep, w_shallow)
-    return np.where(tz > 1e-9, w / np.maximum(tz, 1e-9), np.inf)
-
-
-def brake_speed(l_end: ArrayLike, accel: float, v_end: ArrayLike = 0.0) -> np.ndarray:
-    """v_brake = sqrt(|2 l_end Acc + v_end²|) (eq. 4.20)."""
-    return np.sqrt(np.abs(2.0 * np.asarray(l_end, float) * accel + np.asarray(v_end, float) ** 2))
-
-
-@dataclass(frozen=True)
-class PfcmLimits:
-    """Flight-envelope limits of §4.3.3 (angles in radians). ``r_max``: the thesis prints
-    "40 rad/sec", read as 40 deg/s (0.70 rad/s). ``v_end``: speed at the end of the path."""
-
-    v_cruise: float
-    accel: float = 1.2
-    r_max: float = math.radians(40.0)
-    phi_max: float = math.radians(15.0)
-    theta_max: float = math.radians(15.0)
-    nz_max: float = 1.1
-    vrs_steep_angle: float = math.radians(30.0)
-    w_descent_steep: float = 1.5
-    w_descent_shallow: float = 3.0
-    v_end: float = 0.0
-    xu: float = -0.025
-    anticipate: bool = True
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.v_cruise) and self.v_cruise > 0):
-            raise ValueError(f"v_cruise must be > 0 m/s, got {self.v_cruise}")
-        if not (np.isfinite(self.accel) and self.accel > 0):
-            raise ValueError(f"accel must be > 0 m/s², got {self.accel}")
-        for name in ("w_descent_steep", "w_descent_shallow"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0 m/s, got {getattr(self, name)}")
-        if not 0 < self.vrs_steep_angle < math.pi / 2:
-            raise ValueError(f"vrs_steep_angle must be in (0, pi/2), got {self.vrs_steep_angle}")
-        if not self.v_end >= 0:
-            raise ValueError(f"v_end must be >= 0 m/s, got {self.v_end}")
-        kinematic_speed_limits(1.0, self.r_max, self.phi_max, self.theta_max, self.nz_max, self.xu)
-
-    def u_max(self, radius_y: ArrayLike) -> np.ndarray:
-        return max_path_speed(radius_y, self.r_max, self.phi_max, self.theta_max, self.nz_max, self.xu)
-
-    def v_targ3(self, tau: ArrayLike) -> np.ndarray:
-        return descent_speed_limit(tau, self.vrs_steep_angle, self.w_descent_steep, self.w_descent_shallow)
+def _clip(x: float, lo: float, hi: float) -> float:
+    return min(max(float(x), lo), hi)
 
 
 # ---------------------------------------------------------------------------------- outputs
@@ -166,6 +74,7 @@ class PathReference:
     segment: int
     s: float
     v_target: float
+    accel_target: float  # d v_target/dt [m/s²] (for the θ_ff of eq. 4.14)
     v_targ1: float
     v_targ2: float
     v_targ3: float
@@ -179,13 +88,36 @@ class PathReference:
     source: str = "gps"
 
 
+class _LiveReference:
+    """A reference source: ``step(t, nav)`` gives a ``PathReference``; ``position``, ``velocity``,
+    ``yaw`` and ``source`` read the last one (what a log of the reference records)."""
+
+    last: PathReference | None = None
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.last.position if self.last is not None else np.full(3, np.nan)
+
+    @property
+    def velocity(self) -> np.ndarray:
+        return self.last.velocity if self.last is not None else np.zeros(3)
+
+    @property
+    def yaw(self) -> float:
+        return self.last.yaw if self.last is not None else math.nan
+
+    @property
+    def source(self) -> str:
+        return self.last.source if self.last is not None else "gps"
+
+
 def heading_rotation(psi: float) -> np.ndarray:
     """NED -> heading frame (x forward, y right, z down)."""
     c, s = math.cos(psi), math.sin(psi)
     return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-class PfcmGuidance:
+class PfcmGuidance(_LiveReference):
     """The PFCM trajectory generator on a ``HermitePath``; call ``step(t, nav)`` at the control rate.
 
     A second call at the same ``t`` returns the cached output (the mission manager and the outer
@@ -193,12 +125,22 @@ class PfcmGuidance:
     """
 
     def __init__(self, path: HermitePath, limits: PfcmLimits, iterations: int = 1,
-                 segment_end_speeds: ArrayLike | None = None, table_step_m: float = 0.5):
+                 segment_end_speeds: ArrayLike | None = None, table_step_m: float = 0.5,
+                 roll_lead_s: float = 0.6, yaw_lead_s: float = 0.2, brake_lead_s: float = 0.45,
+                 ff_roll_rate: float = math.radians(30.0), roll_headroom: bool = True):
         if not isinstance(path, HermitePath):
             raise ValueError(f"path must be a HermitePath, got {type(path).__name__}")
         if iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {iterations}")
+        for name, v in (("roll_lead_s", roll_lead_s), ("yaw_lead_s", yaw_lead_s), ("brake_lead_s", brake_lead_s),
+                        ("ff_roll_rate", ff_roll_rate)):
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be >= 0, got {v}")
         self.path, self.limits, self.iterations = path, limits, int(iterations)
+        self.roll_lead_s, self.yaw_lead_s, self.brake_lead_s = float(roll_lead_s), float(yaw_lead_s), float(brake_lead_s)
+        self.ff_jerk = G * float(ff_roll_rate)  # lateral jerk limit [m/s³]
+        self.accel_tau = 0.1  # low-pass of the target acceleration [s]
+        self.roll_headroom = bool(roll_headroom)
         n = len(path)
         v_end = np.full(n, np.inf) if segment_end_speeds is None else np.asarray(segment_end_speeds, float)
         if v_end.shape != (n,) or np.any(v_end < 0):
@@ -215,13 +157,17 @@ class PfcmGuidance:
         self.phase = "accelerate"
         self.v_acc = 0.0
         self.v_prev = 0.0
+        self._a_ff = 0.0
+        self._accel = 0.0
+        self.lateral_bias_ne = np.zeros(2)
         self._t: float | None = None
         self.last: PathReference | None = None
 
-    # -- the look-ahead envelope of v_targ2 and v_targ3 ----------------------------------------
+    # -- the look-ahead envelopes of v_targ2 and v_targ3 ---------------------------------------
     def _build_envelope(self, step: float) -> None:
-        """Limits on a dense table along the path (heading aligned with the path), folded into
-        v_env(l) = min over l' >= l of sqrt(v(l')² + 2 Acc (l' − l)) by a reverse cumulative min."""
+        """Limits on a dense table along the path (heading aligned with the path), each folded into
+        v_env(l) = min over l' >= l of sqrt(v(l')² + 2 Acc (l' − l)) by a reverse cumulative min.
+        The table also holds the curvature, for the feed-forward look-ahead."""
         n = max(8, int(math.ceil(self.path.lengths.max() / step)) + 1)
         smp = self.path.sample(n)
         lim = self.limits
@@ -230,14 +176,42 @@ class PfcmGuidance:
         h = np.hypot(tau[:, 0], tau[:, 1])
         # lateral curvature in a heading frame aligned with the horizontal tangent
         side = np.column_stack([-tau[:, 1], tau[:, 0]]) / np.maximum(h, 1e-9)[:, None]
-        ky = np.abs(np.sum(k[:, :2] * side, axis=1))
+        k_lat = np.sum(k[:, :2] * side, axis=1)  # > 0: the path turns right
+        ky = np.abs(k_lat)
         v2 = np.where(ky > 1e-9, lim.u_max(1.0 / np.maximum(ky, 1e-12)), np.inf) / np.maximum(h, 1e-9)
-        v = np.minimum(v2, lim.v_targ3(tau))
+        v3 = lim.v_targ3(tau)
         l = smp["l"]
-        a = np.minimum(v * v, 1e12) + 2.0 * lim.accel * l
-        env2 = np.minimum.accumulate(a[::-1])[::-1] - 2.0 * lim.accel * l
-        self._env_l, self._env_v = l, np.sqrt(np.maximum(env2, 0.0))
-        self.profile_table = {"l": l, "v_targ2": v2, "v_targ3": lim.v_targ3(tau), "envelope": self._env_v}
+        a2 = 2.0 * lim.accel * l
+
+        def envelope(v: np.ndarray) -> np.ndarray:
+            e = np.minimum.accumulate((np.minimum(v * v, 1e12) + a2)[::-1])[::-1] - a2
+            return np.sqrt(np.clip(e, 0.0, 1e12))  # 1e6 m/s: no limit ahead (inf after lookup)
+
+        self.profile_table = {"l": l, "v_targ2": v2, "v_targ3": v3, "envelope2": envelope(v2),
+                              "envelope3": envelope(v3), "lateral_curvature": k_lat}
+        self._rows = np.column_stack([envelope(v2), envelope(v3), k_lat])
+
+    def _row(self, l: float) -> np.ndarray:
+        """The table row (envelope2, envelope3, lateral curvature) at arc length l, interpolated."""
+        L = self.profile_table["l"]
+        j = min(max(int(L.searchsorted(l)) - 1, 0), len(L) - 2)
+        f = min(max((l - L[j]) / (L[j + 1] - L[j]), 0.0), 1.0)
+        return self._rows[j] * (1.0 - f) + self._rows[j + 1] * f
+
+    def _u_max(self, ky: float, phi: float) -> float:
+        """Scalar eq. 4.15-4.16 for |k_y^b| and a roll limit φ (inf on a straight)."""
+        if ky <= 1e-9:
+            return math.inf
+        lim, R = self.limits, 1.0 / ky
+        return min(R * lim.r_max, math.sqrt(phi * G * R), (G * G * (lim.nz_max - 1.0) * R * R) ** 0.25)
+
+    def set_lateral_bias(self, accel_ne: ArrayLike) -> None:
+        """The horizontal acceleration [m/s², N/E] the outer loop's integrators spend against the
+        wind; the roll it costs is taken off φ_max for v_targ2 (see ``step``)."""
+        a = np.asarray(accel_ne, float)[:2]
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"accel_ne must be finite, got {accel_ne!r}")
+        self.lateral_bias_ne = a
 
     # -- eq. 4.6-4.10 ----------------------------------------------------------------------------
     def update_control_point(self, p_heli: ArrayLike) -> tuple[int, float]:
@@ -245,16 +219,19 @@ class PfcmGuidance:
         p = np.asarray(p_heli, float)
         segs = self.path.segments
         for _ in range(self.iterations):
-            sg = segs[self.segment]
-            t = sg.tangent(self.s)
-            nt = float(np.linalg.norm(t))
-            e_f = float(np.dot(sg.position(self.s) - p, t)) / nt  # eq. 4.7-4.8
-            s = self.s - e_f / nt  # eq. 4.10
-            if s > 1.0 and self.segment < len(segs) - 1:
-                self.segment += 1  # next segment: the parameter restarts at 0 (§4.3.3 item 1)
-                self.s = 0.0
-                continue
-            self.s = float(np.clip(s, 0.0, 1.0))
+            while True:
+                A, B, C, D = segs[self.segment].coeffs
+                u = self.s
+                t = (3.0 * A * u + 2.0 * B) * u + C
+                nt = math.sqrt(t @ t)
+                e_f = float((((A * u + B) * u + C) * u + D - p) @ t) / nt  # eq. 4.7-4.8
+                s = u - e_f / nt  # eq. 4.10
+                if s > 1.0 and self.segment < len(segs) - 1:
+                    self.segment += 1  # next segment: the parameter restarts at 0 (§4.3.3 item 1)
+                    self.s = 0.0
+                    continue
+                break
+            self.s = min(max(float(s), 0.0), 1.0)
         return self.segment, self.s
 
     # -- v_targ1 (Fig. 4.5, eq. 4.19-4.20) -------------------------------------------------------
@@ -292,36 +269,92 @@ class PfcmGuidance:
         lim = self.limits
         i, s = self.update_control_point(pos)
         sg = self.path.segments[i]
-        p_cp, t_n, k_n = sg.position(s), sg.tangent(s), sg.curvature(s)
-        tau = t_n / np.linalg.norm(t_n)
+        p_cp, t_n, k_n = sg.frame_at(s)
+        tau = t_n / math.sqrt(t_n @ t_n)
         l_now = self.path.arc_position(i, s)
-        l_left = self.path.distance_to_end(i, s)
+        l_total = self.path.length
+        l_left = max(l_total - l_now, 0.0)
         C = heading_rotation(psi)
         tau_b, k_b = C @ tau, C @ k_n  # eq. 4.24
         # v_targ2 (eq. 4.21) with R_y^b = 1/k_y^b, and v_targ3 (eq. 4.23)
         ky = float(k_b[1])
-        u_max = float(lim.u_max(1.0 / ky)) if abs(ky) > 1e-9 else math.inf
+        # roll headroom: the bank the wind correction adds in this turn's direction is not available
+        # for turning (the remedy §3.5 suggests when the roll input saturates, Fig. 3.8)
+        lim_phi = lim.phi_max
+        if self.roll_headroom:
+            bias = float(C[1, 0] * self.lateral_bias_ne[0] + C[1, 1] * self.lateral_bias_ne[1]) / G
+            lim_phi = max(lim.phi_max - max(math.copysign(1.0, ky) * bias, 0.0), 0.5 * lim.phi_max)
+            env_scale = math.sqrt(max(lim.phi_max - math.hypot(*self.lateral_bias_ne) / G, 0.5 * lim.phi_max)
+                                  / lim.phi_max)
+        else:
+            env_scale = 1.0
+        u_max = self._u_max(abs(ky), lim_phi)
         v2 = u_max / tau_b[0] if tau_b[0] > 1e-3 else math.inf
-        v3 = float(lim.v_targ3(tau))
+        v3 = math.inf
+        if tau[2] > 1e-9:  # eq. 4.23
+            gamma = math.atan2(tau[2], math.hypot(tau[0], tau[1]))
+            v3 = (lim.w_descent_steep if gamma >= lim.vrs_steep_angle else lim.w_descent_shallow) / tau[2]
+        u = max(float(vel @ tau), 0.0)
+        l_brake = min(l_now + u * self.brake_lead_s, l_total)  # braking lead: the pitch lag
         if lim.anticipate:
-            env = float(np.interp(l_now, self._env_l, self._env_v))
-            v2, v3 = min(v2, env), min(v3, env)
-        v1 = self._v_targ1(dt, self._v_brake(l_now))
+            env = self._row(l_brake)
+            v2 = min(v2, env_scale * float(env[0]) if env[0] < 1e5 else math.inf)
+            v3 = min(v3, float(env[1]) if env[1] < 1e5 else math.inf)
+        v1 = self._v_targ1(dt, self._v_brake(l_brake))
         v = min(v1, v2, v3)
         v = min(v, self.v_prev + lim.accel * dt)  # rises at most at Acc, also after a limit ends
         finished = i == len(self.path) - 1 and s >= 1.0
         if finished:
             v, self.phase = 0.0, "end"
+        if dt > 0:  # d v_targ/dt, low-passed (v_brake follows the measured position)
+            a = _clip((v - self.v_prev) / dt, -2.0 * lim.accel, lim.accel)
+            self._accel += dt / (self.accel_tau + dt) * (a - self._accel)
+        accel = self._accel
         self.v_prev = v
         # heading (§4.3.3 item 3) and feed-forward (eq. 4.14, 4.24), u = along-path speed
         horiz = math.hypot(t_n[0], t_n[1])
-        yaw = math.atan2(t_n[1], t_n[0]) if horiz > 1e-6 * np.linalg.norm(t_n) else psi
+        yaw = math.atan2(t_n[1], t_n[0]) if horiz > 1e-6 * math.sqrt(t_n @ t_n) else psi
         d_psi = (yaw - psi + math.pi) % (2 * math.pi) - math.pi
-        u = max(float(vel @ tau), 0.0)
-        r_ff, phi_ff = u * ky, u * u * ky / G
+        # the curvature a channel lag ahead (roll, yaw); the roll's lateral acceleration u² k_y is
+        # rate-limited (a curvature step at a joint becomes a ramp)
+        def k_ahead(lead: float) -> float:
+            if lead <= 0:
+                return ky
+            return float(self._row(min(l_now + u * lead, l_total))[2])  # in the path's own frame there
+
+        a_ff = u * u * k_ahead(self.roll_lead_s)
+        if self.ff_jerk > 0 and dt > 0:
+            a_ff = _clip(a_ff, self._a_ff - self.ff_jerk * dt, self._a_ff + self.ff_jerk * dt)
+        self._a_ff = a_ff
+        # trimmed turn: tan φ = u²/(g R), body yaw rate r = ψ̇ cos φ (eq. 4.14 is the small-angle form)
+        phi_ff = math.atan(a_ff / G)
+        r_ff = u * k_ahead(self.yaw_lead_s) * math.cos(phi_ff)
         self.last = PathReference(
             t=t, position=p_cp, velocity=v * tau, yaw=yaw, tangent=tau, curvature=k_n, segment=i, s=s,
-            v_target=v, v_targ1=v1, v_targ2=v2, v_targ3=v3, phase=self.phase, heading_error=d_psi,
+            v_target=v, accel_target=accel, v_targ1=v1, v_targ2=v2, v_targ3=v3, phase=self.phase, heading_error=d_psi,
             r_ff=r_ff, phi_ff=phi_ff, distance_to_end=l_left, arc_position=l_now, finished=finished,
+            source=getattr(nav, "source", "gps"))
+        return self.last
+
+
+class PointHold(_LiveReference):
+    """Hover over a point with a heading: a ``PathReference`` source for the same outer loop
+    (before the path starts and after it ends). ``step(t, nav)`` like ``PfcmGuidance``."""
+
+    def __init__(self, point: ArrayLike, yaw: float):
+        p = np.asarray(point, float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise ValueError(f"point must be 3 finite NED values, got {point!r}")
+        self.point, self.hold_yaw = p, float(yaw)
+        self.last: PathReference | None = None
+
+    def step(self, t: float, nav: NavEstimate) -> PathReference:
+        psi = float(nav.attitude[2])
+        d_psi = (self.hold_yaw - psi + math.pi) % (2 * math.pi) - math.pi
+        tau = np.array([math.cos(self.hold_yaw), math.sin(self.hold_yaw), 0.0])
+        self.last = PathReference(
+            t=t, position=self.point, velocity=np.zeros(3), yaw=self.hold_yaw, tangent=tau, curvature=np.zeros(3),
+            segment=-1, s=0.0, v_target=0.0, accel_target=0.0, v_targ1=0.0, v_targ2=math.inf, v_targ3=math.inf, phase="hold",
+            heading_error=d_psi, r_ff=0.0, phi_ff=0.0, distance_to_end=0.0, arc_position=0.0, finished=True,
             source=getattr(nav, "source", "gps"))
         return self.last

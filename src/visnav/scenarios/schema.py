@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -179,8 +179,99 @@ class PalaceMissionConfig(_M):
     flare_height_m: float = Field(3.0, ge=0, le=30, description="sink rate eases to the final rate below this")
 
 
+class PfcmSpiralConfig(_M):
+    """Level lead-in north from the origin, then a descending helix (seed 002 Fig. 4.9), then an
+    optional steeper straight exit descent."""
+
+    start_height_m: float = Field(40.0, ge=2, le=500)
+    end_height_m: float = Field(10.0, ge=2, le=500)
+    radius_m: float = Field(25.0, ge=5, le=500)
+    turns: float = Field(1.5, gt=0, le=10)
+    direction: Literal["left", "right"] = "left"
+    lead_in_m: float = Field(60.0, ge=0, le=2000, description="level straight before the helix")
+    segments_per_turn: int = Field(8, ge=4, le=64)
+    exit_drop_m: float = Field(0.0, ge=0, le=200, description="height lost on the straight exit (part of the total)")
+    exit_angle_deg: float = Field(35.0, gt=0, le=80, description="descent angle of the exit")
+
+
+class PfcmMissionConfig(_M):
+    """WITAS path following control mode (seed 002 ch. 4): ``mission.type = "pfcm"``.
+
+    The path: ``path = "waypoints"`` (NED points with tangent directions, magnitudes by
+    ``tangent_scale``), ``"segments"`` (the planner's 12 parameters per segment: p0, p1, ṗ0, ṗ1)
+    or ``"spiral"`` (``[mission.spiral]``)."""
+
+    type: Literal["pfcm"] = "pfcm"
+    path: Literal["waypoints", "segments", "spiral"] = "waypoints"
+    tangent_scale: Literal["arc", "chord", "given"] = "arc"
+    waypoints_ned_m: list[list[float]] = Field(
+        default_factory=lambda: [[0.0, 0.0, -20.0], [80.0, 0.0, -20.0], [140.0, 30.0, -20.0]])
+    tangents: list[list[float]] = Field(default_factory=lambda: [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, 0.0]],
+                                        validate_default=True)
+    segments: list[list[float]] = Field(default_factory=list, validate_default=True,
+                                        description="12 numbers each: p0, p1, t0, t1 (NED)")
+    spiral: PfcmSpiralConfig = Field(default_factory=PfcmSpiralConfig, validate_default=True)
+    v_cruise_mps: float = Field(5.0, gt=0, le=20)
+    v_end_mps: float = Field(0.0, ge=0, le=20, description="speed at the end of the path")
+    accel_mps2: float = Field(1.2, gt=0, le=5)
+    r_max_deg_s: float = Field(40.0, gt=0, le=180)
+    phi_max_deg: float = Field(15.0, gt=0, le=45)
+    theta_max_deg: float = Field(15.0, gt=0, le=45)
+    nz_max: float = Field(1.1, gt=1, le=3)
+    vrs_steep_angle_deg: float = Field(30.0, gt=0, lt=90)
+    vrs_steep_descent_mps: float = Field(1.5, gt=0, le=10)
+    vrs_shallow_descent_mps: float = Field(3.0, gt=0, le=10)
+    anticipate_limits: bool = True
+    iterations: int = Field(1, ge=1, le=20, description="control-point feedback iterations per cycle (eq. 4.10)")
+    roll_integral: bool = Field(True, description="eq. 4.26 integral action on the roll channel")
+    roll_margin_deg: float = Field(1.5, ge=0, le=15, description="roll command limit = phi_max + this")
+    settle_s: float = Field(2.0, ge=0, le=60)
+    end_tolerance_m: float = Field(0.5, gt=0, le=20)
+    hold_s: float = Field(2.0, ge=0, le=600, description="hover at the end of the path before finishing")
+
+    # the path is checked here, before the run starts (a bad one names its segment)
+    @field_validator("tangents")
+    @classmethod
+    def _waypoint_path(cls, tangents, info):
+        from visnav.guidance.hermite import HermitePath
+
+        d = info.data
+        if d.get("path") != "waypoints" or "waypoints_ned_m" not in d:
+            return tangents
+        pts = d["waypoints_ned_m"]
+        for name, rows in (("waypoints_ned_m", pts), ("tangents", tangents)):
+            bad = [i for i, p in enumerate(rows) if len(p) != 3]
+            if bad:
+                raise ValueError(f"mission.{name}[{bad[0]}] must have 3 values (north, east, down)")
+        if len(tangents) != len(pts):
+            raise ValueError(f"{len(tangents)} tangents for {len(pts)} waypoints")
+        if any(p[2] > 0 for p in pts):
+            raise ValueError("waypoints_ned_m: down coordinates must be <= 0 (above the ground)")
+        HermitePath.from_waypoints(pts, tangents, scale=d.get("tangent_scale", "arc"))
+        return tangents
+
+    @field_validator("segments")
+    @classmethod
+    def _segment_path(cls, segments, info):
+        from visnav.guidance.hermite import HermitePath
+
+        if info.data.get("path") != "segments":
+            return segments
+        if not segments or any(len(s) != 12 for s in segments):
+            raise ValueError("mission.segments must be a list of 12-number segments (p0, p1, t0, t1)")
+        HermitePath.from_segments(segments)
+        return segments
+
+    @field_validator("spiral")
+    @classmethod
+    def _spiral_path(cls, sp, info):
+        if info.data.get("path") == "spiral" and 0 < sp.exit_drop_m >= sp.start_height_m - sp.end_height_m:
+            raise ValueError("exit_drop_m must be smaller than start_height_m - end_height_m")
+        return sp
+
+
 # Every mission's config, told apart by its ``type`` (add new ones to this tuple).
-MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig)
+MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig)
 MissionConfig = (
     Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]
     if len(MISSION_CONFIGS) > 1

@@ -63,3 +63,21 @@ def _hover(sim) -> MissionParts:
     mission = HoverMission(sim.sc.mission, sim.nav, yaw=sim.yaw, recorder=sim.log.record)
     return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=hover_metrics,
                         start_position=mission.start_position(), start_yaw=sim.yaw, uses_camera=True)
+
+
+@register("pfcm")
+def _pfcm(sim) -> MissionParts:
+    import math
+
+    from visnav.analysis.path_metrics import pfcm_metrics
+    from visnav.control.rmax_path import PathFollowingController, PathLoopGains
+    from visnav.mission.pfcm import PfcmMission
+
+    cfg = sim.sc.mission
+    mission = PfcmMission(cfg, recorder=sim.log.record)
+    gains = PathLoopGains(max_roll=math.radians(cfg.phi_max_deg + cfg.roll_margin_deg),
+                          max_pitch=math.radians(cfg.theta_max_deg), max_yaw_rate=math.radians(cfg.r_max_deg_s),
+                          **({} if cfg.roll_integral else {"k3r": 0.0}))
+    controller = PathFollowingController(gains, recorder=sim.log.record)
+    return MissionParts(mission=mission, controller=controller, metrics=pfcm_metrics,
+                        start_position=mission.start_position(), start_yaw=mission.start_yaw, uses_camera=False)

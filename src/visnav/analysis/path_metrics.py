@@ -1,0 +1,165 @@
+"""Metrics and report plots of a PFCM flight (seed 002 ch. 4), from the flight log and truth.
+
+The cross-track error is the distance of the true position to the path (Table 4.1 measured it on
+the INS/GPS solution; truth is stricter). The VRS check compares the true descent rate with the
+eq. 4.23 limit for the descent angle of the path at the closest point.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.guidance.speed_limits import descent_angle, max_descent_rate
+
+#: seed 002 figures beside ours in the report
+PUBLISHED = {
+    "cross_track_rms_m": "Table 4.1: std 0.5-1.3 m at 10 m/s in 2-4 m/s wind",
+    "cross_track_max_m": "Table 4.1: max 1.8-4.1 m (descending turns 2.8/3.5 m in 4 m/s wind)",
+    "max_roll_deg": "phi_max = 15 deg (§4.3.3)",
+    "max_descent_mps": "1.5 m/s above 30 deg descent, 3 m/s below (eq. 4.23)",
+    "real_time_factor": "target >= 30x on 2 cores",
+}
+PUBLISHED_SOURCE = "seed 002 (Conte 2009)"
+
+
+def _follow_mask(log, t: np.ndarray) -> np.ndarray:
+    """Samples from the start of path following to its completion (or the end of the run)."""
+    modes = log.get("mode")
+    if not modes:
+        return np.zeros(t.shape, bool)
+    mt, mm = np.asarray(modes["t"]), list(modes["mode"])
+    if "follow" not in mm:
+        return np.zeros(t.shape, bool)
+    t0 = mt[mm.index("follow")]
+    after = [x for x, m in zip(mt, mm) if x > t0 and m != "follow"]
+    t1 = after[0] if after else np.inf
+    return (t >= t0) & (t <= t1)
+
+
+def path_errors(path, truth: dict) -> dict[str, np.ndarray]:
+    """Per truth sample: cross-track distance, arc position of the closest point, the descent-rate
+    limit there (eq. 4.23) and the true descent rate."""
+    d, l = path.closest(truth["position"])
+    smp = path.sample(400)
+    tau = smp["tangent"] / np.linalg.norm(smp["tangent"], axis=1, keepdims=True)
+    gamma = np.interp(l, smp["l"], descent_angle(tau))
+    return {"cross_track": d, "arc": l, "descent_limit": max_descent_rate(gamma),
+            "descent": truth["velocity"][:, 2]}
+
+
+def pfcm_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
+    """metrics.json of a PFCM run (issue #4 keys first)."""
+    log, m = sim.log, sim.mission
+    truth, ref = log.get("truth"), log.get("pfcm")
+    sim_time = float(truth["t"][-1]) if truth else 0.0
+    out: dict = {k: float("nan") for k in ("cross_track_rms_m", "cross_track_max_m", "speed_error_rms_mps",
+                                           "max_roll_deg", "max_descent_mps")}
+    ctrl = sim.controller
+    out["input_saturation_s"] = float(getattr(ctrl, "saturation_time_s", float("nan")))
+    for c, v in getattr(ctrl, "channel_saturation_s", {}).items():
+        out[f"{c}_saturation_s"] = float(v)
+    out["path_completed"] = bool(m.path_completed) and error is None and not m.aborted
+    if truth:
+        sel = _follow_mask(log, truth["t"])
+        if sel.any():
+            e = path_errors(m.path, {k: truth[k][sel] for k in ("position", "velocity")})
+            ct = e["cross_track"]
+            out["cross_track_rms_m"] = float(np.sqrt(np.mean(ct**2)))
+            out["cross_track_max_m"] = float(ct.max())
+            out["max_descent_mps"] = float(max(e["descent"].max(), 0.0))
+            over = e["descent"] - e["descent_limit"]
+            dt = float(np.median(np.diff(truth["t"]))) if len(truth["t"]) > 1 else 0.0
+            out["vrs_limit_exceeded_s"] = float(np.sum(over > 0) * dt)
+            out["vrs_margin_min_mps"] = float(-over.max())
+            out["max_roll_deg"] = float(np.degrees(np.abs(truth["euler"][sel, 0]).max()))
+            out["max_pitch_deg"] = float(np.degrees(np.abs(truth["euler"][sel, 1]).max()))
+            out["max_speed_mps"] = float(np.linalg.norm(truth["velocity"][sel], axis=1).max())
+        if ref:
+            speed = np.linalg.norm(np.stack([np.interp(ref["t"], truth["t"], truth["velocity"][:, j])
+                                             for j in range(3)], axis=1), axis=1)
+            out["speed_error_rms_mps"] = float(np.sqrt(np.mean((speed - ref["v_target"]) ** 2)))
+    out["path_length_m"] = float(m.path.length)
+    out["flight_time_s"] = float((m.t_complete if m.t_complete is not None else sim_time) - (m.t_follow or 0.0))
+    out["final_mode"] = m.mode
+    out["sim_time_s"] = sim_time
+    out["wall_time_s"] = float(wall_time_s)
+    out["real_time_factor"] = float(sim_time / wall_time_s) if wall_time_s > 0 else float("nan")
+    if error:
+        out["error"] = error
+    return out
+
+
+# ------------------------------------------------------------------------------------ plots
+def plots(log, scenario) -> list[tuple[str, str]]:
+    """Report figures: path from above with the flown track, speed profile with the three limits,
+    cross-track error, attitude and YACS inputs with saturation marks."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from visnav.analysis.report import _fig_to_img
+    from visnav.mission.pfcm import build_path
+
+    tr, ref = log.get("truth"), log.get("pfcm")
+    cmd = log.get("pfcm_control") or log.get("command")  # 50 Hz outer-loop log if there is one
+    if not tr:
+        return []
+    path = build_path(scenario.mission)
+    smp = path.sample(100)
+    out = []
+    fig, ax = plt.subplots(1, 2, figsize=(12, 5))
+    ax[0].plot(smp["position"][:, 1], smp["position"][:, 0], "k--", lw=1, label="path")
+    ax[0].plot(tr["position"][:, 1], tr["position"][:, 0], lw=1.2, label="flown (truth)")
+    ax[0].plot(*path.start[[1, 0]], "go", label="A (start)"), ax[0].plot(*path.end[[1, 0]], "rs", label="B (end)")
+    ax[0].set_xlabel("east [m]"), ax[0].set_ylabel("north [m]"), ax[0].axis("equal"), ax[0].legend()
+    ax[0].set_title("Path from above")
+    e = path_errors(path, tr)
+    ax[1].plot(smp["l"], -smp["position"][:, 2], "k--", lw=1, label="path")
+    ax[1].plot(e["arc"], -tr["position"][:, 2], lw=1.2, label="flown (truth)")
+    ax[1].set_xlabel("distance along the path [m]"), ax[1].set_ylabel("height [m]"), ax[1].legend()
+    ax[1].set_title("Height profile")
+    out.append(("Path and flown track", _fig_to_img(fig)))
+
+    if ref:
+        t = ref["t"]
+        fig, ax = plt.subplots(figsize=(12, 4.5))
+        cap = 1.5 * float(np.nanmax(ref["v_targ1"])) + 1.0
+        ax.plot(t, np.minimum(ref["v_targ1"], cap), ":", label="v_targ1 (accelerate/cruise/brake)")
+        ax.plot(t, np.minimum(ref["v_targ2"], cap), ":", label="v_targ2 (turn limits, eq. 4.15)")
+        ax.plot(t, np.minimum(ref["v_targ3"], cap), ":", label="v_targ3 (VRS, eq. 4.23)")
+        ax.plot(t, ref["v_target"], "k--", label="v_targ")
+        ax.plot(tr["t"], np.linalg.norm(tr["velocity"], axis=1), label="ground speed (truth)")
+        ax.set_ylim(0, cap), ax.set_xlabel("t [s]"), ax.set_ylabel("m/s"), ax.legend(loc="lower right")
+        ax.set_title("Speed profile")
+        out.append(("Speed profile", _fig_to_img(fig)))
+
+    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
+    sel = _follow_mask(log, tr["t"])
+    ax[0].plot(tr["t"][sel], e["cross_track"][sel], label="distance to the path (truth)")
+    if ref:
+        ax[0].plot(ref["t"], ref["nav_cross_track"], "--", lw=0.8, label="to the control point (navigation)")
+    ax[0].set_ylabel("m"), ax[0].legend(), ax[0].set_title("Cross-track error")
+    ax[1].plot(tr["t"], -e["descent"], label="climb rate (truth)")
+    ax[1].plot(tr["t"], -np.minimum(e["descent_limit"], 5.0), "r:", label="-(VRS descent limit)")
+    ax[1].set_ylabel("m/s"), ax[1].set_xlabel("t [s]"), ax[1].legend()
+    out.append(("Cross-track error and descent rate", _fig_to_img(fig)))
+
+    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True)
+    ax[0].plot(tr["t"], np.degrees(tr["euler"][:, 0]), label="roll")
+    ax[0].plot(tr["t"], np.degrees(tr["euler"][:, 1]), label="pitch")
+    phi = scenario.mission.phi_max_deg
+    for s in (-1, 1):
+        ax[0].axhline(s * phi, color="k", lw=0.5, ls=":")
+    ax[0].set_ylabel("deg"), ax[0].legend(), ax[0].set_title("Attitude (truth), ±phi_max dotted")
+    if cmd:
+        for k in ("ail", "ele", "rud", "thr"):
+            line, = ax[1].plot(cmd["t"], cmd[k], lw=0.9, label=k)
+            sat = np.asarray(cmd.get(f"sat_{k}", np.abs(cmd[k]) >= 499.999), bool)
+            if sat.any():
+                ax[1].plot(cmd["t"][sat], cmd[k][sat], "x", color=line.get_color(), ms=5)
+        ax[1].axhline(500, color="k", lw=0.5), ax[1].axhline(-500, color="k", lw=0.5)
+    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend()
+    ax[1].set_title("YACS inputs (x: saturated, at ±500 or at the command limit)")
+    out.append(("Attitude and YACS inputs", _fig_to_img(fig)))
+    return out
