@@ -22,6 +22,16 @@ def interp_rows(t_query, t, values) -> np.ndarray:
     return np.stack([np.interp(tq, t, values[:, j]) for j in range(values.shape[1])], axis=-1)
 
 
+def finish_metrics(out: dict, sim_time_s: float, wall_time_s: float, error: str | None) -> dict:
+    """The keys every run reports: sim_time_s, wall_time_s, real_time_factor (and error, if any)."""
+    out["sim_time_s"] = float(sim_time_s)
+    out["wall_time_s"] = float(wall_time_s)
+    out["real_time_factor"] = float(sim_time_s / wall_time_s) if wall_time_s > 0 else float("nan")
+    if error:
+        out["error"] = error
+    return out
+
+
 def mpe_drift(log, horizontal: bool = True) -> tuple[float, np.ndarray]:
     """Cumulative MPE drift (seed 000 §5.4).
 
@@ -118,12 +128,7 @@ def palace_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
     out["rejected_samples"] = int(h.rejected_samples)
     out["rejected_ranges"] = int(h.rejected_ranges)
     out["final_mode"] = m.mode
-    out["sim_time_s"] = sim_time
-    out["wall_time_s"] = float(wall_time_s)
-    out["real_time_factor"] = float(sim_time / wall_time_s) if wall_time_s > 0 else float("nan")
-    if error:
-        out["error"] = error
-    return out
+    return finish_metrics(out, sim_time, wall_time_s, error)
 
 
 def hover_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
@@ -144,10 +149,4 @@ def hover_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
             out.update(drift_m=r.drift_m, drift_px=r.drift_px, drift_duration_s=r.duration_s,
                        mpe_noise_sigma_m=r.noise_sigma_m, mean_range_m=float(np.mean(mpe["range"][sel])))
     out.update(hover_oscillation(log))
-    sim_time = float(truth["t"][-1]) if truth else 0.0
-    out["sim_time_s"] = sim_time
-    out["wall_time_s"] = float(wall_time_s)
-    out["real_time_factor"] = float(sim_time / wall_time_s) if wall_time_s > 0 else float("nan")
-    if error:
-        out["error"] = error
-    return out
+    return finish_metrics(out, float(truth["t"][-1]) if truth else 0.0, wall_time_s, error)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from visnav.analysis.metrics import finish_metrics
 from visnav.guidance.speed_limits import descent_angle, max_descent_rate
 
 #: seed 002 figures beside ours in the report
@@ -81,12 +82,7 @@ def pfcm_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
     out["path_length_m"] = float(m.path.length)
     out["flight_time_s"] = float((m.t_complete if m.t_complete is not None else sim_time) - (m.t_follow or 0.0))
     out["final_mode"] = m.mode
-    out["sim_time_s"] = sim_time
-    out["wall_time_s"] = float(wall_time_s)
-    out["real_time_factor"] = float(sim_time / wall_time_s) if wall_time_s > 0 else float("nan")
-    if error:
-        out["error"] = error
-    return out
+    return finish_metrics(out, sim_time, wall_time_s, error)
 
 
 # ------------------------------------------------------------------------------------ plots
