@@ -137,7 +137,8 @@ class PfcmGuidance(_LiveReference):
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be >= 0, got {v}")
         self.path, self.limits, self.iterations = path, limits, int(iterations)
-        self.roll_lead_s, self.yaw_lead_s, self.brake_lead_s = float(roll_lead_s), float(yaw_lead_s), float(brake_lead_s)
+        self.roll_lead_s, self.yaw_lead_s = float(roll_lead_s), float(yaw_lead_s)
+        self.brake_lead_s = float(brake_lead_s)
         self.ff_jerk = G * float(ff_roll_rate)  # lateral jerk limit [m/s³]
         self.accel_tau = 0.1  # low-pass of the target acceleration [s]
         self.roll_headroom = bool(roll_headroom)
@@ -354,7 +355,8 @@ class PointHold(_LiveReference):
         tau = np.array([math.cos(self.hold_yaw), math.sin(self.hold_yaw), 0.0])
         self.last = PathReference(
             t=t, position=self.point, velocity=np.zeros(3), yaw=self.hold_yaw, tangent=tau, curvature=np.zeros(3),
-            segment=-1, s=0.0, v_target=0.0, accel_target=0.0, v_targ1=0.0, v_targ2=math.inf, v_targ3=math.inf, phase="hold",
+            segment=-1, s=0.0, v_target=0.0, accel_target=0.0, v_targ1=0.0, v_targ2=math.inf, v_targ3=math.inf,
+            phase="hold",
             heading_error=d_psi, r_ff=0.0, phi_ff=0.0, distance_to_end=0.0, arc_position=0.0, finished=True,
             source=getattr(nav, "source", "gps"))
         return self.last

@@ -110,7 +110,8 @@ class PfcmMission:
                         phase=r.phase, segment=r.segment, s=r.s, arc_position=r.arc_position,
                         distance_to_end=r.distance_to_end, phi_ff=r.phi_ff, r_ff=r.r_ff,
                         heading_error=r.heading_error, control_point=r.position,
-                        nav_cross_track=float(np.linalg.norm(r.position - pos)), speed=float(np.linalg.norm(nav.velocity)))
+                        nav_cross_track=float(np.linalg.norm(r.position - pos)),
+                        speed=float(np.linalg.norm(nav.velocity)))
             if r.finished or r.distance_to_end <= c.end_tolerance_m:
                 self.path_completed = True
                 self.t_complete = t
