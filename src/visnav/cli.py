@@ -31,14 +31,14 @@ def run(
     report: bool = typer.Option(True, help="write report.html"),
 ) -> None:
     """Run one closed-loop simulation and write its run directory."""
-    from visnav.analysis.metrics import PALACE_PUBLISHED
+    from visnav.analysis.report import published_figures
     from visnav.io.runs import new_run_dir, write_run
     from visnav.scenarios.schema import ScenarioError, load_scenario
-    from visnav.sim.loop import Simulation
+    from visnav.sim.missions import make_simulation
 
     try:
         sc = load_scenario(scenario, set_, seed)
-        sim = Simulation(sc)
+        sim = make_simulation(sc)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         console.print(f"[red]error:[/red] {exc}")
         raise typer.Exit(2)
@@ -56,9 +56,10 @@ def run(
     table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
     table.add_column("metric")
     table.add_column("this run", justify="right")
-    table.add_column("seed 000 (Hubbard 2007)")
+    published, source = published_figures(sc)
+    table.add_column(source)
     for k, v in result.metrics.items():
-        table.add_row(k, _fmt(v), PALACE_PUBLISHED.get(k, ""))
+        table.add_row(k, _fmt(v), published.get(k, ""))
     console.print(table)
     console.print(f"run directory: {out_dir}")
     if result.error:

@@ -66,12 +66,12 @@ def run_job(job: Job) -> dict:
 
     cv2.setNumThreads(1)  # one run per core
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.loop import Simulation
+    from visnav.sim.missions import make_simulation
 
     row: dict = {"seed": job.seed, **{k: v for k, v in job.grid}}
     try:
         sets = list(job.overrides) + [f"{k}={_toml_value(v)}" for k, v in job.grid]
-        res = Simulation(load_scenario(job.scenario, sets, seed=job.seed)).run()
+        res = make_simulation(load_scenario(job.scenario, sets, seed=job.seed)).run()
         row["status"] = "failed" if res.error else "ok"
         row["error"] = res.error or ""
         row.update(res.metrics)

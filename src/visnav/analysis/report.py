@@ -105,12 +105,23 @@ def plots(log, point=None) -> list[tuple[str, str]]:
 MISSION_REPORTS = {"pfcm": "visnav.analysis.path_metrics"}
 
 
+def _report_module(sc):
+    own = MISSION_REPORTS.get(getattr(sc.mission, "type", ""))
+    return importlib.import_module(own) if own else None
+
+
+def published_figures(sc) -> tuple[dict, str]:
+    """(metric -> the seed's published figure, which seed) for a scenario's mission."""
+    mod = _report_module(sc)
+    if mod is None:
+        return PALACE_PUBLISHED, "seed 000 (Hubbard 2007)"
+    return mod.PUBLISHED, mod.PUBLISHED_SOURCE
+
+
 def write_report(result, path: Path) -> None:
     sc, log, m = result.scenario, result.log, result.metrics
-    own = MISSION_REPORTS.get(getattr(sc.mission, "type", ""))
-    mod = importlib.import_module(own) if own else None
-    published = mod.PUBLISHED if mod else PALACE_PUBLISHED
-    source = mod.PUBLISHED_SOURCE if mod else "seed 000 (Hubbard 2007)"
+    mod = _report_module(sc)
+    published, source = published_figures(sc)
     rows = []
     for k, v in m.items():
         pub = published.get(k, "")

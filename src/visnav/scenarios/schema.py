@@ -12,22 +12,16 @@ import sys
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
+from visnav.scenarios.base import ScenarioError, _M  # noqa: F401  (re-exported: one base for every config)
+
 BUILTIN_DIR = Path(__file__).resolve().parent
-
-
-class ScenarioError(ValueError):
-    """A scenario file or override is invalid; the message is one line for the user."""
-
-
-class _M(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
 class RunConfig(_M):
@@ -270,7 +264,9 @@ class PfcmMissionConfig(_M):
         return sp
 
 
-# Every mission's config, told apart by its ``type`` (add new ones to this tuple).
+# Every mission's config, told apart by its ``type`` (add new ones to this tuple). A mission that
+# flies another vehicle keeps its own config module (scenarios/config_<mission>.py, built on
+# scenarios/base.py) and its own simulation class (registered in sim/missions.py SIMULATIONS).
 MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig)
 MissionConfig = (
     Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]

@@ -15,6 +15,31 @@ import numpy as np
 Builder = Callable[[object], "MissionParts"]
 REGISTRY: dict[str, Builder] = {}
 
+#: mission type -> "module:Class" of a simulation of its own, for missions that fly another
+#: vehicle with other sensors than the R-MAX loop of ``sim/loop.py`` (multirotor on a ship deck,
+#: fixed wing with a gimbal). The class takes the ``Scenario`` and offers what ``Simulation`` offers
+#: to the command line and the campaign runner: ``.sc``, ``.mission.mode`` and
+#: ``.run(progress=None) -> RunResult``.
+SIMULATIONS: dict[str, str] = {}
+
+
+def simulation_class(mission_type: str):
+    """The simulation class that flies ``mission_type`` (the R-MAX ``Simulation`` by default)."""
+    import importlib
+
+    target = SIMULATIONS.get(mission_type)
+    if target is None:
+        from visnav.sim.loop import Simulation
+
+        return Simulation
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def make_simulation(scenario):
+    """Build the simulation for a validated ``Scenario``."""
+    return simulation_class(getattr(scenario.mission, "type", "palace"))(scenario)
+
 
 @dataclass
 class MissionParts:
