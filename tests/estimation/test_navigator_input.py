@@ -46,3 +46,20 @@ def test_hover_prediction_keeps_position():
         nav.update(AttitudeSample(t, np.zeros(3)))
         nav.update(ImuSample(t, np.array([1.0, 0.0, -9.81]), np.zeros(3)))
     assert abs(nav.estimate(2.0).position[0] - 1.5) < 1e-9
+
+
+def test_late_gps_velocity_is_carried_to_the_filter_time():
+    """Constant 2 m/s^2 north; GPS describes 50 ms before the IMU time the filter is at. Fused as if
+    current, the velocity would sit a*lag = 0.1 m/s behind; carried forward, it matches the truth."""
+    a, lag = 2.0, 0.05
+    nav = _nav()
+    nav.update(GpsSample(0.0, np.array([0.0, 0.0, -10.0]), np.zeros(3)))
+    for k in range(1, 301):
+        t = k * 0.01
+        nav.update(AttitudeSample(t, np.zeros(3)))
+        nav.update(ImuSample(t, np.array([a, 0.0, -9.81]), np.zeros(3)))
+        if k % 10 == 0:  # 10 Hz fixes, delivered 50 ms after the instant they describe
+            tg = t - lag
+            nav.update(GpsSample(tg, np.array([0.5 * a * tg**2, 0.0, -10.0]), np.array([a * tg, 0.0, 0.0])))
+    v = nav.estimate(3.0).velocity[0]
+    assert abs(v - a * 3.0) < 0.01, v

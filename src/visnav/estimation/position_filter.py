@@ -23,6 +23,7 @@ class PositionFilter:
         self.P01 = np.zeros(3)
         self.P11 = np.full(3, sigma_v**2)
         self.t: float | None = None
+        self.accel = np.zeros(3)  # the last kinematic acceleration the filter integrated (NED)
         self.initialized = position is not None
 
     def reset(self, t: float, position, velocity, sigma_p: float = 0.05, sigma_v: float = 0.05) -> None:
@@ -42,6 +43,7 @@ class PositionFilter:
         if dt <= 0:
             return
         self.t = t
+        self.accel = accel_ned
         self.p += self.v * dt + 0.5 * accel_ned * dt * dt
         self.v += accel_ned * dt
         q = self.q

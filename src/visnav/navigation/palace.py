@@ -190,9 +190,11 @@ class PalaceNavigator:
             self.filter.reset(m.t, m.position, m.velocity)
             return
         if self.source == "gps":
+            # the fix describes m.t, the filter is at its last IMU time: carry the fix forward over the
+            # lag with the velocity (position) and the acceleration the filter integrated (velocity)
             lag = (self.filter.t or m.t) - m.t
             self.filter.update_position(m.position + m.velocity * lag, max(m.sigma, 0.01))
-            self.filter.update_velocity(m.velocity, 0.05)
+            self.filter.update_velocity(m.velocity + self.filter.accel * lag, 0.05)
 
     # ---------------------------------------------------------------- vision
     def _laser_at(self, t: float) -> RangeSample | None:
