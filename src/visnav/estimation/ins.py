@@ -59,6 +59,11 @@ def quat_mult(p, q) -> np.ndarray:
     """Hamilton product ``p ⊗ q`` of (..., 4) scalar-first quaternions."""
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
+    if p.shape == (4,) and q.shape == (4,):  # fast path for the per-sample loops
+        pw, px, py, pz = p.tolist()
+        qw, qx, qy, qz = q.tolist()
+        return np.array([pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
+                         pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw])
     pw, px, py, pz = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
     qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     return np.stack(
@@ -80,6 +85,11 @@ def quat_conj(q) -> np.ndarray:
 def quat_from_rotvec(rv) -> np.ndarray:
     """Exact exponential map: rotation vector (..., 3) [rad] -> unit quaternion (..., 4)."""
     rv = np.asarray(rv, dtype=float)
+    if rv.shape == (3,):
+        x, y, z = rv.tolist()
+        a = math.sqrt(x * x + y * y + z * z)
+        k = 0.5 - a * a / 48.0 if a < 1e-8 else math.sin(0.5 * a) / a
+        return np.array([math.cos(0.5 * a), x * k, y * k, z * k])
     ang = np.linalg.norm(rv, axis=-1)
     half = 0.5 * ang
     # sin(a/2)/a with its Taylor series near zero
@@ -91,6 +101,17 @@ def quat_from_rotvec(rv) -> np.ndarray:
 def quat_to_dcm(q) -> np.ndarray:
     """``C_b^n`` (..., 3, 3) from unit quaternion(s) (..., 4) (normalised here)."""
     q = np.asarray(q, dtype=float)
+    if q.shape == (4,):
+        w, x, y, z = q.tolist()
+        n2 = w * w + x * x + y * y + z * z
+        if not n2 > 0.0:
+            raise ValueError(f"quaternion must be non-zero and finite, got {q}")
+        s = 2.0 / n2
+        return np.array([
+            [1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
+            [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
+            [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)],
+        ])
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     return np.stack(
@@ -246,8 +267,9 @@ class StrapdownINS:
         w_in = w_ie + w_en
         C = quat_to_dcm(s.quat)
         # attitude: C' = C [W_ib x] - [w_in x] C, i.e. body increment w_ib - C^T w_in
-        dq = quat_from_rotvec((w - C.T @ w_in) * dt)
-        q_mid = quat_mult(s.quat, quat_from_rotvec((w - C.T @ w_in) * (0.5 * dt)))
+        w_nb = w - C.T @ w_in
+        dq = quat_from_rotvec(w_nb * dt)
+        q_mid = quat_mult(s.quat, quat_from_rotvec(w_nb * (0.5 * dt)))
         q_new = quat_mult(s.quat, dq)
         q_new /= np.linalg.norm(q_new)
         # velocity: specific force through the mid-interval attitude, Coriolis, gravity
