@@ -157,11 +157,19 @@ class ErrorStateKF:
         self.stats: dict[str, _Stats] = {}
         self.rejections: list[tuple[float, str, float]] = []  # (t, kind, nis)
         self.rejected_samples = 0
+        self._gates: dict[int, float] = {}
+        self._I = np.eye(self.n)
         c = self.cfg
         qc = [c.accel_noise**2] * 3 + [c.gyro_noise**2] * 3 + [c.accel_bias_noise**2] * 3
         if c.gyro_bias:
             qc += [c.gyro_bias_noise**2] * 3
         self._Qc = np.diag(qc)
+
+    def _gate(self, dof: int) -> float:
+        g = self._gates.get(dof)
+        if g is None:
+            g = self._gates[dof] = float(chi2.ppf(self.cfg.gate_probability, dof))
+        return g
 
     # ------------------------------------------------------------ model
     def error_model(self, f_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -261,15 +269,14 @@ class ErrorStateKF:
         S = H @ PHt + R
         Sinv = np.linalg.inv(S)
         nis = float(y @ Sinv @ y)
-        thr = math.inf if (not gate or self.cfg.gate_probability >= 1.0) else float(
-            chi2.ppf(self.cfg.gate_probability, len(y)))
+        thr = math.inf if (not gate or self.cfg.gate_probability >= 1.0) else self._gate(len(y))
         if nis > thr:
             st.rejected += 1
             self.rejections.append((self.x.t, kind, nis))
             return UpdateResult(kind, False, nis, y, thr)
         K = PHt @ Sinv
         dx = K @ y
-        IKH = np.eye(self.n) - K @ H
+        IKH = self._I - K @ H
         P = IKH @ self.P @ IKH.T + K @ R @ K.T
         self.P = 0.5 * (P + P.T)
         self._inject(dx)
