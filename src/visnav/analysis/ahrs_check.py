@@ -94,6 +94,8 @@ def _plot(path: Path, data, res, ref, gyro_only, m) -> None:
         b.plot(data.att_t, np.degrees(diff), "C0-", lw=0.8)
         b.fill_between(res["t"], -3 * np.degrees(res["sigma"][:, i]), 3 * np.degrees(res["sigma"][:, i]),
                        color="C0", alpha=0.15, label="±3σ (filter)")
+        lim = max(0.5, 1.5 * float(np.abs(np.degrees(diff[data.att_t > data.att_t[0] + 2.0])).max(initial=0.0)))
+        b.set_ylim(-lim, lim)
         b.set_ylabel(f"{n} ours − PX4 [deg]")
         b.set_title(f"RMS {m[f'{n}_rms_diff_deg']:.3f} deg", fontsize=9)
     axes[0, 0].legend(fontsize=8)
