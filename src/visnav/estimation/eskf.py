@@ -230,16 +230,16 @@ class ErrorStateKF:
             self.rejected_samples += 1
             return False
         prev = self._last_imu
-        if prev is None:
+        if prev is None:  # the filter time becomes the first sample's time
             self._last_imu = imu
-            if imu.t > self.x.t:
-                self.x.t = float(imu.t)
+            self.x.t = float(imu.t)
             return True
         dt = float(imu.t - prev.t)
         if dt <= 0.0:
             self.rejected_samples += 1
             return False
         self.propagate(0.5 * (a + np.asarray(prev.accel)), 0.5 * (w + np.asarray(prev.gyro)), dt)
+        self.x.t = float(imu.t)  # no accumulated rounding of the filter time
         self._last_imu = imu
         return True
 
@@ -370,9 +370,10 @@ class ErrorStateKF:
         return self.update("gravity", y, H, self._cov(sigma, 3, "gravity"), gate)
 
     # ------------------------------------------------------------ output
-    def estimate(self, t: float | None = None) -> NavEstimate:
+    def estimate(self, t: float | None = None, source: str = "inertial") -> NavEstimate:
         """NavEstimate at ``t`` (default: filter time); position extrapolated with the velocity
-        when ``t`` differs. Covariance: the 6x6 position/velocity block."""
+        when ``t`` differs. Covariance: the 6x6 position/velocity block. ``source`` labels it
+        (e.g. "vision" when vision updates drive the filter)."""
         s = self.x
         dt = 0.0 if t is None else float(t) - s.t
         return NavEstimate(
@@ -382,7 +383,7 @@ class ErrorStateKF:
             attitude=s.euler,
             covariance=self.P[:6, :6].copy(),
             valid=bool(np.all(np.isfinite(self.P))),
-            source="inertial",
+            source=source,
         )
 
     @property
