@@ -114,9 +114,9 @@ def _F_level_stationary(g):
 def test_matches_filterpy_linear_kf_on_the_linearised_model(discretization):
     """Stationary level IMU with an accelerometer bias, small initial errors, noisy 3-D position
     fixes: the ESKF (nominal + fed-back error) equals a free-running INS plus a linear filterpy
-    KalmanFilter on the error model, up to second-order terms: with errors ~5e-6 m they agree to 1e-4 of the filter's sigmas (the
-    mismatch falls >= 10x faster than the errors when they are scaled down: a linearisation
-    residual, not a model difference).."""
+    KalmanFilter on the error model, up to second-order terms: with errors ~5e-6 m they agree to
+    1e-4 of the filter's sigmas (the mismatch falls >= 10x faster than the errors when they are
+    scaled down: a linearisation residual, not a model difference)."""
     g, dt, n, pos_every = 9.81, 0.02, 1500, 10
     cfg = EskfConfig(accel_noise=0.02, gyro_noise=5e-4, accel_bias_noise=1e-4, earth_rotation=False,
                      gravity_mps2=g, discretization=discretization, gate_probability=1.0)

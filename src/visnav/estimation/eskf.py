@@ -30,7 +30,7 @@ fed back into the nominal state (``q <- exp(eps) ⊗ q``) and reset to zero (ESK
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm
