@@ -25,7 +25,7 @@ class KltPairs:
 
 class KltTracker:
     def __init__(self, max_features: int = 50, quality: float = 0.01, min_distance_px: float = 12.0,
-                 window_px: int = 21, levels: int = 3, fb_max_px: float = 1.0):
+                 window_px: int = 21, levels: int = 3, fb_max_px: float = 1.0, min_eigenvalue: float = 1.5e-4):
         if not 4 <= max_features <= 2000:
             raise ValueError(f"max_features must be in [4, 2000], got {max_features}")
         self.max_features = int(max_features)
@@ -34,6 +34,9 @@ class KltTracker:
         self.lk = dict(winSize=(window_px, window_px), maxLevel=levels,
                        criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
         self.fb_max = fb_max_px  # forward-backward check: drop a track that does not come back
+        # absolute corner strength (cv2.cornerMinEigenVal, block 7): goodFeaturesToTrack's quality is
+        # relative to the frame's best corner, so over water it would pick sensor noise
+        self.min_eig = min_eigenvalue
         self.prev_img: np.ndarray | None = None
         self.pts: np.ndarray = np.zeros((0, 2), np.float32)
 
@@ -51,7 +54,11 @@ class KltTracker:
         new = cv2.goodFeaturesToTrack(img, need, self.quality, self.min_distance, mask=mask, blockSize=7)
         if new is None:
             return keep
-        return np.vstack([keep, new.reshape(-1, 2).astype(np.float32)])
+        new = new.reshape(-1, 2).astype(np.float32)
+        if self.min_eig > 0:
+            ev = cv2.cornerMinEigenVal(img, 7)
+            new = new[ev[new[:, 1].astype(int), new[:, 0].astype(int)] >= self.min_eig]
+        return np.vstack([keep, new])
 
     def track(self, img: np.ndarray) -> KltPairs:
         """Track the features of the previous frame into ``img``; then top the set up from ``img``."""
