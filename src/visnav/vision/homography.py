@@ -56,7 +56,7 @@ def normalized_dlt(x1, x2) -> np.ndarray:
     n1, T1 = normalize_points(x1)
     n2, T2 = normalize_points(x2)
     A = _dlt_rows(n1, n2)
-    _, _, Vt = np.linalg.svd(A, full_matrices=False)
+    _, _, Vt = np.linalg.svd(A, full_matrices=A.shape[0] < 9)  # 4 points: 8 rows, need the 9th vector
     Hn = Vt[-1].reshape(3, 3)
     H = np.linalg.solve(T2, Hn @ T1)
     return H / H[2, 2] if abs(H[2, 2]) > 1e-12 * np.abs(H).max() else H / np.linalg.norm(H)
