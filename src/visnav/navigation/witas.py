@@ -36,7 +36,7 @@ from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
                                  NavEstimate)
 from visnav.navigation.palace import _AttitudeHistory
-from visnav.vision.odometry import VisualOdometry
+from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration, ncc_to_likelihood
 
 Recorder = Callable[..., None]
@@ -298,11 +298,11 @@ class WitasNavigator:
         height = -float(cam[2])
         self.n_frames += 1
         step = self.vo.step(f.t, f.image, C_cn, height)
-        if step is None:
-            return
+        if step is None:  # the tracker (re)started on this frame: no displacement measured
+            step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "tracker restarted (no features before)")
         look0 = self.hist.at(f.t - 1.0 / c.odometry_hz)
         u_ins = (p - look0[0])[:2] if look0 is not None else np.zeros(2)
-        if step.ok and np.linalg.norm(step.displacement[:2] - u_ins) > c.odometry_gate_m + 0.5 * np.linalg.norm(u_ins):
+        if step.ok and np.linalg.norm(step.displacement[:2] - u_ins) > c.odometry_gate_m + 0.25 * np.linalg.norm(u_ins):
             step.reason = (f"displacement {np.round(step.displacement[:2], 1)} m disagrees with the filter's "
                            f"{np.round(u_ins, 1)} m")
             step.ok = False

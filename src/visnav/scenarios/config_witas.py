@@ -15,9 +15,9 @@ from visnav.scenarios.base import _M
 
 
 class WitasPathConfig(_M):
-    """A closed rounded-rectangle loop, flown anticlockwise... from home (the middle of the west leg)."""
+    """A closed rounded-rectangle loop from home (the middle of the west leg, or of the north leg for ccw) back home."""
 
-    size_north_m: float = Field(300.0, ge=40, le=5000)
+    size_north_m: float = Field(320.0, ge=40, le=5000)
     size_east_m: float = Field(200.0, ge=40, le=5000)
     corner_radius_m: float = Field(30.0, ge=5, le=500)
     altitude_m: float = Field(60.0, ge=10, le=500)
@@ -78,7 +78,7 @@ class WitasFilterConfig(_M):
     ransac: bool = True
     sigma_px: float = Field(1.0, gt=0, le=10, description="feature noise for the RANSAC threshold")
     min_inliers: int = Field(8, ge=4, le=100)
-    odometry_gate_m: float = Field(3.0, gt=0, le=100, description="reject a step this far from the filter's")
+    odometry_gate_m: float = Field(1.0, gt=0, le=100, description="reject a step this far (+ 25 % of it) from the filter's")
     pmf_size_m: float = Field(80.0, ge=10, le=400)
     pmf_resolution_m: float = Field(1.0, ge=0.25, le=10)
     pmf_sigma0_m: float = Field(10.0, gt=0, le=200, description="PMF prior at GPS loss")
