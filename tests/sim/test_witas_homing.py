@@ -67,3 +67,28 @@ def test_real_map(name):
     ext = sim.world.ground.extent_ned()
     tp = res.log.get("truth")["position"]
     assert tp[:, 0].min() > ext[0] and tp[:, 0].max() < ext[1] and tp[:, 1].min() > ext[2] and tp[:, 1].max() < ext[3]
+
+
+def _attitude_errors(res):
+    from visnav.analysis.metrics import interp_rows
+
+    log = res.log
+    est, tr = log.get("estimate"), log.get("truth")
+    te = interp_rows(est["t"], tr["t"], np.unwrap(tr["euler"], axis=0))
+    err = np.degrees((est["euler"] - te + np.pi) % (2 * np.pi) - np.pi)
+    return est["t"], np.abs(err)
+
+
+@pytest.mark.parametrize("compass", [True, pytest.param(False, marks=pytest.mark.slow)])
+def test_five_degree_initial_attitude_error_converges(compass):
+    """§5.9.1 / Fig. 5.22: filter engaged 5 deg off in roll, pitch and heading."""
+    _, res = _fly("mission.path.size_north_m=140", "mission.path.size_east_m=90", "run.duration_s=120",
+                  "mission.filter.init_attitude_error_deg=[5.0, 5.0, 5.0]", f"mission.compass.enabled={str(compass).lower()}")
+    t, err = _attitude_errors(res)
+    t0 = res.log.get("vision_engaged")["t"][0]
+    assert err[np.searchsorted(t, t0 + 0.5)].max() > 4.0  # it really started 5 deg off
+    late = t > t[-1] - 10.0
+    assert err[late, 0].max() < 1.0 and err[late, 1].max() < 1.0  # roll and pitch converge
+    if compass:
+        assert err[late, 2].max() < 2.0  # heading too, with the compass
+    assert res.metrics["returned_home"]
