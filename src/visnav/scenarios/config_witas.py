@@ -72,13 +72,14 @@ class WitasFilterConfig(_M):
 
     backend: Literal["eskf", "ahrs"] = Field("eskf", description="eskf: 12-state INS error filter; "
                                              "ahrs: position filter on the autopilot's attitude")
+    ins_rate_hz: float = Field(50.0, ge=10, le=400, description="INS integration rate (50 Hz in §5.9.1)")
     odometry_hz: float = Field(5.0, ge=1, le=25)
-    registration_every: int = Field(5, ge=1, le=100, description="register every n-th odometry frame")
+    registration_every: int = Field(2, ge=1, le=100, description="register every n-th odometry frame")
     max_features: int = Field(50, ge=8, le=500)
     ransac: bool = True
     sigma_px: float = Field(1.0, gt=0, le=10, description="feature noise for the RANSAC threshold")
     min_inliers: int = Field(8, ge=4, le=100)
-    odometry_gate_m: float = Field(1.0, gt=0, le=100, description="reject a step this far (+ 25 % of it) from the filter's")
+    odometry_gate_m: float = Field(0.5, gt=0, le=100, description="reject a step this far (+ 15 % of it) from the filter's")
     pmf_size_m: float = Field(80.0, ge=10, le=400)
     pmf_resolution_m: float = Field(1.0, ge=0.25, le=10)
     pmf_sigma0_m: float = Field(10.0, gt=0, le=200, description="PMF prior at GPS loss")
