@@ -152,8 +152,9 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     if odo:
         ax[1, 0].plot(odo["t"], herr(odo), "k--", label="odometry")
     if ins:
-        ax[1, 0].plot(ins["t"], np.minimum(herr(ins), 200), "y", label="INS only (clipped at 200 m)")
-    ax[1, 0].set_ylabel("m"), ax[1, 0].set_title("Horizontal position error"), ax[1, 0].legend(fontsize=8)
+        ax[1, 0].plot(ins["t"], herr(ins), "y", label="INS only")
+    ax[1, 0].set_yscale("log"), ax[1, 0].set_ylim(0.05, None)
+    ax[1, 0].set_ylabel("m (log)"), ax[1, 0].set_title("Horizontal position error"), ax[1, 0].legend(fontsize=8)
     if est:
         tv = interp_rows(est["t"], tt, tr["velocity"])
         for j, name in ((0, "north"), (1, "east")):

@@ -37,6 +37,7 @@ class KltTracker:
         # absolute corner strength (cv2.cornerMinEigenVal, block 7): goodFeaturesToTrack's quality is
         # relative to the frame's best corner, so over water it would pick sensor noise
         self.min_eig = min_eigenvalue
+        self.refill_below = 0.8
         self.prev_img: np.ndarray | None = None
         self.pts: np.ndarray = np.zeros((0, 2), np.float32)
 
@@ -46,8 +47,8 @@ class KltTracker:
 
     def _detect(self, img: np.ndarray, keep: np.ndarray) -> np.ndarray:
         need = self.max_features - len(keep)
-        if need <= 0:
-            return keep
+        if need <= 0 or (len(keep) >= self.refill_below * self.max_features):
+            return keep  # top up only when a fifth of the set is lost (detection is the costly part)
         mask = np.full(img.shape, 255, np.uint8)
         for x, y in keep.astype(int):  # at most max_features small discs
             cv2.circle(mask, (int(x), int(y)), int(self.min_distance), 0, -1)
