@@ -64,6 +64,11 @@ def test_real_map(name):
     m = res.metrics
     assert res.error is None and m["returned_home"]
     assert m["pmf_error_max_m"] <= 8.0
+    if name == "strip":  # over the lake the PMF uncertainty grows, over the forest it recovers
+        pmf = res.log.get("pmf")
+        sig = np.sqrt(np.linalg.eigvalsh(pmf["cov"])[:, 1])
+        late = pmf["t"] > pmf["t"][0] + 3.0
+        assert sig[late].max() > 2.0 and sig[-1] < 1.2
     ext = sim.world.ground.extent_ned()
     tp = res.log.get("truth")["position"]
     assert tp[:, 0].min() > ext[0] and tp[:, 0].max() < ext[1] and tp[:, 1].min() > ext[2] and tp[:, 1].max() < ext[3]
