@@ -28,6 +28,8 @@ def test_short_loop_returns_home_on_vision():
     sim, res = _fly("mission.path.size_north_m=140", "mission.path.size_east_m=90", "run.duration_s=120")
     m = res.metrics
     assert res.error is None
+    assert {"pmf_error_max_m", "pmf_error_rms_m", "odometry_drift_pct", "ins_only_error_final_m",
+            "velocity_error_rms_mps", "heading_error_final_deg", "path_length_m", "returned_home"} <= set(m)
     assert m["returned_home"] and m["home_error_m"] < 3.0
     assert 350 < m["path_length_m"] < 500
     assert m["pmf_error_max_m"] <= 5.0 and m["pmf_error_rms_m"] <= 2.5
