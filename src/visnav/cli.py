@@ -185,6 +185,36 @@ def scenarios() -> None:
     console.print(table)
 
 
+@app.command()
+def ahrs(
+    log: str = typer.Argument(..., help="PX4 ULog file (.ulg)"),
+    out: Optional[str] = typer.Option(None, "--out", help="output directory (default: runs/ahrs-<log name>)"),
+    declination_deg: Optional[float] = typer.Option(
+        None, "--declination-deg", help="magnetic declination [deg]; default: the log's EKF2_MAG_DECL, else 0"),
+) -> None:
+    """Our INS attitude filter (AHRS mode) on a PX4 log's raw IMU vs PX4's vehicle_attitude."""
+    from pathlib import Path
+
+    from visnav.analysis.ahrs_check import ahrs_check
+
+    out_dir = Path(out) if out else Path("runs") / f"ahrs-{Path(log).stem}"
+    try:
+        m = ahrs_check(log, out_dir, declination_deg)
+    except (FileNotFoundError, ValueError) as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(code=2)
+    for note in m["log_notes"]:
+        console.print(f"[yellow]log:[/yellow] {note}")
+    table = Table(title=f"AHRS vs PX4 vehicle_attitude ({Path(log).name})")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
+              "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
+        table.add_row(k, _fmt(m[k]))
+    console.print(table)
+    console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
+
+
 def main() -> None:  # pragma: no cover
     app()
 

@@ -114,9 +114,9 @@ def _F_level_stationary(g):
 def test_matches_filterpy_linear_kf_on_the_linearised_model(discretization):
     """Stationary level IMU with an accelerometer bias, small initial errors, noisy 3-D position
     fixes: the ESKF (nominal + fed-back error) equals a free-running INS plus a linear filterpy
-    KalmanFilter on the error model, up to second-order terms: with errors ~5e-6 m they agree to 1e-4 of the filter's sigmas (the
-    mismatch falls >= 10x faster than the errors when they are scaled down: a linearisation
-    residual, not a model difference).."""
+    KalmanFilter on the error model, up to second-order terms: with errors ~5e-6 m they agree to
+    1e-4 of the filter's sigmas (the mismatch falls >= 10x faster than the errors when they are
+    scaled down: a linearisation residual, not a model difference)."""
     g, dt, n, pos_every = 9.81, 0.02, 1500, 10
     cfg = EskfConfig(accel_noise=0.02, gyro_noise=5e-4, accel_bias_noise=1e-4, earth_rotation=False,
                      gravity_mps2=g, discretization=discretization, gate_probability=1.0)
@@ -233,6 +233,32 @@ def test_5_8_3_heading_weakly_observable_without_compass_converges_with_it():
     f, d, hist = _fly(_straight_flight(), CFG, 60.0, rng, compass_every=50, **kw)
     err = _euler_err_deg(hist)
     assert err[0] < 0.5 and err[1] < 0.5 and err[2] < 1.0, err
+
+
+def test_at_rest_on_the_rotating_earth_with_wgs84_gravity():
+    """Earth rate, transport rate and the gravity-gradient term in use (58.4 N, 100 m): an ideal IMU
+    at rest (reading -g and the Earth rate) with 1 Hz position fixes: the filter stays at rest, its
+    NEES stays chi-square-sized and nothing is rejected."""
+    from visnav.estimation.ins import earth_rates, gravity_ned
+
+    lat = math.radians(58.4)
+    cfg = EskfConfig(accel_noise=0.02, gyro_noise=5e-4, accel_bias_noise=1e-4, h0_m=100.0)
+    w_ie, _ = earth_rates(lat, 100.0, np.zeros(3))
+    g = gravity_ned(lat, 100.0)
+    q = euler_to_quat([0.02, -0.01, 0.8])
+    C = quat_to_dcm(q)
+    f = ErrorStateKF(NavState(0.0, quat=q), np.r_[[1.0] * 3, [0.1] * 3, [0.01] * 3, [0.01] * 3], cfg)
+    rng = np.random.default_rng(9)
+    for k in range(3001):
+        f.predict(ImuSample(0.02 * k, C.T @ -g, C.T @ w_ie))
+        if k and k % 50 == 0:
+            f.update_position(rng.normal(0.0, 0.5, 3), 0.5)
+    e = np.r_[-f.x.position, -f.x.velocity]
+    assert np.all(np.abs(e) < 4.0 * np.sqrt(np.diag(f.P)[:6]))  # within 4 sigma on every axis
+    assert np.abs(f.x.velocity).max() < 0.15 and np.abs(f.x.position).max() < 0.5
+    assert e @ np.linalg.solve(f.P[:6, :6], e) < chi2.ppf(0.999, 6)
+    assert f.stats["position3d"].rejected == 0 and f.x.t == pytest.approx(60.0)
+    assert np.abs(f.x.euler - [0.02, -0.01, 0.8]).max() < 0.2 * D2R
 
 
 def test_horizontal_position_update_and_baro():

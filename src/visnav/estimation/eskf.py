@@ -30,7 +30,7 @@ fed back into the nominal state (``q <- exp(eps) ⊗ q``) and reset to zero (ESK
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm
@@ -157,11 +157,19 @@ class ErrorStateKF:
         self.stats: dict[str, _Stats] = {}
         self.rejections: list[tuple[float, str, float]] = []  # (t, kind, nis)
         self.rejected_samples = 0
+        self._gates: dict[int, float] = {}
+        self._I = np.eye(self.n)
         c = self.cfg
         qc = [c.accel_noise**2] * 3 + [c.gyro_noise**2] * 3 + [c.accel_bias_noise**2] * 3
         if c.gyro_bias:
             qc += [c.gyro_bias_noise**2] * 3
         self._Qc = np.diag(qc)
+
+    def _gate(self, dof: int) -> float:
+        g = self._gates.get(dof)
+        if g is None:
+            g = self._gates[dof] = float(chi2.ppf(self.cfg.gate_probability, dof))
+        return g
 
     # ------------------------------------------------------------ model
     def error_model(self, f_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -222,16 +230,16 @@ class ErrorStateKF:
             self.rejected_samples += 1
             return False
         prev = self._last_imu
-        if prev is None:
+        if prev is None:  # the filter time becomes the first sample's time
             self._last_imu = imu
-            if imu.t > self.x.t:
-                self.x.t = float(imu.t)
+            self.x.t = float(imu.t)
             return True
         dt = float(imu.t - prev.t)
         if dt <= 0.0:
             self.rejected_samples += 1
             return False
         self.propagate(0.5 * (a + np.asarray(prev.accel)), 0.5 * (w + np.asarray(prev.gyro)), dt)
+        self.x.t = float(imu.t)  # no accumulated rounding of the filter time
         self._last_imu = imu
         return True
 
@@ -261,15 +269,14 @@ class ErrorStateKF:
         S = H @ PHt + R
         Sinv = np.linalg.inv(S)
         nis = float(y @ Sinv @ y)
-        thr = math.inf if (not gate or self.cfg.gate_probability >= 1.0) else float(
-            chi2.ppf(self.cfg.gate_probability, len(y)))
+        thr = math.inf if (not gate or self.cfg.gate_probability >= 1.0) else self._gate(len(y))
         if nis > thr:
             st.rejected += 1
             self.rejections.append((self.x.t, kind, nis))
             return UpdateResult(kind, False, nis, y, thr)
         K = PHt @ Sinv
         dx = K @ y
-        IKH = np.eye(self.n) - K @ H
+        IKH = self._I - K @ H
         P = IKH @ self.P @ IKH.T + K @ R @ K.T
         self.P = 0.5 * (P + P.T)
         self._inject(dx)
@@ -363,9 +370,10 @@ class ErrorStateKF:
         return self.update("gravity", y, H, self._cov(sigma, 3, "gravity"), gate)
 
     # ------------------------------------------------------------ output
-    def estimate(self, t: float | None = None) -> NavEstimate:
+    def estimate(self, t: float | None = None, source: str = "inertial") -> NavEstimate:
         """NavEstimate at ``t`` (default: filter time); position extrapolated with the velocity
-        when ``t`` differs. Covariance: the 6x6 position/velocity block."""
+        when ``t`` differs. Covariance: the 6x6 position/velocity block. ``source`` labels it
+        (e.g. "vision" when vision updates drive the filter)."""
         s = self.x
         dt = 0.0 if t is None else float(t) - s.t
         return NavEstimate(
@@ -375,7 +383,7 @@ class ErrorStateKF:
             attitude=s.euler,
             covariance=self.P[:6, :6].copy(),
             valid=bool(np.all(np.isfinite(self.P))),
-            source="inertial",
+            source=source,
         )
 
     @property
