@@ -37,7 +37,7 @@ from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, H
                                  NavEstimate)
 from visnav.navigation.palace import _AttitudeHistory
 from visnav.vision.odometry import OdometryStep, VisualOdometry
-from visnav.vision.registration import MapRegistration, ncc_to_likelihood
+from visnav.vision.registration import MapRegistration
 
 Recorder = Callable[..., None]
 

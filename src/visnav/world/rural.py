@@ -10,7 +10,6 @@ over it, as over the thesis' pond, §5.9.1). Seeded: the same ``rng`` state give
 
 from __future__ import annotations
 
-import math
 
 import cv2
 import numpy as np
