@@ -187,10 +187,8 @@ class WitasNavigator:
                 self.h.rejected_samples += 1
                 return
             self.baro = m
-            if self.backend is not None:
+            if self.backend is not None:  # (in the GPS phase the GPS gives the height)
                 self.backend.update_baro(m.altitude, self.cfg.baro_sigma_m)
-            elif self.gps_filter.initialized and self.last_gps is None:
-                self.gps_filter.update_position(np.array([0.0, 0.0, -m.altitude]), self.cfg.baro_sigma_m, axes=(2,))
         elif isinstance(m, HeadingSample):
             if self.backend is not None and math.isfinite(m.heading):
                 self.backend.update_heading(m.heading, math.radians(self.cfg.compass_sigma_deg))
