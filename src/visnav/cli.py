@@ -29,6 +29,8 @@ def run(
     out: Optional[str] = typer.Option(None, help="run directory (default runs/<scenario>-<time>)"),
     set_: List[str] = typer.Option([], "--set", help="override a key, e.g. --set sensors.imu.delay_s=0.043"),
     report: bool = typer.Option(True, help="write report.html"),
+    map_: Optional[str] = typer.Option(None, "--map", help="geo-referenced image (PNG/JPEG + world file) as the "
+                                       "world (and, for witas-homing, the degraded reference map)"),
 ) -> None:
     """Run one closed-loop simulation and write its run directory."""
     from visnav.analysis.report import published_figures
@@ -38,6 +40,11 @@ def run(
 
     try:
         sc = load_scenario(scenario, set_, seed)
+        if map_:  # the mission's own map if it has one (witas-homing fits its loop inside), else the world's
+            from pathlib import Path
+
+            key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
+            sc = load_scenario(scenario, list(set_) + [f"{key}={Path(map_).resolve()}"], seed)
         sim = make_simulation(sc)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         console.print(f"[red]error:[/red] {exc}")

@@ -133,3 +133,19 @@ class PositionReference:
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     yaw: float = 0.0
     source: str = "gps"  # which position source the controller must fly on
+
+
+@dataclass(frozen=True)
+class BaroSample:
+    """Barometric altitude relative to the take-off point (up positive) [m]."""
+
+    t: float
+    altitude: float
+
+
+@dataclass(frozen=True)
+class HeadingSample:
+    """Magnetic-compass heading (declination removed) [rad]."""
+
+    t: float
+    heading: float

@@ -69,6 +69,9 @@ class Simulation:
         self.nav = PalaceNavigator(sc.navigation, self.camera_model, self.mount, recorder=self.log.record)
         parts = build_mission(self)
         self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
+        if parts.navigator is not None:
+            self.nav = parts.navigator
+        self._extra_sensors = tuple(parts.sensors)
         self.uses_camera = parts.uses_camera
         init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
                             euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
@@ -109,7 +112,7 @@ class Simulation:
             (self.laser.rate_hz, lambda t: self._emit(self.laser.sample(t, h), self.laser.latency_s)),
             (self.sonar.rate_hz, lambda t: self._emit(self.sonar.sample(t, h), self.sonar.latency_s)),
             (self.camera.rate_hz, camera),
-        ]
+        ] + [(s.rate_hz, lambda t, s=s: self._emit(s.sample(t, h), s.latency_s)) for s in self._extra_sensors]
         return [[1.0 / r, 0.0, f] for r, f in items]
 
     def run(self, progress=None) -> RunResult:

@@ -49,6 +49,8 @@ class MissionParts:
     start_position: np.ndarray
     start_yaw: float = 0.0
     uses_camera: bool = True
+    navigator: object | None = None  # a mission's own navigator (replaces the PALACE one)
+    sensors: tuple = ()  # extra sensors: .rate_hz, .latency_s, .sample(t, truth_at) -> measurement
 
 
 def register(name: str) -> Callable[[Builder], Builder]:
@@ -106,3 +108,10 @@ def _pfcm(sim) -> MissionParts:
     controller = PathFollowingController(gains, recorder=sim.log.record)
     return MissionParts(mission=mission, controller=controller, metrics=pfcm_metrics,
                         start_position=mission.start_position(), start_yaw=mission.start_yaw, uses_camera=False)
+
+
+@register("witas-homing")
+def _witas(sim) -> MissionParts:
+    from visnav.mission.witas import build as build_witas
+
+    return build_witas(sim)

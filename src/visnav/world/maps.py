@@ -14,7 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-__all__ = ["GeoImage"]
+__all__ = ["GeoImage", "degrade_reference"]
 
 _WORLD_FILE_SUFFIXES = {
     ".png": (".pgw", ".pngw"),
@@ -255,6 +255,8 @@ class GeoImage:
         path = Path(path)
         if not path.is_file():
             raise FileNotFoundError(f"map image not found: {path}")
+        if path.suffix.lower() in (".tif", ".tiff") and world_file is None:
+            return _load_geotiff(cls, path, origin)
         if world_file is None:
             suffixes = _WORLD_FILE_SUFFIXES.get(path.suffix.lower(), ()) + (".wld",)
             candidates = [path.with_suffix(s) for s in suffixes]
@@ -271,6 +273,9 @@ class GeoImage:
             raise ValueError(f"cannot decode image file (corrupt or unsupported format): {path}")
         a, d, b, e, c, f = _read_world_file(world_file)
         h, w = image.shape
+        crs = _check_sidecar(path, world_file, (a, e, c, f), (h, w))
+        if crs == "projected":
+            return _projected(cls, image, path, (a, e, c, f))
         lat_c = f + e * (h - 1) / 2.0
         lon_c = c + a * (w - 1) / 2.0
         if origin is None:
@@ -330,3 +335,107 @@ def _read_world_file(path: Path) -> tuple[float, ...]:
             f"malformed world file {path}, line {numbered[3][0]}: pixel height {e!r} must be < 0 (north-up)"
         )
     return a, d, b, e, c, f
+
+
+def _is_geodetic(a: float, e: float, c: float, f: float) -> bool:
+    """A world file in degrees (EPSG:4326) rather than metres of a projected CRS."""
+    return abs(a) < 0.01 and abs(e) < 0.01 and abs(c) <= 180.0 and abs(f) <= 90.0
+
+
+def _check_sidecar(path: Path, world_file: Path, wf: tuple, shape: tuple[int, int]) -> str:
+    """'geodetic' or 'projected'; a ``.json`` sidecar (width_px, height_px, crs, bounds) must agree
+    with the image and the world file, and a geodetic extent must stay on the globe."""
+    a, e, c, f = wf
+    h, w = shape
+    crs = "geodetic" if _is_geodetic(a, e, c, f) else "projected"
+    side = path.with_suffix(".json")
+    if side.is_file():
+        import json
+
+        try:
+            meta = json.loads(side.read_text())
+        except ValueError as exc:
+            raise ValueError(f"map sidecar {side} is not valid JSON: {exc}") from None
+        mw, mh = meta.get("width_px"), meta.get("height_px")
+        if (mw is not None and int(mw) != w) or (mh is not None and int(mh) != h):
+            raise ValueError(f"world file {world_file} / sidecar {side} describe a {mw}x{mh} px image but "
+                             f"{path} is {w}x{h} px: the world file does not match its image")
+        if "east_lon" in meta and crs == "geodetic":
+            east = c + a * (w - 0.5)
+            if abs(east - float(meta["east_lon"])) > 2 * a:
+                raise ValueError(f"world file {world_file} puts the east edge at {east:.6f} deg but {side} says "
+                                 f"{meta['east_lon']}: the world file does not match the image size {w}x{h}")
+        if str(meta.get("crs", "")).upper() not in ("", "EPSG:4326"):
+            crs = "projected"
+    if crs == "geodetic":
+        south, east = f + e * (h - 0.5), c + a * (w - 0.5)
+        if south < -90.0 or east > 180.0:
+            raise ValueError(f"world file {world_file} with a {w}x{h} px image reaches lat {south:.3f}, "
+                             f"lon {east:.3f}: the world file does not match its image size")
+    return crs
+
+
+def _projected(cls, image: np.ndarray, path: Path, wf: tuple) -> GeoImage:
+    """A world file in metres (projected CRS, x east, y north): the NED origin is the map centre."""
+    a, e, c, f = wf
+    h, w = image.shape
+    res_n, res_e = -e, a
+    w_sq = max(1, int(round(w * res_e / res_n)))
+    if w_sq != w:
+        image = cv2.resize(image, (w_sq, h), interpolation=cv2.INTER_AREA if w_sq < w else cv2.INTER_LINEAR)
+    xc, yc = c + a * (w - 1) / 2.0, f + e * (h - 1) / 2.0
+    return cls(image, f - yc, c - xc - res_e / 2.0 + res_n / 2.0, res_n, name=path.stem)
+
+
+def _load_geotiff(cls, path: Path, origin) -> GeoImage:
+    """GeoTIFF through rasterio (optional extra): north-up, EPSG:4326 or projected."""
+    try:
+        import rasterio
+    except ImportError:
+        raise ValueError(f"{path}: reading GeoTIFF needs rasterio (pip install rasterio), "
+                         "or give a PNG/JPEG with a world file") from None
+    import tempfile
+
+    with rasterio.open(path) as src:
+        band = src.read(1)
+        tr = src.transform
+        if tr.b != 0 or tr.d != 0:
+            raise ValueError(f"{path}: only north-up GeoTIFFs are supported")
+        img = cv2.normalize(band.astype(np.float32), None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
+    with tempfile.TemporaryDirectory() as tmp:
+        png = Path(tmp) / (path.stem + ".png")
+        cv2.imwrite(str(png), img)
+        png.with_suffix(".pgw").write_text(
+            f"{tr.a}\n0\n0\n{tr.e}\n{tr.c + tr.a / 2}\n{tr.f + tr.e / 2}\n")
+        return cls.load(png, origin=origin)
+
+
+def degrade_reference(geo: GeoImage, resolution_m: float = 1.0, gain: float = 0.8, offset: float = 25.0,
+                      gamma: float = 1.2, blur_m: float = 1.0) -> GeoImage:
+    """The navigator's reference map: the same ground seen by another sensor on another day.
+
+    Resampled to ``resolution_m`` over the same extent (anti-aliased, exact geometry: the new pixel
+    centres are placed with an affine warp), blurred by a Gaussian of ``blur_m``, and re-mapped in
+    brightness and contrast: I' = 255 (I/255)^gamma * gain + offset.
+    """
+    R = float(resolution_m)
+    if not (math.isfinite(R) and R >= geo.resolution_m):
+        raise ValueError(f"resolution_m must be >= the map's {geo.resolution_m} m, got {resolution_m}")
+    r = geo.resolution_m
+    k = R / r
+    img = geo.image.astype(np.float32)
+    sigma = math.hypot(0.5 * k if k > 1 else 0.0, blur_m / r)
+    if sigma > 0.1:
+        img = cv2.GaussianBlur(img, (0, 0), sigma)
+    h, w = geo.shape
+    H, W = max(1, int(math.floor(h / k))), max(1, int(math.floor(w / k)))
+    # dst pixel (c', r') centre -> src (c, r) = ((c' + 0.5) k - 0.5, ...)
+    M = np.array([[k, 0.0, 0.5 * k - 0.5], [0.0, k, 0.5 * k - 0.5]], np.float32)
+    small = cv2.warpAffine(img, M, (W, H), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                           borderMode=cv2.BORDER_REPLICATE)
+    out = 255.0 * (np.clip(small, 0, 255) / 255.0) ** gamma * gain + offset
+    north0 = geo.north0 + 0.5 * r - 0.5 * R
+    east0 = geo.east0 - 0.5 * r + 0.5 * R
+    ref = GeoImage(np.clip(np.rint(out), 0, 255).astype(np.uint8), north0, east0, R, name=geo.name + "-reference")
+    ref.origin_geodetic = geo.origin_geodetic
+    return ref

@@ -1,0 +1,379 @@
+"""The WITAS vision-based navigator (seed 002 Fig. 5.3): INS + Kalman filter, fed by a point-mass filter
+that fuses visual odometry (§5.6) and registration to a reference map (§5.7).
+
+Phases. Until GPS is lost the navigator is a GPS-aided position filter (as the R-MAX's own INS/GPS).
+When GPS samples stop arriving (``gps_timeout_s``) the vision filter is engaged "with the initial UAV
+state taken from the last GPS reading" (§5.9.1): the Kalman filter backend starts from the GPS-era
+estimate (plus an optional attitude error, the §5.9.1 experiment), the PMF grid is centred on it, and
+from then on:
+
+* every camera frame at ``odometry_hz``: KLT + RANSAC + eq. 5.9 -> displacement u (odometry) with the
+  filter's attitude at the frame's instant and its height (barometer-aided) -> PMF time update;
+* every ``registration_every``-th frame: NCC registration around the PMF estimate, window from the PMF
+  covariance -> likelihood -> PMF measurement update;
+* the PMF MV estimate -> Kalman filter horizontal position update (constant 2 m, §5.8.4, or eq. 5.30);
+* barometer -> altitude update (4 m, §5.8.4); optional compass -> heading update.
+
+It also keeps, for comparison only, an odometry-only track and an INS-only track (free inertial from
+the same initial state). It never sees truth.
+
+Backends: ``eskf`` is the 12-state INS error-state filter of appendix A (``estimation/eskf.py``);
+``ahrs`` is the flight computer's position filter on the autopilot's attitude solution (no attitude
+estimation: the attitude errors of Fig. 5.19 are the AHRS's).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Callable
+
+import numpy as np
+
+from visnav.estimation.pmf import PointMassFilter
+from visnav.estimation.position_filter import PositionFilter, accel_ned
+from visnav.geometry.rotations import euler_to_dcm
+from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
+                                 NavEstimate)
+from visnav.navigation.palace import _AttitudeHistory
+from visnav.vision.odometry import OdometryStep, VisualOdometry
+from visnav.vision.registration import MapRegistration
+
+Recorder = Callable[..., None]
+
+
+class _AhrsBackend:
+    """Position/velocity filter driven by the IMU and the AHRS attitude."""
+
+    def __init__(self, t, position, velocity, euler, sigma_p=0.5, sigma_v=0.2):
+        self.f = PositionFilter(accel_noise=0.3)
+        self.f.reset(t, position, velocity, sigma_p, sigma_v)
+        self.euler = np.asarray(euler, float).copy()
+        self.offset = np.zeros(3)  # initial attitude error (the §5.9.1 experiment), kept constant
+
+    def propagate(self, t, accel, gyro, dt, ahrs_euler) -> None:
+        if ahrs_euler is not None:
+            self.euler = np.asarray(ahrs_euler, float) + self.offset
+        self.f.predict(t, accel_ned(euler_to_dcm(self.euler), accel))
+
+    def update_position(self, ne, cov) -> bool:
+        return self.f.update_position(np.r_[ne, 0.0], np.sqrt(np.diag(cov)), axes=(0, 1))
+
+    def update_baro(self, alt, sigma) -> None:
+        self.f.update_position(np.array([0.0, 0.0, -alt]), sigma, axes=(2,))
+
+    def update_heading(self, yaw, sigma) -> None:
+        pass
+
+    def state(self):
+        return self.f.t, self.f.p.copy(), self.f.v.copy(), self.euler.copy(), self.f.covariance()
+
+
+class _EskfBackend:
+    """The 12-state error-state KF of appendix A (estimation/eskf.py)."""
+
+    def __init__(self, t, position, velocity, euler, sigma_p=0.5, sigma_v=0.2, sigma_att_deg=1.0):
+        try:
+            from visnav.estimation.eskf import EskfConfig, ErrorStateKF
+            from visnav.estimation.ins import NavState, euler_to_quat
+        except ImportError as exc:  # pragma: no cover - the ESKF lives in estimation/eskf.py
+            raise RuntimeError(f"filter.backend 'eskf' needs visnav.estimation.eskf ({exc}); "
+                               "use --set mission.filter.backend=ahrs") from None
+        s = NavState(t=float(t), position=np.asarray(position, float).copy(),
+                     velocity=np.asarray(velocity, float).copy(), quat=euler_to_quat(euler))
+        sa = math.radians(sigma_att_deg)
+        P0 = np.r_[[sigma_p] * 3, [sigma_v] * 3, [sa, sa, 3 * sa], [0.02] * 3]
+        cfg = EskfConfig(accel_noise=0.05, gyro_noise=2e-3, accel_bias_noise=1e-3, gravity_mps2=9.81,
+                         earth_rotation=False, gate_probability=1.0)
+        self.kf = ErrorStateKF(s, P0, cfg)
+
+    def propagate(self, t, accel, gyro, dt, ahrs_euler) -> None:
+        self.kf.propagate(accel, gyro, dt)
+
+    def update_position(self, ne, cov) -> bool:
+        return self.kf.update_position(ne, cov).accepted
+
+    def update_baro(self, alt, sigma) -> None:
+        self.kf.update_baro(alt, sigma)
+
+    def update_heading(self, yaw, sigma) -> None:
+        self.kf.update_heading(yaw, sigma)
+
+    def state(self):
+        x = self.kf.x
+        return x.t, x.position.copy(), x.velocity.copy(), x.euler.copy(), self.kf.P[:6, :6].copy()
+
+
+class _History:
+    """Ring buffer of (t, position, euler) of the filter for look-ups at frame instants."""
+
+    def __init__(self, n=128):
+        self.t = np.full(n, -np.inf)
+        self.p = np.zeros((n, 3))
+        self.e = np.zeros((n, 3))
+        self.k = 0
+        self.n = n
+
+    def push(self, t, p, e):
+        i = self.k % self.n
+        e = np.asarray(e, float).copy()
+        if self.k:
+            prev = self.e[(self.k - 1) % self.n, 2]
+            e[2] = prev + (e[2] - prev + np.pi) % (2 * np.pi) - np.pi
+        self.t[i], self.p[i], self.e[i] = t, p, e
+        self.k += 1
+
+    def at(self, t):
+        m = min(self.k, self.n)
+        if m == 0:
+            return None
+        idx = np.arange(self.k - m, self.k) % self.n
+        ts = self.t[idx]
+        if t < ts[0] - 0.05 or t > ts[-1] + 0.05:
+            return None
+        p = np.array([np.interp(t, ts, self.p[idx, j]) for j in range(3)])
+        e = np.array([np.interp(t, ts, self.e[idx, j]) for j in range(3)])
+        e[2] = (e[2] + np.pi) % (2 * np.pi) - np.pi
+        return p, e
+
+
+class WitasNavigator:
+    def __init__(self, cfg, K: np.ndarray, mount, reference, recorder: Recorder | None = None,
+                 rng: np.random.Generator | None = None, gps_timeout_s: float = 0.5):
+        """``cfg``: a ``WitasFilterConfig``; ``K``, ``mount``: the camera; ``reference``: the
+        navigator's reference map (a north-up GeoImage-like raster)."""
+        self.cfg = cfg
+        self.K = np.asarray(K, float)
+        self.mount = mount
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.recorder = recorder or (lambda *a, **k: None)
+        self.gps_timeout = gps_timeout_s
+        self.vo = VisualOdometry(self.K, max_features=cfg.max_features, sigma_px=cfg.sigma_px,
+                                 min_inliers=cfg.min_inliers, use_ransac=cfg.ransac, rng=self.rng)
+        self.reg = MapRegistration(reference, self.K, mount, min_template_std=cfg.min_template_std)
+        self.gps_filter = PositionFilter(accel_noise=0.3)
+        self.att = _AttitudeHistory()
+        self.hist = _History()
+        self.backend = None
+        self.pmf: PointMassFilter | None = None
+        self.ins_only = None
+        self.odo_track: np.ndarray | None = None
+        self.last_gps: GpsSample | None = None
+        self.baro: BaroSample | None = None
+        self.frames: deque[Frame] = deque(maxlen=8)
+        self.n_frames = 0
+        self.t_vision: float | None = None
+        self.h = Health(source="gps")
+        self._last_imu: ImuSample | None = None
+        self.skipped_odometry = 0
+        self.registrations = 0
+        self._last_u = np.zeros(2)
+        self._acc: list = [np.zeros(3), np.zeros(3), 0, 0.0]
+        self._ins_log_t = -np.inf
+
+    # ------------------------------------------------------------------ measurements
+    def update(self, m) -> None:
+        if isinstance(m, ImuSample):
+            self._on_imu(m)
+        elif isinstance(m, AttitudeSample):
+            if np.all(np.isfinite(m.euler)):
+                self.att.push(m.t, m.euler)
+            else:
+                self.h.rejected_samples += 1
+        elif isinstance(m, GpsSample):
+            self._on_gps(m)
+        elif isinstance(m, BaroSample):
+            if not math.isfinite(m.altitude):
+                self.h.rejected_samples += 1
+                return
+            self.baro = m
+            if self.backend is not None:  # (in the GPS phase the GPS gives the height)
+                self.backend.update_baro(m.altitude, self.cfg.baro_sigma_m)
+        elif isinstance(m, HeadingSample):
+            if self.backend is not None and math.isfinite(m.heading):
+                self.backend.update_heading(m.heading, math.radians(self.cfg.compass_sigma_deg))
+        elif isinstance(m, Frame):
+            if self.backend is not None:
+                self.frames.append(m)
+                self._process_frames()
+
+    def _ahrs(self):
+        return self.att.e[(self.att.k - 1) % self.att.n] if self.att.k else None
+
+    def _on_imu(self, m: ImuSample) -> None:
+        if not (np.all(np.isfinite(m.accel)) and np.all(np.isfinite(m.gyro))) or (
+                self._last_imu is not None and m.t <= self._last_imu.t):
+            self.h.rejected_samples += 1
+            return
+        e = self._ahrs()
+        if self.backend is None and self.last_gps is not None and m.t - self.last_gps.t > self.gps_timeout:
+            self._engage_vision(self._last_imu.t if self._last_imu is not None else m.t)
+        self._last_imu = m
+        if self.backend is not None:
+            # the INS is integrated at ins_rate_hz (50 Hz in §5.9.1) on the mean of the samples in between
+            a = self._acc
+            a[0] += m.accel
+            a[1] += m.gyro
+            a[2] += 1
+            dt = m.t - a[3]
+            if dt < 1.0 / self.cfg.ins_rate_hz - 1e-6:
+                return
+            acc, gyr = a[0] / a[2], a[1] / a[2]
+            self._acc = [np.zeros(3), np.zeros(3), 0, m.t]
+            self.backend.propagate(m.t, acc, gyr, dt, e)
+            t, p, v, eul, _ = self.backend.state()
+            self.hist.push(t, p, eul)
+            self._ins_only_step(m.t, acc, gyr, dt, e)
+        elif self.gps_filter.initialized and e is not None:
+            self.gps_filter.predict(m.t, accel_ned(euler_to_dcm(e), m.accel))
+
+    def _on_gps(self, m: GpsSample) -> None:
+        if not (np.all(np.isfinite(m.position)) and np.all(np.isfinite(m.velocity))):
+            self.h.rejected_samples += 1
+            return
+        if self.backend is not None:
+            return  # the vision filter is engaged: GPS is not used again
+        self.last_gps = m
+        f = self.gps_filter
+        if not f.initialized:
+            f.reset(m.t, m.position, m.velocity)
+            return
+        lag = (f.t or m.t) - m.t
+        f.update_position(m.position + m.velocity * lag, max(m.sigma, 0.05))
+        f.update_velocity(m.velocity, 0.05)
+
+    def _engage_vision(self, t: float) -> None:
+        c = self.cfg
+        f = self.gps_filter
+        e = self._ahrs()
+        e = np.zeros(3) if e is None else e.copy()
+        err = np.radians(np.asarray(c.init_attitude_error_deg, float))
+        if c.backend == "eskf":
+            self.backend = _EskfBackend(f.t, f.p, f.v, e + err)
+        else:
+            self.backend = _AhrsBackend(f.t, f.p, f.v, e + err)
+            self.backend.offset = err
+        self.t_vision = t
+        self._acc = [np.zeros(3), np.zeros(3), 0, f.t]
+        self.pmf = PointMassFilter(f.p[:2], c.pmf_size_m, c.pmf_resolution_m, c.pmf_sigma0_m)
+        self.odo_track = f.p.copy()
+        self._init_ins_only(f.t, f.p, f.v, e + err)
+        self.h.source = "vision"
+        self.recorder("vision_engaged", t, position=f.p.copy(), velocity=f.v.copy(), euler=e + err)
+
+    # ------------------------------------------------------------------ INS-only comparison track
+    def _init_ins_only(self, t, p, v, e) -> None:
+        try:
+            from visnav.estimation.ins import NavState, StrapdownINS, euler_to_quat
+
+            self.ins_only = ("ins", StrapdownINS(earth_rotation=False, gravity=9.81),
+                             NavState(t=float(t), position=p.copy(), velocity=v.copy(), quat=euler_to_quat(e)))
+        except ImportError:  # no strapdown INS available: integrate on the AHRS attitude
+            pf = PositionFilter()
+            pf.reset(t, p, v)
+            self.ins_only = ("ahrs", pf, None)
+
+    def _ins_only_step(self, t, acc, gyr, dt, ahrs_euler) -> None:
+        kind, a, b = self.ins_only
+        if kind == "ins":
+            self.ins_only = (kind, a, a.propagate(b, acc, gyr, dt))
+            pos = self.ins_only[2].position
+        else:
+            if ahrs_euler is not None:
+                a.predict(t, accel_ned(euler_to_dcm(ahrs_euler), acc))
+            pos = a.p
+        if t - self._ins_log_t >= 0.1 - 1e-6:
+            self._ins_log_t = t
+            self.recorder("ins_only", t, position=pos.copy())
+
+    # ------------------------------------------------------------------ vision
+    def _process_frames(self) -> None:
+        while self.frames:
+            f = self.frames[0]
+            if self.hist.k == 0 or self.hist.t[(self.hist.k - 1) % self.hist.n] < f.t:
+                return  # the filter has not reached the frame's instant yet
+            self.frames.popleft()
+            self._vision(f)
+
+    def _vision(self, f: Frame) -> None:
+        c = self.cfg
+        look = self.hist.at(f.t)
+        if look is None:
+            return
+        p, e = look
+        C_bn = euler_to_dcm(e)
+        cam, C_cn = self.mount.camera_pose(p, C_bn)
+        height = -float(cam[2])
+        self.n_frames += 1
+        step = self.vo.step(f.t, f.image, C_cn, height)
+        if step is None:  # the tracker (re)started on this frame: no displacement measured
+            step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "tracker restarted (no features before)")
+        look0 = self.hist.at(f.t - 1.0 / c.odometry_hz)
+        u_ins = (p - look0[0])[:2] if look0 is not None else np.zeros(2)
+        if step.ok and np.linalg.norm(step.displacement[:2] - u_ins) > c.odometry_gate_m + 0.15 * np.linalg.norm(u_ins):
+            step.reason = (f"displacement {np.round(step.displacement[:2], 1)} m disagrees with the filter's "
+                           f"{np.round(u_ins, 1)} m")
+            step.ok = False
+        self.h.tracking = bool(step.ok)
+        if step.ok:
+            u = step.displacement[:2]
+            self._last_u = u
+            self.odo_track = self.odo_track + np.r_[u, 0.0]
+            sv = c.process_noise_m + c.process_noise_frac * float(np.linalg.norm(u))
+            self.pmf.predict(u, sv)
+        else:
+            self.skipped_odometry += 1
+            self._note(f"{f.t:.1f}s odometry skipped: {step.reason}")
+            # no displacement measured: predict with the filter's own displacement and a wider noise
+            u = u_ins
+            self.pmf.predict(u, c.process_noise_m + 0.2 * float(np.linalg.norm(u)) + 0.5)
+            # the odometry-only track dead-reckons on its last measured displacement
+            self.odo_track = self.odo_track + np.r_[self._last_u, 0.0]
+        self.recorder("odometry", f.t, ok=step.ok, n_tracked=step.n_tracked, n_inliers=step.n_inliers,
+                      n_outliers=step.n_outliers, displacement=np.nan_to_num(step.displacement[:2]),
+                      position=self.odo_track.copy(), height=height)
+        registered, peak, window = False, float("nan"), float("nan")
+        if self.n_frames % c.registration_every == 0:
+            mean, P = self.pmf.estimate()
+            sig = math.sqrt(max(np.linalg.eigvalsh(P).max(), 0.0))
+            window = float(np.clip(c.window_sigmas * sig + 2.0, c.window_min_m, c.window_max_m))
+            reg = self.reg.register(f.image, e, height, mean, window)
+            peak = reg.peak
+            if reg.ok and reg.peak >= c.min_peak_ncc:
+                N, E = np.meshgrid(*self.pmf.grid(), indexing="ij")
+                ncc = reg.sample(N, E, fill=-1.0)
+                top = float(np.nanmax(reg.ncc))
+                L = c.likelihood_floor + np.exp(c.ncc_gain * (ncc - top))
+                registered = self.pmf.update(L) > 0
+                self.registrations += int(registered)
+                self.h.coherence = float(reg.peak)
+            elif not reg.ok:
+                self._note(f"{f.t:.1f}s no registration: {reg.reason}")
+        mean, P = self.pmf.estimate()
+        self.recorder("pmf", f.t, position=mean, cov=P, registered=registered, ncc_peak=peak, window_m=window)
+        if not (step.ok or registered):
+            return  # the PMF only carried the filter's own prediction: nothing to feed back
+        # PMF -> Kalman filter (position at the frame instant, moved to the filter's time by its velocity)
+        t_kf, p_kf, v_kf, _, _ = self.backend.state()
+        z = mean + v_kf[:2] * (t_kf - f.t)
+        R = P + 0.01 * np.eye(2) if c.use_pmf_covariance else np.eye(2) * c.kf_position_sigma_m**2
+        self.backend.update_position(z, R)
+
+    def _note(self, text: str) -> None:
+        if len(self.h.notes) < 200:
+            self.h.notes.append(text)
+
+    # ------------------------------------------------------------------ outputs
+    def estimate(self, t: float) -> NavEstimate:
+        if self.backend is not None:
+            tb, p, v, e, P = self.backend.state()
+            return NavEstimate(t=t, position=p + v * (t - tb), velocity=v, attitude=e, covariance=P,
+                               valid=bool(np.all(np.isfinite(p))), source="vision")
+        f = self.gps_filter
+        e = self._ahrs()
+        return NavEstimate(t=t, position=f.p.copy(), velocity=f.v.copy(),
+                           attitude=np.zeros(3) if e is None else e.copy(), covariance=f.covariance(),
+                           valid=f.initialized and e is not None, source="gps")
+
+    def health(self, t: float | None = None) -> Health:
+        return self.h

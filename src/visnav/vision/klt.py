@@ -1,0 +1,87 @@
+"""KLT feature tracking (seed 002 §5.6): Shi-Tomasi corners (``cv2.goodFeaturesToTrack``) re-associated
+frame to frame by the pyramidal Lucas-Kanade tracker (``cv2.calcOpticalFlowPyrLK``), at most
+``max_features`` (50 in the thesis, Fig. 5.20). Lost features are replaced from the new frame,
+away from the ones still tracked, so the set stays spread over the image.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+__all__ = ["KltTracker", "KltPairs"]
+
+
+@dataclass
+class KltPairs:
+    """Correspondences between the previous and the current frame."""
+
+    prev: np.ndarray  # (N, 2) pixel positions in the previous frame
+    curr: np.ndarray  # (N, 2) in the current frame
+    n_detected: int  # features that were searched for
+
+
+class KltTracker:
+    def __init__(self, max_features: int = 50, quality: float = 0.01, min_distance_px: float = 12.0,
+                 window_px: int = 21, levels: int = 3, fb_max_px: float = 1.0, min_eigenvalue: float = 1.5e-4):
+        if not 4 <= max_features <= 2000:
+            raise ValueError(f"max_features must be in [4, 2000], got {max_features}")
+        self.max_features = int(max_features)
+        self.quality = quality
+        self.min_distance = min_distance_px
+        self.lk = dict(winSize=(window_px, window_px), maxLevel=levels,
+                       criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
+        self.fb_max = fb_max_px  # forward-backward check: drop a track that does not come back
+        # absolute corner strength (cv2.cornerMinEigenVal, block 7): goodFeaturesToTrack's quality is
+        # relative to the frame's best corner, so over water it would pick sensor noise
+        self.min_eig = min_eigenvalue
+        self.refill_below = 0.8
+        self.prev_img: np.ndarray | None = None
+        self.pts: np.ndarray = np.zeros((0, 2), np.float32)
+
+    def reset(self) -> None:
+        self.prev_img = None
+        self.pts = np.zeros((0, 2), np.float32)
+
+    def _detect(self, img: np.ndarray, keep: np.ndarray) -> np.ndarray:
+        need = self.max_features - len(keep)
+        if need <= 0 or (len(keep) >= self.refill_below * self.max_features):
+            return keep  # top up only when a fifth of the set is lost (detection is the costly part)
+        mask = np.full(img.shape, 255, np.uint8)
+        for x, y in keep.astype(int):  # at most max_features small discs
+            cv2.circle(mask, (int(x), int(y)), int(self.min_distance), 0, -1)
+        new = cv2.goodFeaturesToTrack(img, need, self.quality, self.min_distance, mask=mask, blockSize=7)
+        if new is None:
+            return keep
+        new = new.reshape(-1, 2).astype(np.float32)
+        if self.min_eig > 0:
+            ev = cv2.cornerMinEigenVal(img, 7)
+            new = new[ev[new[:, 1].astype(int), new[:, 0].astype(int)] >= self.min_eig]
+        return np.vstack([keep, new])
+
+    def track(self, img: np.ndarray) -> KltPairs:
+        """Track the features of the previous frame into ``img``; then top the set up from ``img``."""
+        if img.ndim != 2 or img.dtype != np.uint8:
+            raise ValueError(f"KltTracker needs a uint8 grey image, got {img.dtype} {img.shape}")
+        empty = np.zeros((0, 2))
+        if self.prev_img is None or len(self.pts) == 0:
+            self.prev_img = img
+            self.pts = self._detect(img, np.zeros((0, 2), np.float32))
+            return KltPairs(empty, empty, 0)
+        p0 = self.pts.reshape(-1, 1, 2)
+        p1, st, _ = cv2.calcOpticalFlowPyrLK(self.prev_img, img, p0, None, **self.lk)
+        ok = st.ravel() == 1
+        if self.fb_max > 0 and ok.any():
+            pb, stb, _ = cv2.calcOpticalFlowPyrLK(img, self.prev_img, p1, None, **self.lk)
+            fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
+            ok &= (stb.ravel() == 1) & (fb < self.fb_max)
+        h, w = img.shape
+        q = p1.reshape(-1, 2)
+        ok &= (q[:, 0] >= 0) & (q[:, 0] < w) & (q[:, 1] >= 0) & (q[:, 1] < h)
+        prev, curr = self.pts[ok].astype(float), q[ok].astype(float)
+        n = len(self.pts)
+        self.prev_img = img
+        self.pts = self._detect(img, q[ok].astype(np.float32))
+        return KltPairs(prev, curr, n)
