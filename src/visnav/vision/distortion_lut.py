@@ -21,7 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import RegularGridInterpolator, griddata
+from scipy.interpolate import LinearNDInterpolator, RegularGridInterpolator
+from scipy.spatial import Delaunay, cKDTree
 
 from visnav.geometry.camera import PinholeCamera
 from visnav.vision.rectification import CameraGeometry
@@ -90,11 +91,19 @@ class DistortionLUT:
         return Xm + self._ix(q), Ym + self._iy(q)
 
 
-def _to_grid(px, py, values, gx, gy) -> np.ndarray:
-    G = np.meshgrid(gx, gy, indexing="ij")
-    lin = griddata((px, py), values, tuple(G), method="linear")
-    near = griddata((px, py), values, tuple(G), method="nearest")
-    return np.where(np.isfinite(lin), lin, near)
+def _to_grid(px, py, values, gx, gy) -> list[np.ndarray]:
+    """Scattered (px, py) -> regular grid, linear inside the marks' hull, nearest mark outside;
+    one triangulation for all ``values`` (a list of arrays)."""
+    pts = np.column_stack([px, py])
+    tri = Delaunay(pts)
+    G = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1)
+    simplex = tri.find_simplex(G)
+    _, nearest = cKDTree(pts).query(G)
+    out = []
+    for v in values:
+        lin = LinearNDInterpolator(tri, v)(G)
+        out.append(np.where(simplex >= 0, lin, v[nearest]))
+    return out
 
 
 def thesis_lut(board: Board, geom: CameraGeometry, n: int = 11) -> DistortionLUT:
@@ -107,8 +116,8 @@ def thesis_lut(board: Board, geom: CameraGeometry, n: int = 11) -> DistortionLUT
     cy = (dym - board.dy[q]) / board.dy[q]  # eq. 3.6
     nx, ny = board.Xm[q] / (geom.width / 2.0), board.Ym[q] / (geom.height / 2.0)
     g = np.linspace(0.0, 1.0, n)
-    return DistortionLUT("factor", g, g, _to_grid(nx, ny, 1.0 / (1.0 + cx), g, g),
-                         _to_grid(nx, ny, 1.0 / (1.0 + cy), g, g), geom.width, geom.height)
+    tx, ty = _to_grid(nx, ny, [1.0 / (1.0 + cx), 1.0 / (1.0 + cy)], g, g)
+    return DistortionLUT("factor", g, g, tx, ty, geom.width, geom.height)
 
 
 def full_lut(board: Board, geom: CameraGeometry, nx: int = 33, ny: int = 25) -> DistortionLUT:
@@ -119,5 +128,5 @@ def full_lut(board: Board, geom: CameraGeometry, nx: int = 33, ny: int = 25) -> 
     oy = geom.fy * board.dy / d - board.Ym
     px, py = board.Xm / (geom.width / 2.0), board.Ym / (geom.height / 2.0)
     gx, gy = np.linspace(-1.0, 1.0, nx), np.linspace(-1.0, 1.0, ny)
-    return DistortionLUT("offset", gx, gy, _to_grid(px, py, ox, gx, gy), _to_grid(px, py, oy, gx, gy),
-                         geom.width, geom.height)
+    tx, ty = _to_grid(px, py, [ox, oy], gx, gy)
+    return DistortionLUT("offset", gx, gy, tx, ty, geom.width, geom.height)

@@ -66,11 +66,12 @@ class CameraGeometry:
         return self.height / (2.0 * math.tan(self.half_vfov))
 
 
-def altimeter_correction(h_bar, t_outside_c):
+def altimeter_correction(h_bar, t_outside_c, c0: float = 0.004, c1: float = 0.00005):
     """Temperature-corrected barometric height AGL, seed 004 eq. 2.1:
-    ``h = h_bar (1 - (0.004 + (15 - t_O) 0.00005) h_bar)``."""
+    ``h = h_bar (1 - (c0 + (15 - t_O) c1) h_bar)`` with the printed c0 = 0.004, c1 = 0.00005 (which
+    would take 40 % off at 100 m; the simulation's altimeter uses a tenth of both, docs/condor.md)."""
     h_bar = np.asarray(h_bar, float)
-    out = h_bar * (1.0 - (0.004 + (15.0 - np.asarray(t_outside_c, float)) * 0.00005) * h_bar)
+    out = h_bar * (1.0 - (c0 + (15.0 - np.asarray(t_outside_c, float)) * c1) * h_bar)
     return out if out.ndim else float(out)
 
 
