@@ -30,7 +30,7 @@ G = 9.81
 
 @dataclass(frozen=True)
 class InnerGains:
-    kp_phi: float = 1.2  # rad aileron / rad bank error
+    kp_phi: float = 2.0  # rad aileron / rad bank error
     kd_phi: float = 0.15  # rad / (rad/s)
     kp_psi: float = 0.6  # rad rudder / (rad/s) heading-rate error
     kp_h: float = 0.02  # rad pitch / m

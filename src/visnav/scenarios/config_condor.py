@@ -45,6 +45,7 @@ class GimbalConfig(_M):
     roll_leak: float = Field(0.05, ge=0.0, le=1.0, description="fraction of the aircraft bank left on the camera")
     roll_bias_deg: float = Field(-1.0, ge=-20.0, le=20.0)
     ahrs_noise_deg: float = Field(0.15, ge=0.0, le=5.0)
+    ahrs_noise_tau_s: float = Field(1.0, ge=0.0, le=60.0, description="correlation time of the AHRS noise (0: white)")
     ahrs_bias_tilt_deg: float = Field(0.0, ge=-5.0, le=5.0)
     ahrs_bias_roll_deg: float = Field(0.0, ge=-5.0, le=5.0)
     ahrs_accel_gain: float = Field(0.2, ge=0.0, le=1.0, description="share of unexplained acceleration in the attitude")
@@ -83,15 +84,15 @@ class OrbitConfig(_M):
     transition_s: float = Field(40.0, ge=0.0, le=600.0, description="excluded from the orbit error")
     kp_original: float = Field(0.001, ge=0.0, le=0.1, description="rad/s per m (eq. 5.1, low as in flight 1)")
     kd_original: float = Field(0.01, ge=0.0, le=0.5)
-    kp_modified: float = Field(0.015, ge=0.0, le=0.1)
-    kd_modified: float = Field(0.05, ge=0.0, le=0.5)
+    kp_modified: float = Field(0.012, ge=0.0, le=0.1)
+    kd_modified: float = Field(0.06, ge=0.0, le=0.5)
     base_limit: float = Field(0.4, ge=0.0, le=1.0, description="eq. 5.2 limit (+-40 %)")
 
 
 class ControlConfig(_M):
     orbit: OrbitConfig = OrbitConfig()
     altitude_m: float = Field(100.0, ge=20.0, le=500.0)
-    kp_phi: float = Field(1.2, ge=0.0, le=10.0)
+    kp_phi: float = Field(2.0, ge=0.0, le=10.0)
     kd_phi: float = Field(0.15, ge=0.0, le=5.0)
     kp_psi: float = Field(0.6, ge=0.0, le=10.0)
     bank_limit_deg: float = Field(35.0, ge=5.0, le=60.0)

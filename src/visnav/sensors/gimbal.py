@@ -75,14 +75,16 @@ class CameraAhrs:
     an acceleration error: the part of the horizontal acceleration it cannot tell from gravity
     (``accel_gain`` times the NED acceleration not explained by the airspeed-based centripetal
     compensation) tilts its vertical, low-passed with ``tau_s`` (it needs a steady position to
-    converge)."""
+    converge). Its noise is what a filtered attitude output shows: a first-order Gauss-Markov error
+    of standard deviation ``noise`` and correlation time ``noise_tau_s`` (0: white)."""
 
     def __init__(self, rng: np.random.Generator, noise: float, bias_tilt: float, bias_roll: float,
-                 accel_gain: float, tau_s: float) -> None:
-        self.rng, self.noise = rng, noise
+                 accel_gain: float, tau_s: float, noise_tau_s: float = 0.0) -> None:
+        self.rng, self.noise, self.noise_tau = rng, noise, noise_tau_s
         self.bias = np.array([bias_tilt, bias_roll])
         self.accel_gain, self.tau_s = accel_gain, tau_s
         self.err = np.zeros(2)
+        self.gm = rng.normal(0.0, noise, 2) if noise > 0 else np.zeros(2)
 
     def step(self, dt: float, accel_unexplained_ned, cam_pan: float) -> None:
         a = np.asarray(accel_unexplained_ned, float)
@@ -91,9 +93,15 @@ class CameraAhrs:
         # a forward acceleration looks like a nose-up vertical: the camera seems tilted down less
         target = self.accel_gain * np.array([np.arctan2(fwd, 9.81), -np.arctan2(right, 9.81)])
         self.err += (target - self.err) * min(1.0, dt / self.tau_s)
+        if self.noise > 0 and self.noise_tau > 0:
+            a = np.exp(-dt / self.noise_tau)
+            self.gm = a * self.gm + self.noise * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
 
     def read(self, tilt: float, roll: float) -> tuple[float, float]:
-        n = self.rng.normal(0.0, self.noise, 2) if self.noise > 0 else np.zeros(2)
+        if self.noise_tau > 0:
+            n = self.gm
+        else:
+            n = self.rng.normal(0.0, self.noise, 2) if self.noise > 0 else np.zeros(2)
         return tilt + self.err[0] + self.bias[0] + n[0], roll + self.err[1] + self.bias[1] + n[1]
 
 

@@ -74,7 +74,7 @@ class CondorSimulation:
         self.gimbal = Gimbal(math.pi / 2, -math.atan2(h, o.loiter_radius_m), math.radians(g.pan_rate_deg_s),
                              math.radians(g.tilt_rate_deg_s), g.roll_leak, math.radians(g.roll_bias_deg))
         self.ahrs = CameraAhrs(rng[2], math.radians(g.ahrs_noise_deg), math.radians(g.ahrs_bias_tilt_deg),
-                               math.radians(g.ahrs_bias_roll_deg), g.ahrs_accel_gain, g.ahrs_tau_s)
+                               math.radians(g.ahrs_bias_roll_deg), g.ahrs_accel_gain, g.ahrs_tau_s, g.ahrs_noise_tau_s)
         self.pot = PanPotentiometer(rng[3], math.radians(g.pot_noise_deg))
         a = cfg.altimeter
         self.baro = Barometer(rng[4], a.noise_m, a.t_outside_c, a.c0, a.c1)
