@@ -48,6 +48,7 @@ def test_short_vision_orbit_coordinated():
     assert m["radius_est_error_rms_pct"] <= 3.0
     assert m["tracking_lost_s"] < 2.0
     assert 0.05 < m["link_drop_fraction"] < 0.2  # the 0.33 s link drops ~10 %
+    assert m["position_est_error_rms_m"] < 5.0  # eq. 3.24 range + bearing: GPS-free relative position
     # nothing non-finite ever reached the controller
     ctl = r.log.get("control")
     vis = ctl["mode"] == "vision_orbit"

@@ -45,15 +45,13 @@ class CondorSimulation:
     # ------------------------------------------------------------------------------------ build
     def _build_orbit(self) -> None:
         sc, cfg, rng = self.sc, self.cfg, self.rng
-        s = cfg.airframe.mass_kg / 13.5
-        base = FixedWingParams()
+        s = cfg.airframe.mass_kg / 13.5  # Aerosonde inertias scaled with the mass (vehicles/fixedwing.py)
         self.params = FixedWingParams(mass=cfg.airframe.mass_kg, Jx=0.8244 * s, Jy=1.135 * s, Jz=1.759 * s,
                                       Jxz=0.1204 * s)
         va = cfg.airframe.airspeed_mps
         o = cfg.control.orbit
         self.trim_level = trim(self.params, va)
         tr = trim(self.params, va, turn_radius=o.loiter_radius_m)
-        del base
         self.target = np.array([cfg.target.north_m, cfg.target.east_m, 0.0])
         h = cfg.control.altitude_m
         a0 = 0.0  # start north of the tent, flying east: a right-hand orbit, tent on the right wing
@@ -164,6 +162,7 @@ class CondorSimulation:
         v_prev = self.vehicle.state.velocity
         accel = np.zeros(3)
         ctrl_log: dict = {}
+        h_meas = -float(x[2])
         for k in range(n):
             t = self._t = k * dt
             x = self.vehicle.x
@@ -211,7 +210,7 @@ class CondorSimulation:
                 log.record("truth", t, position=st.position, velocity=st.velocity, euler=st.euler,
                            body_rates=st.body_rates, airspeed=self.vehicle.air["Va"], beta=self.vehicle.air["beta"])
                 log.record("control", t, mode=self.mission.mode, **ctrl_log)
-                log.record("estimate", t, **self._position_estimate(st))
+                log.record("estimate", t, **self._position_estimate(st, h_meas))
                 if progress is not None:
                     progress(t, n * dt)
             if k % d_wind == 0:
@@ -224,13 +223,14 @@ class CondorSimulation:
             if -self.vehicle.x[2] < 5.0:
                 raise RuntimeError(f"aircraft below 5 m AGL (h = {-self.vehicle.x[2]:.1f} m)")
 
-    def _position_estimate(self, st) -> dict:
-        """GPS-free relative position from the last vision fix (eq. 3.23-3.24): bearing = heading +
-        pan potentiometer + Psi_VB, aircraft = tent - R (cos b, sin b); height from truth's attitude."""
+    def _position_estimate(self, st, h_meas: float) -> dict:
+        """GPS-free position relative to the tent from the last vision fix (eq. 3.23-3.24): bearing =
+        heading (compass, taken as the AHRS yaw) + pan potentiometer + Psi_VB, aircraft = tent -
+        R (cos b, sin b), height from the corrected barometer. Logged, not flown on (as in the thesis)."""
         lv = getattr(self, "_last_vision", None)
         if lv is None:
             return {"position": np.full(3, np.nan), "euler": st.euler, "valid": False}
         R, psi_vb, pan_pot = lv
         b = st.euler[2] + pan_pot + psi_vb
-        p = self.target + np.array([-R * math.cos(b), -R * math.sin(b), st.position[2]])
+        p = self.target + np.array([-R * math.cos(b), -R * math.sin(b), -h_meas])
         return {"position": p, "euler": st.euler, "valid": True}

@@ -21,7 +21,7 @@ Wind is NED air velocity (steady + Dryden from ``world/wind.py``), frozen over o
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -281,4 +281,4 @@ def default_trim(Va: float = 17.0) -> tuple[FixedWingParams, Trim]:
     return p, trim(p, Va)
 
 
-__all__ = ["FixedWingParams", "Controls", "FixedWingModel", "Trim", "trim", "derivatives", "default_trim", "replace"]
+__all__ = ["FixedWingParams", "Controls", "FixedWingModel", "Trim", "trim", "derivatives", "default_trim"]
