@@ -102,3 +102,19 @@ def test_tent_render_centre_and_distortion():
     assert abs(u.mean() - cam.cx) < 1.0 and abs(v.mean() - cam.cy) < 1.0  # the optical centre, not the image centre
     empty = tc.render([0, 0, -100.0], math.pi, -0.7, 0.0, outline)  # looking away
     assert np.array_equal(empty, tc.background)
+
+
+def test_projection_matches_opencv():
+    import cv2
+
+    cam = condor_camera(640, 480, 53.0, -0.25, 0.05, 12.0, -7.0)
+    pan, tilt, roll = 1.2, math.radians(-42), math.radians(-3)
+    pos = np.array([5.0, -80.0, -100.0])
+    rng = np.random.default_rng(7)
+    C = camera_dcm(pan, tilt, roll)
+    rays = cam.unproject(np.stack([rng.uniform(20, 620, 30), rng.uniform(20, 460, 30)], 1)) @ C
+    pts = pos + rays * (100.0 / rays[:, 2])[:, None]
+    ours = project_points(cam, pos, pan, tilt, roll, pts)
+    rvec, _ = cv2.Rodrigues(C)
+    ref, _ = cv2.projectPoints(pts, rvec, -C @ pos, cam.K, np.array(cam.dist[:5]))
+    np.testing.assert_allclose(ours, ref[:, 0, :], atol=1e-6)

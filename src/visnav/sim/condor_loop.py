@@ -157,6 +157,8 @@ class CondorSimulation:
         pan, tilt, roll = self.gimbal.camera_attitude(x[6:9])
         uv0 = self.renderer.project(x[0:3], pan, tilt, roll, self.target[None])[0]
         self.tracker.start(*uv0)
+        log.record("mode", 0.0, mode="gps_loiter",
+                   reason=f"GPS loiter at {o.loiter_radius_m:.0f} m, tracker started on the tent")
         wind = self.wind.velocity_ned(0.0, 0.0)
         u = self.trim_level.controls
         v_prev = self.vehicle.state.velocity
