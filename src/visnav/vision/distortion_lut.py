@@ -97,12 +97,11 @@ def _to_grid(px, py, values, gx, gy) -> list[np.ndarray]:
     pts = np.column_stack([px, py])
     tri = Delaunay(pts)
     G = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1)
-    simplex = tri.find_simplex(G)
     _, nearest = cKDTree(pts).query(G)
     out = []
     for v in values:
-        lin = LinearNDInterpolator(tri, v)(G)
-        out.append(np.where(simplex >= 0, lin, v[nearest]))
+        lin = LinearNDInterpolator(tri, v)(G)  # NaN outside the hull (no separate find_simplex:
+        out.append(np.where(np.isfinite(lin), lin, v[nearest]))  # its walk is erratically slow)
     return out
 
 
