@@ -15,7 +15,8 @@ from visnav.sim.missions import make_simulation
 def main(n: int = 5) -> None:
     seeds = list(range(1, n + 1))
     g = [make_simulation(load_scenario("condor-ground-test", seed=s)).run().metrics for s in seeds]
-    print(f"## ground test, seeds {seeds[0]}-{seeds[-1]}\n\n| method | mean abs error % | max abs error % |\n|---|---:|---:|")
+    print(f"## ground test, seeds {seeds[0]}-{seeds[-1]}\n")
+    print("| method | mean abs error % | max abs error % |\n|---|---:|---:|")
     for k, label in (("thesis", "thesis (mirrored quadrant table, printed roll, linear pan)"),
                      ("ours", "ours (whole-frame table, 2-D roll rotation, pinhole pan)")):
         mean = [m[f"{k}_mean_abs_error_pct"] for m in g]
@@ -23,12 +24,13 @@ def main(n: int = 5) -> None:
         print(f"| {label} | {np.mean(mean):.2f} ({np.min(mean):.2f}-{np.max(mean):.2f}) | "
               f"{np.mean(mx):.2f} ({np.min(mx):.2f}-{np.max(mx):.2f}) |")
     keys = ("orbit_radius_error_rms_m", "orbit_radius_error_max_m", "orbit_centre_offset_m", "orbit_radius_mean_m",
-            "radius_est_error_rms_pct", "radius_est_error_max_pct", "tracking_lost_s", "max_bank_deg", "real_time_factor")
+            "radius_est_error_rms_pct", "radius_est_error_max_pct", "tracking_lost_s", "max_bank_deg",
+            "real_time_factor")
     print(f"\n## condor-orbit, 8 kt wind, seeds {seeds[0]}-{seeds[-1]}: mean (min-max)\n")
     print("| controller | " + " | ".join(keys) + " |\n|---|" + "---:|" * len(keys))
     for logic in ("original", "modified", "coordinated"):
-        ms = [make_simulation(load_scenario("condor-orbit", [f"mission.control.orbit.logic={logic}"], seed=s)).run().metrics
-              for s in seeds]
+        ov = [f"mission.control.orbit.logic={logic}"]
+        ms = [make_simulation(load_scenario("condor-orbit", ov, seed=s)).run().metrics for s in seeds]
         cells = []
         for k in keys:
             v = np.array([m[k] for m in ms], float)

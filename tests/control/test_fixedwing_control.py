@@ -30,7 +30,8 @@ def _fly(psidot_ref, rud_ref, seconds=20.0, h_des=100.0, start_h=100.0):
 def test_heading_rate_formula():
     # level turn: p = -psidot sin(theta), q = psidot sin(phi) cos(theta), r = psidot cos(phi) cos(theta)
     phi, th, pd = 0.4, 0.05, 0.15
-    assert heading_rate(phi, th, pd * math.sin(phi) * math.cos(th), pd * math.cos(phi) * math.cos(th)) == pytest.approx(pd)
+    q, r = pd * math.sin(phi) * math.cos(th), pd * math.cos(phi) * math.cos(th)
+    assert heading_rate(phi, th, q, r) == pytest.approx(pd)
 
 
 @pytest.mark.parametrize("rudder", ["same", None])

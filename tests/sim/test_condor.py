@@ -29,7 +29,8 @@ def test_ground_test_thesis_method_vs_ours():
 
 
 def test_ground_test_ours_is_exact_without_noise():
-    sc = load_scenario("condor-ground-test", ["mission.ground_test.pixel_noise_px=0", "mission.gimbal.ahrs_noise_deg=0"])
+    sc = load_scenario("condor-ground-test",
+                       ["mission.ground_test.pixel_noise_px=0", "mission.gimbal.ahrs_noise_deg=0"])
     m = make_simulation(sc).run().metrics
     assert m["ours_max_abs_error_pct"] < 0.1  # only the distortion table's interpolation is left (0.02 %)
     assert m["thesis_mean_abs_error_pct"] > 2.0  # the thesis' method keeps its systematic errors

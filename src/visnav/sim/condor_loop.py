@@ -88,7 +88,9 @@ class CondorSimulation:
         self.autopilot = FixedWingAutopilot(gains, self.trim_level.controls)
         g_orig, g_mod = OrbitGains(o.kp_original, o.kd_original), OrbitGains(o.kp_modified, o.kd_modified)
         self.guidance = OrbitGuidance(o.logic, o.radius_m, va, g_orig, g_mod, o.base_limit)
-        self.loiter = OrbitGuidance("coordinated", o.loiter_radius_m, va, g_orig, OrbitGains(o.kp_modified, o.kd_modified), o.base_limit)
+        # the GPS loiter knows its ground speed: base rate V_GS / R_loiter from a 0.5 s mean of it
+        self.loiter = OrbitGuidance("coordinated", o.loiter_radius_m, va, g_orig,
+                                    OrbitGains(o.kp_modified, o.kd_modified), o.base_limit, v_avg_tau_s=0.5)
         self.radius = RadiusFilter()
         self.mission.mode = "gps_loiter"
 

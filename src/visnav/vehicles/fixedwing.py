@@ -237,7 +237,8 @@ def trim(params: FixedWingParams, Va: float, turn_radius: float = math.inf, gamm
     """Trim for wings-level flight (``turn_radius`` inf) or a steady coordinated turn at constant
     airspeed (Beard & McLain §5.3): unknowns alpha, beta, roll, and the four controls; residuals the
     body accelerations and angular accelerations (no wind), the climb rate, and zero lateral specific
-    force (a coordinated turn: the rudder's side force is balanced by a little sideslip). Solved with ``scipy.optimize.least_squares``."""
+    force (a coordinated turn: the rudder's side force is balanced by a little sideslip).
+    Solved with ``scipy.optimize.least_squares``."""
     from scipy.optimize import least_squares
 
     if not Va > 0:
