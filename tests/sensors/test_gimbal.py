@@ -118,3 +118,17 @@ def test_projection_matches_opencv():
     rvec, _ = cv2.Rodrigues(C)
     ref, _ = cv2.projectPoints(pts, rvec, -C @ pos, cam.K, np.array(cam.dist[:5]))
     np.testing.assert_allclose(ours, ref[:, 0, :], atol=1e-6)
+
+
+def test_ahrs_lags_a_quick_tilt():
+    """Fig. 4.2: a tilt ramp at w reads w * lag behind once the lag has settled."""
+    ahrs = CameraAhrs(np.random.default_rng(1), 0.0, 0.0, 0.0, 0.0, 3.0, lag_s=0.5)
+    w, dt = math.radians(20.0), 0.01
+    for k in range(400):
+        tilt = -0.9 + w * k * dt
+        ahrs.step(dt, np.zeros(3), 0.0, tilt, 0.02)
+    tilt_m, roll_m = ahrs.read(tilt, 0.02)
+    assert tilt - tilt_m == pytest.approx(w * (0.5 - dt), rel=0.01)  # discrete first-order lag
+    assert roll_m == pytest.approx(0.02)
+    still = CameraAhrs(np.random.default_rng(1), 0.0, 0.0, 0.0, 0.0, 3.0)
+    assert still.read(-0.5, 0.1) == (-0.5, 0.1)  # no lag configured: reads the attitude it is given

@@ -76,17 +76,27 @@ class CameraAhrs:
     (``accel_gain`` times the NED acceleration not explained by the airspeed-based centripetal
     compensation) tilts its vertical, low-passed with ``tau_s`` (it needs a steady position to
     converge). Its noise is what a filtered attitude output shows: a first-order Gauss-Markov error
-    of standard deviation ``noise`` and correlation time ``noise_tau_s`` (0: white)."""
+    of standard deviation ``noise`` and correlation time ``noise_tau_s`` (0: white). With ``lag_s`` > 0
+    its tilt and roll follow the camera through a first-order lag, so a quick tilt (Fig. 4.2) reads
+    late: a ramp at rate w reads ``w lag_s`` behind."""
 
     def __init__(self, rng: np.random.Generator, noise: float, bias_tilt: float, bias_roll: float,
-                 accel_gain: float, tau_s: float, noise_tau_s: float = 0.0) -> None:
+                 accel_gain: float, tau_s: float, noise_tau_s: float = 0.0, lag_s: float = 0.0) -> None:
         self.rng, self.noise, self.noise_tau = rng, noise, noise_tau_s
         self.bias = np.array([bias_tilt, bias_roll])
         self.accel_gain, self.tau_s = accel_gain, tau_s
         self.err = np.zeros(2)
         self.gm = rng.normal(0.0, noise, 2) if noise > 0 else np.zeros(2)
+        self.lag_s = lag_s
+        self.lagged: np.ndarray | None = None
 
-    def step(self, dt: float, accel_unexplained_ned, cam_pan: float) -> None:
+    def step(self, dt: float, accel_unexplained_ned, cam_pan: float, tilt: float | None = None,
+             roll: float | None = None) -> None:
+        if self.lag_s > 0 and tilt is not None and roll is not None:
+            true = np.array([tilt, roll])
+            if self.lagged is None:
+                self.lagged = true
+            self.lagged = self.lagged + (true - self.lagged) * min(1.0, dt / self.lag_s)
         a = np.asarray(accel_unexplained_ned, float)
         c, s = np.cos(cam_pan), np.sin(cam_pan)
         fwd, right = a[0] * c + a[1] * s, -a[0] * s + a[1] * c
@@ -98,6 +108,8 @@ class CameraAhrs:
             self.gm = a * self.gm + self.noise * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
 
     def read(self, tilt: float, roll: float) -> tuple[float, float]:
+        if self.lag_s > 0 and self.lagged is not None:
+            tilt, roll = float(self.lagged[0]), float(self.lagged[1])
         if self.noise_tau > 0:
             n = self.gm
         else:

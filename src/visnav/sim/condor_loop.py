@@ -72,7 +72,8 @@ class CondorSimulation:
         self.gimbal = Gimbal(math.pi / 2, -math.atan2(h, o.loiter_radius_m), math.radians(g.pan_rate_deg_s),
                              math.radians(g.tilt_rate_deg_s), g.roll_leak, math.radians(g.roll_bias_deg))
         self.ahrs = CameraAhrs(rng[2], math.radians(g.ahrs_noise_deg), math.radians(g.ahrs_bias_tilt_deg),
-                               math.radians(g.ahrs_bias_roll_deg), g.ahrs_accel_gain, g.ahrs_tau_s, g.ahrs_noise_tau_s)
+                               math.radians(g.ahrs_bias_roll_deg), g.ahrs_accel_gain, g.ahrs_tau_s, g.ahrs_noise_tau_s,
+                               g.ahrs_lag_s)
         self.pot = PanPotentiometer(rng[3], math.radians(g.pot_noise_deg))
         a = cfg.altimeter
         self.baro = Barometer(rng[4], a.noise_m, a.t_outside_c, a.c0, a.c1)
@@ -181,7 +182,8 @@ class CondorSimulation:
                 psidot = (x[10] * math.sin(x[6]) + x[11] * math.cos(x[6])) / math.cos(x[7])
                 # what the camera AHRS cannot explain: acceleration minus the airspeed-based centripetal term
                 comp = psidot * air["Va"] * np.array([-math.sin(x[8]), math.cos(x[8]), 0.0])
-                self.ahrs.step(d_ctrl * dt, accel - comp, x[8] + self.gimbal.pan)
+                _, cam_tilt, cam_roll = self.gimbal.camera_attitude(x[6:9])
+                self.ahrs.step(d_ctrl * dt, accel - comp, x[8] + self.gimbal.pan, cam_tilt, cam_roll)
                 a = cfg.altimeter
                 h_meas = altimeter_correction(self.baro.read(-x[2]), a.t_measured_c, a.c0, a.c1)
                 m = AirData(phi=x[6], theta=x[7], p=x[9], q=x[10], r=x[11], h=h_meas, Va=va_meas,
