@@ -21,6 +21,7 @@ REGISTRY: dict[str, Builder] = {}
 #: to the command line and the campaign runner: ``.sc``, ``.mission.mode`` and
 #: ``.run(progress=None) -> RunResult``.
 SIMULATIONS: dict[str, str] = {}
+SIMULATIONS["condor"] = "visnav.sim.condor_loop:CondorSimulation"
 
 
 def simulation_class(mission_type: str):

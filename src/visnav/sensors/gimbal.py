@@ -1,0 +1,170 @@
+"""CONDOR gimbal camera (seed 004 §2.1.1): 3-axis stabilised gimbal, camera AHRS, pan potentiometer.
+
+The camera body frame has x along the optical axis, y right, z down; its attitude in NED is the
+Z-Y-X Euler triple (roll, tilt, pan) with the tilt negative below the horizon and the roll about
+the optical axis, so that a camera roll is exactly a 2-D rotation of the image (seed 004 eq. 3.9-3.10).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.geometry.rotations import euler_to_dcm
+
+#: OpenCV camera axes (x right, y down, z optical axis) from camera-body axes (x fwd, y right, z down)
+C_CV_CB = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+
+
+def camera_dcm(pan: float, tilt: float, roll: float) -> np.ndarray:
+    """``C_n^cv``: NED -> OpenCV camera frame for a camera at (pan, tilt, roll) [rad] in NED."""
+    return C_CV_CB @ euler_to_dcm(np.array([roll, tilt, pan])).T
+
+
+def project_points(camera, cam_pos_ned, pan: float, tilt: float, roll: float, points_ned) -> np.ndarray:
+    """Pixels (N, 2) of NED points seen by ``camera`` (a PinholeCamera) at the given pose."""
+    p = (np.asarray(points_ned, float) - np.asarray(cam_pos_ned, float)) @ camera_dcm(pan, tilt, roll).T
+    return camera.project(p)
+
+
+def centred_coords(camera, uv) -> tuple[np.ndarray, np.ndarray]:
+    """Seed 004 image coordinates (X right, Y up) [px] from the image centre of OpenCV pixels."""
+    uv = np.asarray(uv, float)
+    return uv[..., 0] - (camera.width - 1) / 2.0, (camera.height - 1) / 2.0 - uv[..., 1]
+
+
+def _wrap(a: float) -> float:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+class Gimbal:
+    """3-axis brushless gimbal with pan and tilt commands (seed 004 §2.1.1).
+
+    Pan is relative to the airframe (about its yaw axis) and slews at ``pan_rate`` toward the
+    command; tilt is held relative to the horizon and slews at ``tilt_rate``; roll stabilisation is
+    imperfect: the camera keeps ``roll_leak`` of the aircraft's bank plus a static ``roll_bias``
+    (the flight of §7.1 saw -11 deg). Returns the camera's true (pan, tilt, roll) in NED.
+    """
+
+    def __init__(self, pan: float, tilt: float, pan_rate: float, tilt_rate: float, roll_leak: float,
+                 roll_bias: float) -> None:
+        self.pan, self.tilt = float(pan), float(tilt)
+        self.pan_cmd, self.tilt_cmd = self.pan, self.tilt
+        self.pan_rate, self.tilt_rate = pan_rate, tilt_rate
+        self.roll_leak, self.roll_bias = roll_leak, roll_bias
+
+    def command(self, pan: float, tilt: float) -> None:
+        if not (np.isfinite(pan) and np.isfinite(tilt)):
+            return  # a NaN command is ignored: the gimbal keeps its last one
+        self.pan_cmd, self.tilt_cmd = float(pan), float(np.clip(tilt, -np.pi / 2, 0.0))
+
+    def step(self, dt: float) -> None:
+        dp = _wrap(self.pan_cmd - self.pan)
+        self.pan = _wrap(self.pan + float(np.clip(dp, -self.pan_rate * dt, self.pan_rate * dt)))
+        dtl = self.tilt_cmd - self.tilt
+        self.tilt += float(np.clip(dtl, -self.tilt_rate * dt, self.tilt_rate * dt))
+
+    def camera_attitude(self, euler_aircraft) -> tuple[float, float, float]:
+        """(pan in NED, tilt, roll) [rad] of the camera for the aircraft's (roll, pitch, yaw)."""
+        phi, _, psi = euler_aircraft
+        return _wrap(psi + self.pan), self.tilt, self.roll_leak * phi + self.roll_bias
+
+
+class CameraAhrs:
+    """The mini-controller on the camera (§2.1.1, §4, Fig. 4.2, §7.1): tilt and roll readings with a
+    static misalignment (calibrated away on the ground, what is left is ``bias``), white noise, and
+    an acceleration error: the part of the horizontal acceleration it cannot tell from gravity
+    (``accel_gain`` times the NED acceleration not explained by the airspeed-based centripetal
+    compensation) tilts its vertical, low-passed with ``tau_s`` (it needs a steady position to
+    converge). Its noise is what a filtered attitude output shows: a first-order Gauss-Markov error
+    of standard deviation ``noise`` and correlation time ``noise_tau_s`` (0: white). With ``lag_s`` > 0
+    its tilt and roll follow the camera through a first-order lag, so a quick tilt (Fig. 4.2) reads
+    late: a ramp at rate w reads ``w lag_s`` behind."""
+
+    def __init__(self, rng: np.random.Generator, noise: float, bias_tilt: float, bias_roll: float,
+                 accel_gain: float, tau_s: float, noise_tau_s: float = 0.0, lag_s: float = 0.0) -> None:
+        self.rng, self.noise, self.noise_tau = rng, noise, noise_tau_s
+        self.bias = np.array([bias_tilt, bias_roll])
+        self.accel_gain, self.tau_s = accel_gain, tau_s
+        self.err = np.zeros(2)
+        self.gm = rng.normal(0.0, noise, 2) if noise > 0 else np.zeros(2)
+        self.lag_s = lag_s
+        self.lagged: np.ndarray | None = None
+
+    def step(self, dt: float, accel_unexplained_ned, cam_pan: float, tilt: float | None = None,
+             roll: float | None = None) -> None:
+        if self.lag_s > 0 and tilt is not None and roll is not None:
+            true = np.array([tilt, roll])
+            if self.lagged is None:
+                self.lagged = true
+            self.lagged = self.lagged + (true - self.lagged) * min(1.0, dt / self.lag_s)
+        a = np.asarray(accel_unexplained_ned, float)
+        c, s = np.cos(cam_pan), np.sin(cam_pan)
+        fwd, right = a[0] * c + a[1] * s, -a[0] * s + a[1] * c
+        # a forward acceleration looks like a nose-up vertical: the camera seems tilted down less
+        target = self.accel_gain * np.array([np.arctan2(fwd, 9.81), -np.arctan2(right, 9.81)])
+        self.err += (target - self.err) * min(1.0, dt / self.tau_s)
+        if self.noise > 0 and self.noise_tau > 0:
+            a = np.exp(-dt / self.noise_tau)
+            self.gm = a * self.gm + self.noise * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
+
+    def read(self, tilt: float, roll: float) -> tuple[float, float]:
+        if self.lag_s > 0 and self.lagged is not None:
+            tilt, roll = float(self.lagged[0]), float(self.lagged[1])
+        if self.noise_tau > 0:
+            n = self.gm
+        else:
+            n = self.rng.normal(0.0, self.noise, 2) if self.noise > 0 else np.zeros(2)
+        return tilt + self.err[0] + self.bias[0] + n[0], roll + self.err[1] + self.bias[1] + n[1]
+
+
+class PanPotentiometer:
+    """Linear potentiometer on the gimbal's yaw axis (Fig. 2.7): pan relative to the airframe plus
+    white noise (ADC and wire) and a scale error."""
+
+    def __init__(self, rng: np.random.Generator, noise: float, scale_error: float = 0.0) -> None:
+        self.rng, self.noise, self.scale = rng, noise, 1.0 + scale_error
+
+    def read(self, pan_rel: float) -> float:
+        return self.scale * pan_rel + (self.rng.normal(0.0, self.noise) if self.noise > 0 else 0.0)
+
+
+class Barometer:
+    """Barometric height AGL whose raw reading needs the temperature correction of eq. 2.1: the raw
+    reading is the eq. 2.1 inverse of the true height at the true outside temperature, plus noise."""
+
+    def __init__(self, rng: np.random.Generator, noise_m: float, t_outside_c: float, c0: float, c1: float) -> None:
+        self.rng, self.noise, self.t_out, self.c0, self.c1 = rng, noise_m, t_outside_c, c0, c1
+
+    def read(self, h_true: float) -> float:
+        k = self.c0 + (15.0 - self.t_out) * self.c1
+        h = max(float(h_true), 0.0)
+        disc = 1.0 - 4.0 * k * h
+        raw = h if k <= 0 else (1.0 - np.sqrt(disc)) / (2.0 * k) if disc > 0 else 1.0 / (2.0 * k)
+        return float(raw + (self.rng.normal(0.0, self.noise) if self.noise > 0 else 0.0))
+
+
+class TelemetryLink:
+    """Radio link of the vision result (§4, ch. 6): a fixed latency (0.33 s typical) and dropouts,
+    each message lost with ``drop_prob``, and outages of ``outage_s`` starting at ``outage_rate_hz``."""
+
+    def __init__(self, rng: np.random.Generator, latency_s: float, drop_prob: float, outage_rate_hz: float,
+                 outage_s: float) -> None:
+        self.rng, self.latency = rng, latency_s
+        self.drop_prob, self.outage_rate, self.outage_s = drop_prob, outage_rate_hz, outage_s
+        self._queue: list[tuple[float, object]] = []
+        self._outage_until = -1.0
+        self.sent = self.dropped = 0
+
+    def send(self, t: float, msg, dt_since_last: float) -> None:
+        self.sent += 1
+        if self.outage_rate > 0 and self.rng.random() < self.outage_rate * dt_since_last:
+            self._outage_until = t + self.outage_s
+        if t < self._outage_until or (self.drop_prob > 0 and self.rng.random() < self.drop_prob):
+            self.dropped += 1
+            return
+        self._queue.append((t + self.latency, msg))
+
+    def receive(self, t: float) -> list:
+        out = [m for ta, m in self._queue if ta <= t + 1e-9]
+        self._queue = [(ta, m) for ta, m in self._queue if ta > t + 1e-9]
+        return out

@@ -1,0 +1,285 @@
+"""6-DOF small fixed-wing UAV (seed 004's Skywalker stand-in), after Beard & McLain.
+
+Equations of motion: R. W. Beard and T. W. McLain, *Small Unmanned Aircraft: Theory and Practice*,
+Princeton University Press 2012, ch. 3 (eq. 3.14-3.17: position, body velocities, Euler angles, body
+rates with the Gamma inertia terms) and ch. 4 (eq. 4.6-4.19: longitudinal and lateral forces and
+moments, the blended lift of eq. 4.9-4.10, the quadratic drag polar of eq. 4.11, the propeller of
+eq. 4.18). Aerodynamic coefficients and geometry: the book's Aerosonde table (Appendix E.2),
+written here from the published table.
+
+The Aerosonde flies at 25-35 m/s with 13.5 kg; seed 004's Skywalker cruises at 15-18 m/s. The mass
+and inertias are therefore scaled down (default 5 kg, inertias x 5/13.5) so that the same airframe
+trims at 17 m/s with a moderate angle of attack, and the motor constant ``k_motor`` is lowered to 30 m/s
+so that cruise throttle sits near mid range. Deflections: aileron, elevator, rudder [rad] with the
+book's signs (positive elevator = trailing edge down = nose down; positive aileron = right roll
+negative moment per C_l_delta_a > 0 convention of the book: delta_a > 0 rolls right); throttle in [0, 1].
+
+State: NED position, body velocity (u, v, w), Euler (roll, pitch, yaw), body rates (p, q, r).
+Wind is NED air velocity (steady + Dryden from ``world/wind.py``), frozen over one step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from visnav.measurements import VehicleState
+
+G = 9.81
+
+
+@dataclass(frozen=True)
+class FixedWingParams:
+    """Beard & McLain Aerosonde (App. E.2); mass/inertia scaled to the Skywalker's speed (see module)."""
+
+    mass: float = 5.0
+    Jx: float = 0.8244 * 5.0 / 13.5
+    Jy: float = 1.135 * 5.0 / 13.5
+    Jz: float = 1.759 * 5.0 / 13.5
+    Jxz: float = 0.1204 * 5.0 / 13.5
+    S: float = 0.55
+    b: float = 2.8956
+    c: float = 0.18994
+    S_prop: float = 0.2027
+    rho: float = 1.2682
+    k_motor: float = 30.0
+    C_prop: float = 1.0
+    e: float = 0.9
+    M: float = 50.0
+    alpha0: float = 0.4712
+    # longitudinal
+    C_L_0: float = 0.28
+    C_L_alpha: float = 3.45
+    C_L_q: float = 0.0
+    C_L_de: float = -0.36
+    C_D_p: float = 0.0437
+    C_D_q: float = 0.0
+    C_D_de: float = 0.0
+    C_m_0: float = -0.02338
+    C_m_alpha: float = -0.38
+    C_m_q: float = -3.6
+    C_m_de: float = -0.5
+    # lateral
+    C_Y_0: float = 0.0
+    C_Y_beta: float = -0.98
+    C_Y_p: float = 0.0
+    C_Y_r: float = 0.0
+    C_Y_da: float = 0.0
+    C_Y_dr: float = -0.17
+    C_l_0: float = 0.0
+    C_l_beta: float = -0.12
+    C_l_p: float = -0.26
+    C_l_r: float = 0.14
+    C_l_da: float = 0.08
+    C_l_dr: float = 0.105
+    C_n_0: float = 0.0
+    C_n_beta: float = 0.25
+    C_n_p: float = 0.022
+    C_n_r: float = -0.35
+    C_n_da: float = 0.06
+    C_n_dr: float = -0.032
+    max_deflection: float = math.radians(30.0)
+
+    @property
+    def AR(self) -> float:
+        return self.b * self.b / self.S
+
+    def gammas(self) -> tuple[float, ...]:
+        """Gamma_1..Gamma_8 of Beard & McLain eq. 3.13."""
+        Jx, Jz, Jxz, Jy = self.Jx, self.Jz, self.Jxz, self.Jy
+        g = Jx * Jz - Jxz * Jxz
+        return (Jxz * (Jx - Jy + Jz) / g, (Jz * (Jz - Jy) + Jxz * Jxz) / g, Jz / g, Jxz / g,
+                (Jz - Jx) / Jy, Jxz / Jy, ((Jx - Jy) * Jx + Jxz * Jxz) / g, Jx / g)
+
+
+@dataclass
+class Controls:
+    aileron: float = 0.0
+    elevator: float = 0.0
+    rudder: float = 0.0
+    throttle: float = 0.5
+
+
+def _lift_drag(p: FixedWingParams, alpha: float) -> tuple[float, float]:
+    """C_L (eq. 4.9-4.10, sigma-blended flat plate past stall) and C_D (eq. 4.11) at ``alpha``."""
+    ea, eb = math.exp(-p.M * (alpha - p.alpha0)), math.exp(p.M * (alpha + p.alpha0))
+    sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
+    cl_lin = p.C_L_0 + p.C_L_alpha * alpha
+    sa = math.sin(alpha)
+    cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * math.copysign(1.0, alpha) * sa * sa * math.cos(alpha)
+    cd = p.C_D_p + cl_lin * cl_lin / (math.pi * p.e * p.AR)
+    return cl, cd
+
+
+def derivatives(p: FixedWingParams, x: np.ndarray, u: Controls, wind_ned: np.ndarray,
+                gam: tuple | None = None) -> tuple[np.ndarray, dict]:
+    """dx/dt of the 12-state model (eq. 3.14-3.17) and the air data (Va, alpha, beta)."""
+    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
+    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
+    # body -> NED
+    C = np.array([[ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp],
+                  [ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp],
+                  [-st, sf * ct, cf * ct]])
+    wb = C.T @ wind_ned
+    ur, vr, wr = uu - wb[0], vv - wb[1], ww - wb[2]
+    Va = math.sqrt(ur * ur + vr * vr + wr * wr)
+    Va_s = max(Va, 1.0)
+    alpha = math.atan2(wr, ur)
+    beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
+    qbar = 0.5 * p.rho * Va_s * Va_s * p.S
+    cl, cd = _lift_drag(p, alpha)
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    da, de, dr, dt = u.aileron, u.elevator, u.rudder, u.throttle
+    # eq. 4.19 longitudinal force coefficients in body axes
+    cx = -cd * ca + cl * sa
+    cxq = -p.C_D_q * ca + p.C_L_q * sa
+    cxde = -p.C_D_de * ca + p.C_L_de * sa
+    cz = -cd * sa - cl * ca
+    czq = -p.C_D_q * sa - p.C_L_q * ca
+    czde = -p.C_D_de * sa - p.C_L_de * ca
+    c2v, b2v = p.c / (2.0 * Va_s), p.b / (2.0 * Va_s)
+    m = p.mass
+    thrust = 0.5 * p.rho * p.S_prop * p.C_prop * ((p.k_motor * dt) ** 2 - Va * Va)  # eq. 4.18
+    fx = -m * G * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+    fy = m * G * ct * sf + qbar * (p.C_Y_0 + p.C_Y_beta * beta + p.C_Y_p * b2v * P + p.C_Y_r * b2v * R
+                                   + p.C_Y_da * da + p.C_Y_dr * dr)
+    fz = m * G * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
+    l_m = qbar * p.b * (p.C_l_0 + p.C_l_beta * beta + p.C_l_p * b2v * P + p.C_l_r * b2v * R
+                        + p.C_l_da * da + p.C_l_dr * dr)
+    m_m = qbar * p.c * (p.C_m_0 + p.C_m_alpha * alpha + p.C_m_q * c2v * Q + p.C_m_de * de)
+    n_m = qbar * p.b * (p.C_n_0 + p.C_n_beta * beta + p.C_n_p * b2v * P + p.C_n_r * b2v * R
+                        + p.C_n_da * da + p.C_n_dr * dr)
+    g1, g2, g3, g4, g5, g6, g7, g8 = gam or p.gammas()
+    pos_dot = C @ np.array([uu, vv, ww])  # eq. 3.14
+    vel_dot = (R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m)  # eq. 3.15
+    tt = st / ct
+    eul_dot = (P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct)  # eq. 3.16
+    rate_dot = (g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,  # eq. 3.17
+                g5 * P * R - g6 * (P * P - R * R) + m_m / p.Jy,
+                g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m)
+    dx = np.concatenate([pos_dot, vel_dot, eul_dot, rate_dot])
+    air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array([fx, fy, fz]) / m
+           - C.T @ np.array([0.0, 0.0, G])}
+    return dx, air
+
+
+@dataclass
+class FixedWingModel:
+    """RK4 integration of :func:`derivatives`; ``state`` is a :class:`VehicleState`."""
+
+    params: FixedWingParams = field(default_factory=FixedWingParams)
+    x: np.ndarray = field(default_factory=lambda: np.zeros(12))
+    t: float = 0.0
+
+    def __post_init__(self) -> None:
+        self._gam = self.params.gammas()
+        self.air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
+
+    @classmethod
+    def from_trim(cls, params: FixedWingParams, trim: "Trim", position_ned, heading: float) -> "FixedWingModel":
+        x = trim.state.copy()
+        x[0:3] = position_ned
+        x[8] = heading
+        return cls(params, x)
+
+    def _clip(self, u: Controls) -> Controls:
+        lim = self.params.max_deflection
+        return Controls(float(np.clip(u.aileron, -lim, lim)), float(np.clip(u.elevator, -lim, lim)),
+                        float(np.clip(u.rudder, -lim, lim)), float(np.clip(u.throttle, 0.0, 1.0)))
+
+    def step(self, u: Controls, dt: float, wind_ned) -> None:
+        u = self._clip(u)
+        w = np.asarray(wind_ned, float)
+        if not np.all(np.isfinite(w)):
+            raise ValueError(f"wind must be finite, got {w}")
+        f = lambda x: derivatives(self.params, x, u, w, self._gam)[0]  # noqa: E731
+        x = self.x
+        k1 = f(x)
+        k2 = f(x + 0.5 * dt * k1)
+        k3 = f(x + 0.5 * dt * k2)
+        k4 = f(x + dt * k3)
+        self.x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        self.x[8] = (self.x[8] + math.pi) % (2 * math.pi) - math.pi
+        if not np.all(np.isfinite(self.x)):
+            raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
+        self.t += dt
+        self.air = derivatives(self.params, self.x, u, w, self._gam)[1]
+
+    def euler_rates(self) -> np.ndarray:
+        return derivatives(self.params, self.x, Controls(), np.zeros(3), self._gam)[0][6:9]
+
+    @property
+    def state(self) -> VehicleState:
+        x = self.x
+        C = _dcm(x[6:9])
+        return VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
+                            body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
+
+
+def _dcm(e) -> np.ndarray:
+    from visnav.geometry.rotations import euler_to_dcm
+
+    return euler_to_dcm(np.asarray(e, float))
+
+
+@dataclass
+class Trim:
+    state: np.ndarray  # 12 states (position 0, heading 0)
+    controls: Controls
+    alpha: float
+    beta: float
+    residual: float
+
+
+def trim(params: FixedWingParams, Va: float, turn_radius: float = math.inf, gamma: float = 0.0) -> Trim:
+    """Trim for wings-level flight (``turn_radius`` inf) or a steady coordinated turn at constant
+    airspeed (Beard & McLain §5.3): unknowns alpha, beta, roll, and the four controls; residuals the
+    body accelerations and angular accelerations (no wind), the climb rate, and zero lateral specific
+    force (a coordinated turn: the rudder's side force is balanced by a little sideslip).
+    Solved with ``scipy.optimize.least_squares``."""
+    from scipy.optimize import least_squares
+
+    if not Va > 0:
+        raise ValueError(f"Va must be positive, got {Va!r}")
+    psi_dot = 0.0 if math.isinf(turn_radius) else Va * math.cos(gamma) / turn_radius
+
+    def build(z):
+        alpha, beta, phi, da, de, dr, dt = z
+        u = Va * math.cos(alpha) * math.cos(beta)
+        v = Va * math.sin(beta)
+        w = Va * math.sin(alpha) * math.cos(beta)
+        # pitch from the flight-path angle (Beard & McLain §5.3): sin(gamma) = a sin(theta) - b cos(theta)
+        a = math.cos(alpha) * math.cos(beta)
+        b = math.sin(phi) * math.sin(beta) + math.cos(phi) * math.sin(alpha) * math.cos(beta)
+        sg = math.sin(gamma)
+        theta = math.atan2(a * b + sg * math.sqrt(max(a * a - sg * sg + b * b, 0.0)), a * a - sg * sg)
+        p_ = -psi_dot * math.sin(theta)
+        q_ = psi_dot * math.sin(phi) * math.cos(theta)
+        r_ = psi_dot * math.cos(phi) * math.cos(theta)
+        x = np.array([0, 0, 0, u, v, w, phi, theta, 0, p_, q_, r_], float)
+        return x, Controls(da, de, dr, dt)
+
+    def res(z):
+        x, c = build(z)
+        dx, air = derivatives(params, x, c, np.zeros(3))
+        out = list(dx[3:6]) + list(dx[9:12])
+        # climb rate and the coordinated-turn condition: no lateral specific force (ball centred)
+        out.append(dx[2] + Va * math.sin(gamma))
+        out.append(air["specific_force"][1])
+        return np.array(out)
+
+    sol = least_squares(res, np.array([0.05, 0.0, 0.0, 0.0, -0.05, 0.0, 0.6]),
+                        bounds=([-0.3, -0.3, -1.2, -0.5, -0.5, -0.5, 0.0], [0.4, 0.3, 1.2, 0.5, 0.5, 0.5, 1.0]),
+                        xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    x, c = build(sol.x)
+    return Trim(x, c, float(sol.x[0]), float(sol.x[1]), float(np.abs(sol.fun).max()))
+
+
+def default_trim(Va: float = 17.0) -> tuple[FixedWingParams, Trim]:
+    p = FixedWingParams()
+    return p, trim(p, Va)
+
+
+__all__ = ["FixedWingParams", "Controls", "FixedWingModel", "Trim", "trim", "derivatives", "default_trim"]
