@@ -19,6 +19,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from visnav.scenarios.config_deck import DeckMissionConfig
 from visnav.scenarios.base import ScenarioError, _M  # noqa: F401  (re-exported: one base for every config)
 
 BUILTIN_DIR = Path(__file__).resolve().parent
@@ -267,7 +268,7 @@ class PfcmMissionConfig(_M):
 # Every mission's config, told apart by its ``type`` (add new ones to this tuple). A mission that
 # flies another vehicle keeps its own config module (scenarios/config_<mission>.py, built on
 # scenarios/base.py) and its own simulation class (registered in sim/missions.py SIMULATIONS).
-MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig)
+MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig, DeckMissionConfig)
 MissionConfig = (
     Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]
     if len(MISSION_CONFIGS) > 1

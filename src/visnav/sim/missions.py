@@ -20,7 +20,7 @@ REGISTRY: dict[str, Builder] = {}
 #: fixed wing with a gimbal). The class takes the ``Scenario`` and offers what ``Simulation`` offers
 #: to the command line and the campaign runner: ``.sc``, ``.mission.mode`` and
 #: ``.run(progress=None) -> RunResult``.
-SIMULATIONS: dict[str, str] = {}
+SIMULATIONS: dict[str, str] = {"deck": "visnav.sim.deck_loop:DeckSimulation"}
 
 
 def simulation_class(mission_type: str):
