@@ -10,7 +10,9 @@ guidance and control every second step. Modes (logged in the ``mode`` stream):
   ``lambda_max_deg`` of the start azimuth and at least ``gamma_min_deg`` from vertical);
 * ``approach`` - the tau trajectory (static: three straight gaps, k = 0.3, 15 s; moving: alpha,
   beta, rho gaps of ch. 4, re-aimed at every control step at the latest touchdown prediction);
-* ``descend`` - past the trajectory's end without contact: sink at ``final_descent_mps``;
+* ``descend`` - past the trajectory's end without contact: thrust along the estimated deck normal
+  (attitude kept matched) with the vertical speed servoed to ``final_descent_mps`` (not in the
+  thesis, whose runs end at the trajectory's end);
 * ``landed`` / ``missed`` - the gear met the deck plane on / off the plate; the run ends.
 
 Truth reaches the navigator only as the pilot's hold in ``manual`` and, with ``filter.init =
@@ -178,20 +180,30 @@ class DeckSimulation:
                 c, n_up = self._target(Cd0, wd, psi_d, max(self.approach.T - tm, 0.0))
                 try:
                     a_td, _, _ = touchdown_acceleration(n_up, g.touchdown_accel_mps2)
-                    self.approach.retarget(a_td)
+                    # the prediction is noisy (deck rates x time to go): re-aim through a first-order filter
+                    w = min(dt / g.retarget_tau_s, 1.0) if g.retarget_tau_s > 0 else 1.0
+                    self._a_td = self._a_td + w * (a_td - self._a_td)
+                    self.approach.retarget(self._a_td)
                 except ValueError:
                     pass
             else:
                 c = self._c0
-            pd, vd, ad = self.approach.desired(tm)
-            p_des, v_des, a_ff = c + pd, vd, ad
+            pd, vd, a_now = self.approach.desired(tm)
+            # the horizontal acceleration feed-forward is realised by tilting, through the attitude loop's lag:
+            # take it that far ahead; the vertical one (thrust, fast) as it is
+            _, _, a_lead = self.approach.desired(min(tm + g.feedforward_lead_s, self.approach.T))
+            p_des, v_des, a_ff = c + pd, vd, np.array([a_lead[0], a_lead[1], a_now[2]])
             if tm >= self.approach.T:
                 self._set_mode(t, "descend", "trajectory ended without contact")
-        else:  # descend
-            c, _ = self._target(Cd0, wd, psi_d, 0.0)
-            p_des = np.array([c[0], c[1], p_ld[2]])
-            v_des = np.array([0.0, 0.0, g.final_descent_mps])
-        a_cmd_ld = follow(p_des, v_des, a_ff, p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
+        else:  # descend: thrust along the deck normal (attitude matched), sink at final_descent_mps
+            c, n_up = self._target(Cd0, wd, psi_d, 0.0)
+            p_des, v_des = np.array([c[0], c[1], p_ld[2]]), np.array([0.0, 0.0, g.final_descent_mps])
+            a_z = g.damper_per_s * (g.final_descent_mps - v_ld[2])
+            a_ff = np.array([0.0, 0.0, G]) + (G - a_z) / max(-n_up[2], 0.5) * n_up
+        if mode == "descend":
+            a_cmd_ld = a_ff
+        else:
+            a_cmd_ld = follow(p_des, v_des, a_ff, p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
         a_cmd = Rz @ a_cmd_ld
         Tm, phi, theta = attitude_command(a_cmd, np.radians(self.cfg.vehicle.max_tilt_deg))
         height = max(-p_ld[2] - self.params.gear_offset, 0.0)
@@ -232,6 +244,7 @@ class DeckSimulation:
               and np.radians(g.gamma_min_deg) <= gam <= np.radians(g.gamma_max_deg))
         if ok or tm >= g.max_wait_s:
             self.approach = TauGapApproach(p_ld - c, a_td, g.k_rho, g.k_alpha_beta)
+            self._a_td = a_td
             why = "conditions met" if ok else "waited max_wait_s"
             self._set_mode(t, "approach", f"{why}: lambda={np.degrees(lam):.0f} deg, gamma={np.degrees(gam):.0f} deg, "
                                           f"T={self.approach.T:.2f}s")
