@@ -96,6 +96,7 @@ class UnscentedKalmanFilter:
         self.state_add, self.x_mean, self.z_mean = state_add, x_mean, z_mean
         self.S: np.ndarray | None = None  # innovation covariance of the last update
         self.y: np.ndarray | None = None  # innovation of the last update
+        self.nis = float("nan")
 
     @property
     def n(self) -> int:
@@ -143,3 +144,4 @@ class UnscentedKalmanFilter:
         P = self.P - K @ S @ K.T
         self.P = 0.5 * (P + P.T)
         self.S, self.y = S, y
+        self.nis = float(y @ cho_solve(cf, y))  # normalised innovation squared (chi2 with y.size dof)

@@ -1,8 +1,9 @@
 """The deck navigator: IMU-driven predictions and bearing corrections of the relative deck UKF (seed 003 ch. 3).
 
 * :meth:`DeckNavigator.imu` predicts over the time since the previous IMU sample (eq. 3.1-3.5) with
-  the process noise of eq. 3.8; the angular acceleration is the (lightly low-passed) numerical
-  derivative of the gyro rates. Samples out of order or with NaN are dropped and counted.
+  the process noise of eq. 3.8; the angular acceleration is the numerical derivative of the gyro
+  rates (unfiltered by default: its noise telescopes in the velocity, while a low-pass lag biases
+  the Euler term during manoeuvres). Samples out of order or with NaN are dropped and counted.
 * :meth:`DeckNavigator.camera` associates the frame's bearings with the expected lights
   (eq. 3.11-3.12, bearings only, the covariance of each light's predicted bearings from the
   unscented transform plus R) and corrects with the matched bearings and, for blobs matched to the
@@ -35,7 +36,7 @@ class DeckNavStats:
 class DeckNavigator:
     def __init__(self, lights: np.ndarray, cam: dm.CameraGeometry, x0, P0, imu_cov: np.ndarray,
                  ship_cov: np.ndarray, bearing_sigma: float, rate_sigma: float, gate: float = 13.8,
-                 alpha: float = 0.1, beta: float = 2.0, kappa: float = 0.0, gyro_dot_tau: float = 0.03):
+                 alpha: float = 0.1, beta: float = 2.0, kappa: float = 0.0, gyro_dot_tau: float = 0.0):
         self.lights = np.asarray(lights, float)
         self.cam = cam
         self.ukf = UnscentedKalmanFilter(x0, P0, dm.process_model, alpha=alpha, beta=beta, kappa=kappa,
@@ -49,6 +50,13 @@ class DeckNavigator:
         self._gyro: np.ndarray | None = None
         self._gyro_dot = np.zeros(3)
         self.last_gyro = np.zeros(3)
+        self.last_nis, self.last_dof = float("nan"), 0
+        self.last_bearing_rms = float("nan")  # RMS bearing innovation of the last update [rad]
+
+    def reset(self, x0, P0) -> None:
+        """Restart the filter (the thesis' operator resets it during manual flight, Fig. 5.7)."""
+        self.ukf.x = np.array(x0, float)
+        self.ukf.P = np.array(P0, float)
 
     @property
     def x(self) -> np.ndarray:
@@ -120,4 +128,7 @@ class DeckNavigator:
         self.ukf.update(z, R, hx=dm.measurement_model, lights=self.lights, cam=self.cam, gyro=self.last_gyro,
                         idx=idx, rate_idx=ridx)
         self.stats.lights_used_last = int(idx.size)
+        self.last_nis, self.last_dof = self.ukf.nis, int(z.size)
+        yb = self.ukf.y[:2 * idx.size]
+        self.last_bearing_rms = float(np.sqrt(np.mean(yb * yb)))
         return int(idx.size)

@@ -71,6 +71,11 @@ class DeckFilterConfig(_M):
     bearing_rate_noise_deg_s: float = Field(2.0, gt=0, le=100, description="sigma of each bearing rate (§3.1.2)")
     gate: float = Field(13.8, gt=0, le=1000, description="Mahalanobis gate / dummy cost (eq. 3.12)")
     init: Literal["static", "truth"] = Field("static", description="eq. 5.12-5.17, or truth with small sigmas (§5.3.5)")
+    converged_bearing_rms_deg: float = Field(0.2, gt=0, le=10, description="hand over only when the RMS bearing "
+                                             "innovation of the last second is below this")
+    yaw_hypotheses_deg: list[float] = Field(default_factory=lambda: [45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0],
+                                            description="relative yaws the filter restarts from, in turn, while "
+                                                        "it has not converged (manual flight)")
     ship_accel_scale: float = Field(1.0, ge=0, le=100, description="multiplies the eq. 3.7 bound in Q")
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
 

@@ -4,7 +4,11 @@ One dynamics / IMU step of ``run.dt_s``; the camera frame every ``round(1 / (rat
 guidance and control every second step. Modes (logged in the ``mode`` stream):
 
 * ``manual`` - the pilot holds the start point (truth-based hold, as in §5.3.2 and §5.3.5 the
-  vehicle was flown by hand while the estimator started and converged); the filter runs;
+  vehicle was flown by hand while the estimator started and converged); the filter runs. After
+  ``start.manual_s`` the hand-over waits for the operator's check (§5.3.1): every frame of the last
+  second with >= 3 lights and an RMS bearing innovation below ``filter.converged_bearing_rms_deg``;
+  failing it, the filter restarts (as the thesis' operator reset it, Fig. 5.7) from the next relative
+  yaw of ``filter.yaw_hypotheses_deg`` and the hold goes on;
 * ``hover`` (moving deck) - autonomous hold on the estimates for at least ``hover_min_s``, until the
   start conditions of §5.3.5 hold (near the start point; predicted approach path within
   ``lambda_max_deg`` of the start azimuth and at least ``gamma_min_deg`` from vertical);
@@ -123,6 +127,7 @@ class DeckSimulation:
                                  np.radians(f.bearing_noise_deg), np.radians(f.bearing_rate_noise_deg_s), f.gate,
                                  f.alpha, f.beta, f.kappa)
         self.log.record("filter_init", 0.0, x0=x0, sigma=np.sqrt(np.diag(P0)), source=f.init)
+        self._x0, self._P0, self._n_restarts = x0, P0, 0
         hov = self.params.hover_throttle
         self.throttle = ThrottleController(hover_throttle_1m=hov, hover_throttle_ground=hov / self.params.ground_effect(
             v.gear_offset_m + self.params.rotor_height))
@@ -172,7 +177,10 @@ class DeckSimulation:
         if mode in ("manual", "hover"):
             p_des, v_des = self.start_rel_ld, np.zeros(3)
             if mode == "manual" and tm >= self.cfg.start.manual_s:
-                self._begin(t, "hover" if self.cfg.deck.motion == "moving" else "approach", p_ld, Cd0, wd, psi_d)
+                if self._converged(t):
+                    self._begin(t, "hover" if self.cfg.deck.motion == "moving" else "approach", p_ld, Cd0, wd, psi_d)
+                else:
+                    self._restart_filter(t)
             elif mode == "hover":
                 self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
         elif mode == "approach":
@@ -212,6 +220,26 @@ class DeckSimulation:
         yaw_rate = 1.0 * np.arctan2(r[1], r[0]) if np.hypot(r[0], r[1]) > 0.3 else 0.0
         self.log.record("reference", t, position=Rz @ p_des, velocity=Rz @ v_des, accel=a_cmd)
         return AttitudeThrustCommand(t=t, roll=phi, pitch=theta, yaw_rate=float(yaw_rate), throttle=thr)
+
+    def _converged(self, t: float) -> bool:
+        """The operator's check before hand-over (§5.3.1): lights tracked and bearings fit, last second."""
+        c = self.log.get("camera")
+        m = c["t"] > t - 1.0
+        if m.sum() < 5 or np.any(c["lights_used"][m] < 3):
+            return False
+        rms = np.sqrt(np.nanmean(c["bearing_rms"][m] ** 2))
+        return bool(rms <= np.radians(self.cfg.filter.converged_bearing_rms_deg))
+
+    def _restart_filter(self, t: float) -> None:
+        hyp = self.cfg.filter.yaw_hypotheses_deg
+        if self._n_restarts >= len(hyp):
+            raise RuntimeError("the deck filter did not converge from any initial yaw hypothesis")
+        x0, P0 = self._x0.copy(), self._P0
+        x0[5] = np.radians(hyp[self._n_restarts])
+        self._n_restarts += 1
+        self.nav.reset(x0, P0)
+        self.log.record("filter_init", t, x0=x0, sigma=np.sqrt(np.diag(P0)), source=f"restart {self._n_restarts}")
+        self._set_mode(t, "manual", f"filter not converged: restart from relative yaw {hyp[self._n_restarts - 1]:.0f} deg")
 
     def _set_mode(self, t, mode, reason):
         self.mission.mode, self.t_mode = mode, t
@@ -304,7 +332,9 @@ class DeckSimulation:
                                      to_ned(self.extra) if len(self.extra) else None)
         frame = self.tracker.process(t, img)
         used = self.nav.camera(frame.bearings, frame.rates)
-        self.log.record("camera", t, blobs=len(frame.bearings), lights_used=used)
+        self.log.record("camera", t, blobs=len(frame.bearings), lights_used=used,
+                        nis=self.nav.last_nis if used else float("nan"), dof=self.nav.last_dof if used else 0,
+                        bearing_rms=self.nav.last_bearing_rms if used else float("nan"))
 
     def _gear_height(self, ds) -> float:
         """Height of the gear above the deck plane, along the deck normal."""
