@@ -135,17 +135,18 @@ def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, sh
     C = euler_dcm_batch(e[None, :])[0]  # C_h^d
     E = euler_rate_matrix(e[None, :])[0]
     I3 = np.eye(3)
+    dt2 = 0.5 * dt * dt
     Fz = np.zeros((N_STATE, 6))
-    Fz[POS, 0:3] = -0.5 * dt * dt * I3
+    Fz[POS, 0:3] = -dt2 * I3
     Fz[VEL, 0:3] = -dt * I3
     dvdw = 2.0 * _skew(v) + 2.0 * np.outer(r, w) - np.dot(w, r) * I3 - np.outer(w, r)
     Fz[VEL, 3:6] = dt * dvdw
-    Fz[POS, 3:6] = 0.5 * dt * dt * dvdw
+    Fz[POS, 3:6] = dt2 * dvdw
     Fz[ATT, 3:6] = dt * E
     Fs = np.zeros((N_STATE, 6))
-    Fs[POS, 0:3] = 0.5 * dt * dt * C.T
+    Fs[POS, 0:3] = dt2 * C.T
     Fs[VEL, 0:3] = dt * C.T
-    Fs[ATT, 3:6] = -0.5 * dt * dt * E @ C.T
+    Fs[ATT, 3:6] = -dt2 * E @ C.T
     Fs[RATE, 3:6] = dt * I3
     return Fz @ imu_cov @ Fz.T + Fs @ ship_cov @ Fs.T
 

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve, cholesky
 
 
 def _sub(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -65,9 +64,12 @@ class SigmaWeights:
     def points(self, x: np.ndarray, P: np.ndarray, state_add=_add) -> np.ndarray:
         """The 2n+1 sigma points: x, x + rows of U, x - rows of U with U^T U = (n + lambda) P."""
         n = self.n
+        A = (self.lam + n) * P
+        if not np.all(np.isfinite(A)):
+            raise np.linalg.LinAlgError("UKF covariance is not positive definite: it holds NaN or inf")
         try:
-            U = cholesky((self.lam + n) * P, lower=False, check_finite=True)
-        except (np.linalg.LinAlgError, ValueError) as exc:
+            U = np.linalg.cholesky(A).T  # upper factor, U^T U = A (as scipy.linalg.cholesky)
+        except np.linalg.LinAlgError as exc:
             raise np.linalg.LinAlgError(f"UKF covariance is not positive definite: {exc}") from None
         d = np.vstack([np.zeros((1, n)), U, -U])
         return state_add(np.broadcast_to(x, d.shape), d)
@@ -137,11 +139,11 @@ class UnscentedKalmanFilter:
         zp, S, sig, dz = self.predict_measurement(np.asarray(R, dtype=float), hx, **hx_args)
         dx = self.residual_x(sig, self.x)
         Pxz = (dx * self.weights.wc[:, None]).T @ dz
-        cf = cho_factor(S, check_finite=True)
-        K = cho_solve(cf, Pxz.T).T  # K = Pxz S^-1 (S symmetric)
         y = self.residual_z(z[None, :], zp[None, :])[0]
+        sol = np.linalg.solve(S, np.column_stack([Pxz.T, y]))  # S^-1 [Pxz^T y]
+        K = sol[:, :-1].T  # K = Pxz S^-1 (S symmetric)
         self.x = self.state_add(self.x[None, :], (K @ y)[None, :])[0]
         P = self.P - K @ S @ K.T
         self.P = 0.5 * (P + P.T)
         self.S, self.y = S, y
-        self.nis = float(y @ cho_solve(cf, y))  # normalised innovation squared (chi2 with y.size dof)
+        self.nis = float(y @ sol[:, -1])  # normalised innovation squared (chi2 with y.size dof)

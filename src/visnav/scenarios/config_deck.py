@@ -87,7 +87,7 @@ class DeckGuidanceConfig(_M):
     k_alpha_beta: float = Field(0.45, gt=0, lt=0.5)
     touchdown_accel_mps2: float = Field(2.5, gt=0.2, le=6, description="eq. 4.1-4.3 nominal")
     hover_min_s: float = Field(5.0, ge=0, le=120)
-    max_wait_s: float = Field(30.0, ge=0, le=600, description="start anyway after this long in hover")
+    max_wait_s: float = Field(30.0, ge=0, le=600, description="after this long in hover, drop the lambda condition")
     lambda_max_deg: float = Field(45.0, gt=0, le=180, description="approach heading within this of the start")
     gamma_min_deg: float = Field(20.0, ge=0, le=80)
     gamma_max_deg: float = Field(60.0, ge=0, le=90, description="no near-horizontal terminal paths")

@@ -208,8 +208,9 @@ class DeckSimulation:
             p_des, v_des = np.array([c[0], c[1], p_ld[2]]), np.array([0.0, 0.0, g.final_descent_mps])
             a_z = g.damper_per_s * (g.final_descent_mps - v_ld[2])
             a_ff = np.array([0.0, 0.0, G]) + (G - a_z) / max(-n_up[2], 0.5) * n_up
-        if mode == "descend":
-            a_cmd_ld = a_ff
+        if mode == "descend":  # plus the spring-damper on the horizontal error (no sliding off)
+            fb = follow(p_des, np.zeros(3), np.zeros(3), p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
+            a_cmd_ld = a_ff + np.array([fb[0], fb[1], 0.0])
         else:
             a_cmd_ld = follow(p_des, v_des, a_ff, p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
         a_cmd = Rz @ a_cmd_ld
@@ -270,7 +271,8 @@ class DeckSimulation:
         near = np.linalg.norm(p_ld - self.start_rel_ld) <= g.start_tolerance_m
         ok = (near and dl <= np.radians(g.lambda_max_deg)
               and np.radians(g.gamma_min_deg) <= gam <= np.radians(g.gamma_max_deg))
-        if ok or tm >= g.max_wait_s:
+        relaxed = tm >= g.max_wait_s and gam <= np.radians(g.gamma_max_deg)  # late: any heading, never too flat
+        if ok or relaxed:
             self.approach = TauGapApproach(p_ld - c, a_td, g.k_rho, g.k_alpha_beta)
             self._a_td = a_td
             why = "conditions met" if ok else "waited max_wait_s"
