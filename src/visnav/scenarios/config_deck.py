@@ -93,7 +93,7 @@ class DeckGuidanceConfig(_M):
     gamma_max_deg: float = Field(60.0, ge=0, le=90, description="no near-horizontal terminal paths")
     start_tolerance_m: float = Field(0.15, gt=0, le=2)
     retarget_tau_s: float = Field(0.5, ge=0, le=10, description="low-pass of the re-aimed terminal path (0: none)")
-    feedforward_lead_s: float = Field(0.12, ge=0, le=1, description="trajectory acceleration taken this far "
+    feedforward_lead_s: float = Field(0.18, ge=0, le=1, description="trajectory acceleration taken this far "
                                       "ahead (about 2 zeta / omega of the attitude loop)")
     spring_per_s2: float = Field(6.0, gt=0, le=100, description="K of eq. 4.25")
     damper_per_s: float = Field(4.0, gt=0, le=100, description="B of eq. 4.25")
