@@ -67,3 +67,13 @@ def test_layout_with_fewer_than_three_lights_is_refused():
         load_scenario("deck-static", ["mission.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
     with pytest.raises(ScenarioError, match="mission.filter.gate"):
         load_scenario("deck-static", ["mission.filter.gate=-1"])
+
+
+def test_filter_restarts_when_it_locks_on_a_wrong_yaw():
+    # seed 15 starts 47 deg off in relative heading: from eq. 5.12's zero yaw the filter settles on a
+    # wrong association; the hand-over check sees its bearing innovations and restarts it
+    sim, m = _run("deck-static", 15)
+    md = sim.log.get("mode")
+    assert any("restart from relative yaw 45" in r for r in md["reason"])
+    _assert_landing(m)
+    assert m["att_error_final_approach_median_deg"] < 1.0

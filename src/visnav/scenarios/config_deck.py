@@ -108,8 +108,8 @@ class DeckStartConfig(_M):
     distance_max_m: float = Field(2.6, gt=0.3, le=50)
     elevation_min_deg: float = Field(35.0, gt=5, le=89)
     elevation_max_deg: float = Field(55.0, gt=5, le=89)
-    azimuth_spread_deg: float = Field(30.0, ge=0, le=180, description="start bearing around 'behind the deck'")
-    heading_offset_max_deg: float = Field(45.0, ge=0, le=90)
+    heading_offset_max_deg: float = Field(45.0, ge=0, le=90, description="start azimuth around 'behind the "
+                                          "deck', and so the relative heading (the vehicle faces the deck)")
     manual_s: float = Field(5.0, ge=0, le=60, description="pilot holds the start (truth) while the filter converges")
 
 

@@ -29,6 +29,7 @@ import time
 
 import numpy as np
 
+from visnav.control.multirotor import ThrottleController, attitude_command, follow
 from visnav.estimation import deck as dm
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
@@ -40,7 +41,6 @@ from visnav.sim.loop import RunResult
 from visnav.vehicles.multirotor import AttitudeThrustCommand, Multirotor, MultirotorParams
 from visnav.vision.blobs import BearingTracker
 from visnav.world.deck import SEA_STATES, DeckMotion, validate_lights
-from visnav.control.multirotor import ThrottleController, attitude_command, follow
 
 G = 9.81
 DIST_EQ_5_6_5_7 = (-0.188, -0.1631, 0.00136, 0.001605, 0.1631, 0.131, -0.366, 0.2436)  # OpenCV order
@@ -59,6 +59,8 @@ def _Rz(a: float) -> np.ndarray:
 
 
 class _Mode:
+    """What the command line and the campaign runner read: ``sim.mission.mode``."""
+
     def __init__(self):
         self.mode = "manual"
 
@@ -94,7 +96,7 @@ class DeckSimulation:
             dist, elev, az = np.sqrt(2.0), np.radians(45.0), np.pi
         rel = dist * np.array([np.cos(elev) * np.cos(az), np.cos(elev) * np.sin(az), -np.sin(elev)])
         d0 = self.deck.state(0.0)
-        self.start_rel_ld = rel + np.array([0.0, 0.0, -v.gear_offset_m * 0.0])
+        self.start_rel_ld = rel  # the hold point of the manual and hover modes (level-deck frame)
         yaw0 = np.arctan2(-rel[1], -rel[0]) + np.radians(rng[1].uniform(-5, 5))
         self.vehicle = Multirotor(self.params, d0.position + rel, yaw=yaw0)
 
