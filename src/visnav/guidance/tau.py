@@ -35,7 +35,10 @@ def tau_dot(t, x0: float, xdot0: float, k: float):
     c = 1.0 + k * xdot0 / x0 * t
     x = x0 * _pow(c, 1.0 / k)
     xd = xdot0 * _pow(c, (1.0 - k) / k)
-    xdd = xdot0**2 / x0 * (1.0 - k) * _pow(c, (1.0 - 2.0 * k) / k)
+    if k == 1.0:  # constant speed: no acceleration, even at contact
+        xdd = np.zeros_like(x)
+    else:
+        xdd = xdot0**2 / x0 * (1.0 - k) * _pow(c, (1.0 - 2.0 * k) / k)
     return x, xd, xdd
 
 
