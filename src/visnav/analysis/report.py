@@ -103,7 +103,8 @@ def plots(log, point=None) -> list[tuple[str, str]]:
 #: mission type -> module with its own report: ``plots(log, scenario) -> [(title, img)]``,
 #: ``PUBLISHED`` (metric -> seed figure) and ``PUBLISHED_SOURCE``; other missions get the PALACE plots
 MISSION_REPORTS = {"pfcm": "visnav.analysis.path_metrics", "witas-homing": "visnav.analysis.witas_metrics",
-                   "condor": "visnav.analysis.condor_report"}
+                   "condor": "visnav.analysis.condor_report",
+                   "deck": "visnav.analysis.deck_report"}
 
 
 def _report_module(sc):

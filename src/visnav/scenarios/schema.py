@@ -19,6 +19,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from visnav.scenarios.config_deck import DeckMissionConfig
 from visnav.scenarios.base import ScenarioError, _M  # noqa: F401  (re-exported: one base for every config)
 from visnav.scenarios.config_witas import WitasMissionConfig
 from visnav.scenarios.config_condor import CondorMissionConfig
@@ -270,7 +271,7 @@ class PfcmMissionConfig(_M):
 # flies another vehicle keeps its own config module (scenarios/config_<mission>.py, built on
 # scenarios/base.py) and its own simulation class (registered in sim/missions.py SIMULATIONS).
 MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig,
-                                                WitasMissionConfig, CondorMissionConfig)
+                                                WitasMissionConfig, CondorMissionConfig, DeckMissionConfig)
 MissionConfig = (
     Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]
     if len(MISSION_CONFIGS) > 1

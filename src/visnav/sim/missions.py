@@ -20,8 +20,10 @@ REGISTRY: dict[str, Builder] = {}
 #: fixed wing with a gimbal). The class takes the ``Scenario`` and offers what ``Simulation`` offers
 #: to the command line and the campaign runner: ``.sc``, ``.mission.mode`` and
 #: ``.run(progress=None) -> RunResult``.
-SIMULATIONS: dict[str, str] = {}
-SIMULATIONS["condor"] = "visnav.sim.condor_loop:CondorSimulation"
+SIMULATIONS: dict[str, str] = {
+    "condor": "visnav.sim.condor_loop:CondorSimulation",
+    "deck": "visnav.sim.deck_loop:DeckSimulation",
+}
 
 
 def simulation_class(mission_type: str):

@@ -1,0 +1,53 @@
+"""Metrics of a deck landing run (issue #6 keys), from the flight log and the touchdown record."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.analysis.metrics import finish_metrics
+from visnav.geometry.rotations import euler_to_dcm
+
+#: 95% two-sided chi-square band of the NEES of 12 states
+NEES_BAND_12 = (4.404, 23.337)
+
+
+def attitude_error_deg(e_true: np.ndarray, e_est: np.ndarray) -> np.ndarray:
+    """Rotation angle [deg] between true and estimated relative attitudes, per sample."""
+    Ct, Ce = euler_to_dcm(e_true), euler_to_dcm(e_est)
+    tr = np.einsum("nij,nij->n", Ct, Ce)
+    return np.degrees(np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0)))
+
+
+def final_approach_mask(log) -> np.ndarray:
+    es = log.get("estimate")
+    return np.isin(es["mode"], ["approach", "descend"]) if es else np.zeros(0, bool)
+
+
+def deck_metrics(sim, sim_time_s: float, wall_time_s: float, error: str | None) -> dict:
+    log, td = sim.log, sim.touchdown
+    out: dict = {"landed": bool(td is not None and td["on_deck"] and error is None)}
+    nan = float("nan")
+    out["touchdown_rel_speed_mps"] = td["rel_speed"] if td else nan
+    out["touchdown_attitude_mismatch_deg"] = td["att_mismatch"] if td else nan
+    out["touchdown_position_error_m"] = td["pos_err"] if td else nan
+    tr, es = log.get("truth"), log.get("estimate")
+    m = final_approach_mask(log)
+    if tr and m.any():
+        out["pos_error_final_approach_median_m"] = float(np.median(np.linalg.norm(
+            es["position"][m] - tr["position"][m], axis=1)))
+        out["att_error_final_approach_median_deg"] = float(np.median(attitude_error_deg(tr["euler"][m], es["euler"][m])))
+        out["vel_error_final_approach_median_mps"] = float(np.median(np.linalg.norm(
+            es["velocity"][m] - tr["velocity"][m], axis=1)))
+    else:
+        for k in ("pos_error_final_approach_median_m", "att_error_final_approach_median_deg",
+                  "vel_error_final_approach_median_mps"):
+            out[k] = nan
+    auto = np.isin(es["mode"], ["hover", "approach", "descend"]) if es else np.zeros(0, bool)
+    out["nees_mean"] = float(np.nanmean(es["nees"][auto])) if es and auto.any() else nan
+    cam = log.get("camera")
+    out["lights_used_mean"] = float(np.mean(cam["lights_used"])) if cam else nan
+    st = sim.nav.stats
+    out["blobs_rejected"] = int(st.blobs_rejected)
+    out["imu_dropped"] = int(st.imu_dropped)
+    out["touchdown_time_s"] = td["t"] if td else nan
+    return finish_metrics(out, sim_time_s, wall_time_s, error)

@@ -1,0 +1,113 @@
+"""Report of a deck landing run: estimate vs truth with +-2 sigma (seed 003 Figs. 5.12-5.17), error norms
+against distance to the deck in 1 cm bins (Figs. 5.9-5.11, 5.19-5.21) and the flown paths (Figs. 5.8, 5.18)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.analysis.deck_metrics import attitude_error_deg
+from visnav.geometry.rotations import euler_to_dcm
+
+PUBLISHED_SOURCE = "seed 003 (Holmes 2017)"
+PUBLISHED = {
+    "landed": "64 static-deck and 20 moving-deck landings (§5.3.3, §5.3.5)",
+    "touchdown_rel_speed_mps": "not reported (issue target <= 0.5 m/s)",
+    "touchdown_attitude_mismatch_deg": "not reported (issue target <= 5 deg)",
+    "touchdown_position_error_m": "touchdown errors 'on the order of a centimeter' (§6.1, estimate)",
+    "pos_error_final_approach_median_m": "generally below 10 cm (Fig. 5.20; issue target <= 5 cm)",
+    "att_error_final_approach_median_deg": "0.08-0.12 rad = 4.6-6.9 deg (Fig. 5.20; issue target <= 3 deg)",
+    "vel_error_final_approach_median_mps": "about 0.2 m/s (Fig. 5.21; issue target <= 0.1 m/s)",
+    "nees_mean": "errors inside +-2 sigma (Figs. 5.12-5.15); 95% chi2(12) band 4.40-23.34",
+}
+STATE_GROUPS = (("position", "relative position [m]", ("x", "y", "z"), 1.0),
+                ("euler", "relative attitude [deg]", ("roll", "pitch", "yaw"), np.degrees(1.0)),
+                ("velocity", "relative velocity [m/s]", ("u", "v", "w"), 1.0),
+                ("deck_rates", "deck body rates [deg/s]", ("p", "q", "r"), np.degrees(1.0)))
+
+
+def distance_and_errors(log) -> dict:
+    """Distance from the vehicle body origin to the deck origin, and the error norms of the four state groups."""
+    tr, es = log.get("truth"), log.get("estimate")
+    if not tr:
+        return {}
+    d = np.linalg.norm(tr["position"], axis=1)
+    return {"distance": d,
+            "position": np.linalg.norm(es["position"] - tr["position"], axis=1),
+            "attitude": np.radians(attitude_error_deg(tr["euler"], es["euler"])),
+            "velocity": np.linalg.norm(es["velocity"] - tr["velocity"], axis=1),
+            "deck_rates": np.linalg.norm(es["deck_rates"] - tr["deck_rates"], axis=1),
+            "approach": np.isin(es["mode"], ["approach", "descend"])}
+
+
+def binned_mean(distance: np.ndarray, value: np.ndarray, width: float = 0.01):
+    """Mean of ``value`` in bins of ``width`` metres of ``distance`` (the black lines of Figs. 5.9-5.11)."""
+    if distance.size == 0:
+        return np.zeros(0), np.zeros(0)
+    idx = np.floor(distance / width).astype(int)
+    n = np.bincount(idx)
+    s = np.bincount(idx, weights=value)
+    ok = n > 0
+    return (np.nonzero(ok)[0] + 0.5) * width, s[ok] / n[ok]
+
+
+def relative_path(log) -> np.ndarray:
+    """Vehicle position relative to the deck origin in the deck frame (N, 3)."""
+    veh, dk = log.get("vehicle"), log.get("deck")
+    C = euler_to_dcm(dk["euler"])
+    return np.einsum("nji,nj->ni", C, veh["position"] - dk["position"])
+
+
+def plots(log, scenario=None) -> list[tuple[str, str]]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from visnav.analysis.report import _fig_to_img
+
+    out = []
+    tr, es = log.get("truth"), log.get("estimate")
+    if not tr:
+        return out
+    t = tr["t"]
+    for key, title, names, scale in STATE_GROUPS:
+        fig, ax = plt.subplots(3, 1, figsize=(11, 6.5), sharex=True)
+        j0 = {"position": 0, "euler": 3, "velocity": 6, "deck_rates": 9}[key]
+        for i in range(3):
+            sig = es["sigma"][:, j0 + i] * scale
+            err = (es[key][:, i] - tr[key][:, i]) * scale
+            if key == "euler":
+                err = np.degrees((np.radians(err) + np.pi) % (2 * np.pi) - np.pi)
+            ax[i].plot(t, es[key][:, i] * scale, lw=1, label="estimate")
+            ax[i].plot(t, tr[key][:, i] * scale, lw=1, label="truth")
+            ax[i].plot(t, err, lw=1, label="error")
+            ax[i].plot(t, 2 * sig, "k", lw=0.6, label="+-2 sigma")
+            ax[i].plot(t, -2 * sig, "k", lw=0.6)
+            ax[i].set_ylabel(names[i])
+        ax[0].set_title(f"Estimated {title} of the deck in the vehicle frame")
+        ax[0].legend(ncol=4, fontsize=8)
+        ax[2].set_xlabel("t [s]")
+        out.append((f"Estimate vs truth: {title}", _fig_to_img(fig)))
+
+    de = distance_and_errors(log)
+    fig, ax = plt.subplots(2, 2, figsize=(11, 7))
+    for a, (k, lab) in zip(ax.ravel(), (("position", "m"), ("attitude", "rad"), ("velocity", "m/s"),
+                                        ("deck_rates", "rad/s"))):
+        m = de["approach"] if de["approach"].any() else np.ones_like(de["approach"])
+        a.plot(de["distance"][m], de[k][m], color="0.6", lw=0.8)
+        x, y = binned_mean(de["distance"][m], de[k][m])
+        a.plot(x, y, "k", lw=1.2, label="mean in 1 cm bins")
+        a.set_xlabel("distance to the deck [m]"), a.set_ylabel(f"|{k} error| [{lab}]")
+        a.invert_xaxis()
+    ax[0, 0].legend()
+    out.append(("Error norms against distance (final approach)", _fig_to_img(fig)))
+
+    rp = relative_path(log)
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.5))
+    ax[0].plot(np.hypot(rp[:, 0], rp[:, 1]), -rp[:, 2])
+    ax[0].set_xlabel("horizontal distance to the deck [m]"), ax[0].set_ylabel("height above the deck [m]")
+    ax[1].plot(rp[:, 1], rp[:, 0])
+    ax[1].plot(0, 0, "r+", ms=14)
+    ax[1].set_xlabel("deck y [m]"), ax[1].set_ylabel("deck x [m]"), ax[1].axis("equal")
+    out.append(("Flown path relative to the deck", _fig_to_img(fig)))
+    return out

@@ -1,0 +1,229 @@
+"""The relative deck model of seed 003 (Holmes 2017), written for batches of sigma points.
+
+State (12), everything in the vehicle (helicopter) body frame h, FRD:
+
+    x = [ r_d/h (3),  e = (phi, theta, psi) (3),  v = dr/dt seen from h (3),  w_d = (p_d, q_d, r_d) (3) ]
+
+* ``r``: position of the deck origin relative to the vehicle, h components (eq. 2.2);
+* ``e``: the 3-2-1 Euler angles of T_h T_d^T, the rotation from the deck to the vehicle frame
+  (eq. 2.8-2.12). In this package's convention ``euler_to_dcm(e) = C_h^d`` (vehicle -> deck) and
+  ``C_d^h = T_h T_d^T = euler_to_dcm(e)^T``;
+* ``v``: the derivative of r as seen from the rotating vehicle frame (eq. 2.5-2.6);
+* ``w_d``: the deck's own body rates, deck frame (the [p_d q_d r_d] of eq. 2.14), modelled constant.
+
+Prediction (eq. 3.1-3.5): zero deck acceleration, vehicle acceleration from the IMU,
+``a_h = z_acc + T_g g`` (eq. 3.4 with the accelerometer's specific force convention), the angular
+acceleration of the vehicle from the numerical derivative of the gyro rates:
+
+    dv/dt = -a_h - dw/dt x r - 2 w x v - w x (w x r)                      (eq. 3.5)
+    de/dt = E(e) (w - C_d^h w_d)                                           (eq. 3.2 / 2.14)
+
+Measurements of light i at b_i (deck frame), camera at rho with rotation T_cam (body -> camera):
+
+    s_i = T_cam (r + C_d^h b_i - rho)                                      (eq. 2.26)
+    ds_i/dt = T_cam (v - Omega C_d^h b_i),  Omega = skew(w - C_d^h w_d)   (eq. 2.28-2.29)
+    bearings = (atan(s_x/s_z), atan(s_y/s_z)),  rates = eq. 2.27
+
+The thesis' camera axes are (x optical axis, y right, z down); ours are OpenCV's (x right, y down,
+z optical axis), so its (s_x, s_y, s_z) is our (s_z, s_x, s_y). Eq. 2.28 as printed adds
+``w_h x r`` to dr/dt: that is the inertial derivative; the camera turns with the vehicle and sees
+the rotating-frame derivative, which is the state v itself, so the term is not added here
+(checked against finite differences of eq. 2.26 in the tests).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+N_STATE = 12
+POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+
+
+def euler_dcm_batch(e: np.ndarray) -> np.ndarray:
+    """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3)."""
+    cf, sf = np.cos(e[:, 0]), np.sin(e[:, 0])
+    ct, st = np.cos(e[:, 1]), np.sin(e[:, 1])
+    cp, sp = np.cos(e[:, 2]), np.sin(e[:, 2])
+    C = np.empty((e.shape[0], 3, 3))
+    C[:, 0, 0] = ct * cp
+    C[:, 0, 1] = -cf * sp + sf * st * cp
+    C[:, 0, 2] = sf * sp + cf * st * cp
+    C[:, 1, 0] = ct * sp
+    C[:, 1, 1] = cf * cp + sf * st * sp
+    C[:, 1, 2] = -sf * cp + cf * st * sp
+    C[:, 2, 0] = -st
+    C[:, 2, 1] = sf * ct
+    C[:, 2, 2] = cf * ct
+    return C
+
+
+def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
+    """E(e) of eq. 2.13 (body rates -> Euler angle rates) for a batch (N, 3) -> (N, 3, 3)."""
+    cf, sf = np.cos(e[:, 0]), np.sin(e[:, 0])
+    ct, tt = np.cos(e[:, 1]), np.tan(e[:, 1])
+    E = np.zeros((e.shape[0], 3, 3))
+    E[:, 0, 0] = 1.0
+    E[:, 0, 1] = sf * tt
+    E[:, 0, 2] = cf * tt
+    E[:, 1, 1] = cf
+    E[:, 1, 2] = -sf
+    E[:, 2, 1] = sf / ct
+    E[:, 2, 2] = cf / ct
+    return E
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b along the last axis with broadcasting (numpy's cross is slow for small batches)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack(np.broadcast_arrays(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+@dataclass(frozen=True)
+class ImuInput:
+    """What drives one prediction: specific force and rates (body), their rate derivative, and
+    gravity in the body frame from the autopilot's roll and pitch (the T_g g of eq. 3.4)."""
+
+    accel: np.ndarray
+    gyro: np.ndarray
+    gyro_dot: np.ndarray
+    gravity_body: np.ndarray
+
+
+def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
+    """Discrete eq. 3.1-3.5 for a batch of states (N, 12): one explicit step of length ``dt``."""
+    r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
+    w, wdot = u.gyro, u.gyro_dot
+    a_h = u.accel + u.gravity_body  # vehicle's inertial acceleration, h components (eq. 3.4)
+    wxr = _cross(w, r)
+    vdot = -a_h - _cross(wdot, r) - 2.0 * _cross(w, v) - _cross(w, wxr)  # eq. 3.5
+    C = euler_dcm_batch(e)  # C_h^d
+    w_rel = w - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
+    edot = np.einsum("nij,nj->ni", euler_rate_matrix(e), w_rel)
+    out = np.empty_like(sig)
+    out[:, POS] = r + v * dt + 0.5 * vdot * dt * dt
+    out[:, ATT] = e + edot * dt
+    out[:, VEL] = v + vdot * dt
+    out[:, RATE] = wd
+    return out
+
+
+def ship_acceleration_bound(amplitude, omega, sigma_amplitude=0.0, sigma_omega=0.0) -> np.ndarray:
+    """Peak acceleration of a sinusoid of uncertain amplitude and frequency, eq. 3.7."""
+    a = np.asarray(amplitude, float) + 3.0 * np.asarray(sigma_amplitude, float)
+    w = np.asarray(omega, float) + 3.0 * np.asarray(sigma_omega, float)
+    return a * w * w
+
+
+def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, ship_cov: np.ndarray) -> np.ndarray:
+    """Q = F_z Sigma_imu F_z^T + F_ship Sigma_ship F_ship^T (eq. 3.8) at the mean ``x``.
+
+    ``F_z`` is the Jacobian of one step of eq. 3.5/3.2 with respect to the accelerometer and gyro
+    readings (6), ``F_ship`` the one with respect to the deck's linear (deck frame) and angular
+    accelerations (6) that the zero-acceleration model leaves out. ``imu_cov`` (6, 6) is the
+    per-sample covariance of (accel, gyro); ``ship_cov`` (6, 6) that of the deck accelerations.
+    The numerical derivative of the rates is not differentiated: its noise telescopes over steps.
+    """
+    r, e, v = x[POS], x[ATT], x[VEL]
+    w = u.gyro
+    C = euler_dcm_batch(e[None, :])[0]  # C_h^d
+    E = euler_rate_matrix(e[None, :])[0]
+    I3 = np.eye(3)
+    dt2 = 0.5 * dt * dt
+    Fz = np.zeros((N_STATE, 6))
+    Fz[POS, 0:3] = -dt2 * I3
+    Fz[VEL, 0:3] = -dt * I3
+    dvdw = 2.0 * _skew(v) + 2.0 * np.outer(r, w) - np.dot(w, r) * I3 - np.outer(w, r)
+    Fz[VEL, 3:6] = dt * dvdw
+    Fz[POS, 3:6] = dt2 * dvdw
+    Fz[ATT, 3:6] = dt * E
+    Fs = np.zeros((N_STATE, 6))
+    Fs[POS, 0:3] = dt2 * C.T
+    Fs[VEL, 0:3] = dt * C.T
+    Fs[ATT, 3:6] = -dt2 * E @ C.T
+    Fs[RATE, 3:6] = dt * I3
+    return Fz @ imu_cov @ Fz.T + Fs @ ship_cov @ Fs.T
+
+
+@dataclass(frozen=True)
+class CameraGeometry:
+    """Camera pose in the vehicle frame: position ``rho`` (FRD, m) and rotation body -> camera."""
+
+    rho: np.ndarray
+    T_cam: np.ndarray  # 3x3, OpenCV camera axes
+
+
+def light_vectors(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry):
+    """s_i (eq. 2.26) and ds_i/dt (eq. 2.28) in camera axes for every state and light: (N, L, 3) each."""
+    r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
+    C = euler_dcm_batch(e)  # C_h^d
+    b_h = np.einsum("nji,lj->nli", C, lights)  # C_d^h b_i
+    p = r[:, None, :] + b_h - cam.rho
+    s = p @ cam.T_cam.T
+    return s, b_h, C
+
+
+def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray):
+    """Predicted bearings (eq. 2.25) and bearing rates (eq. 2.27) of every light: (N, L, 2) each."""
+    s, b_h, C = light_vectors(sig, lights, cam)
+    wd = sig[:, RATE]
+    w_rel = gyro - np.einsum("nji,nj->ni", C, wd)  # eq. 2.29
+    pdot = sig[:, None, VEL] - _cross(w_rel[:, None, :], b_h)
+    sdot = pdot @ cam.T_cam.T
+    sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
+    dx, dy, dz = sdot[..., 0], sdot[..., 1], sdot[..., 2]
+    bear = np.stack([np.arctan(sx / sz), np.arctan(sy / sz)], axis=-1)
+    rate = np.stack([(dx * sz - sx * dz) / (sx * sx + sz * sz), (dy * sz - sy * dz) / (sy * sy + sz * sz)], axis=-1)
+    return bear, rate
+
+
+def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray,
+                      idx: np.ndarray, rate_idx: np.ndarray) -> np.ndarray:
+    """Stacked measurement (eq. 3.10): bearings of lights ``idx``, then rates of lights ``rate_idx``."""
+    bear, rate = bearings_and_rates(sig, lights, cam, gyro)
+    return np.concatenate([bear[:, idx, :].reshape(len(sig), -1), rate[:, rate_idx, :].reshape(len(sig), -1)], axis=1)
+
+
+def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry) -> np.ndarray:
+    """Bearings of every light (N, 2L), for data association."""
+    s, _, _ = light_vectors(sig, lights, cam)
+    return np.stack([np.arctan(s[..., 0] / s[..., 2]), np.arctan(s[..., 1] / s[..., 2])], axis=-1).reshape(len(sig), -1)
+
+
+def wrap_state(sig: np.ndarray) -> np.ndarray:
+    """Keep the relative Euler angles' roll and yaw in (-pi, pi]."""
+    out = np.array(sig, dtype=float, copy=True)
+    out[..., [3, 5]] = np.mod(out[..., [3, 5]] + np.pi, 2 * np.pi) - np.pi
+    return out
+
+
+def residual_x(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    d = a - b
+    d[..., 3:6] = np.mod(d[..., 3:6] + np.pi, 2 * np.pi) - np.pi
+    return d
+
+
+def state_add(x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+    return wrap_state(x + dx)
+
+
+def initial_state_static(position=(1.0, 0.0, 1.0), sigma_pos_m: float = 0.5, sigma_att_rad: float = np.radians(20),
+                         sigma_vel_mps: float = 0.05, sigma_rate_rad_s: float = np.radians(2)):
+    """Initial estimate and covariance of the static-deck flights, eq. 5.12-5.17."""
+    x0 = np.zeros(N_STATE)
+    x0[POS] = position  # eq. 5.12: 1 m ahead of and 1 m below the vehicle
+    P0 = np.diag(np.repeat([sigma_pos_m**2, sigma_att_rad**2, sigma_vel_mps**2, sigma_rate_rad_s**2], 3))
+    return x0, P0
+
+
+def initial_covariance_sea_state(amplitude_lin, omega_lin, amplitude_ang, omega_ang) -> np.ndarray:
+    """Initial covariance from the sea state (eq. 3.14-3.15): A^2/2 and A^2 w^2/2 per axis."""
+    al, wl = np.asarray(amplitude_lin, float), np.asarray(omega_lin, float)
+    aa, wa = np.asarray(amplitude_ang, float), np.asarray(omega_ang, float)
+    return np.diag(np.concatenate([al**2 / 2, aa**2 / 2, al**2 * wl**2 / 2, aa**2 * wa**2 / 2]))

@@ -1,0 +1,124 @@
+"""Scenario config of the ship-deck landing mission (seed 003, issue #6): ``[mission] type = "deck"``."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, field_validator
+
+from visnav.scenarios.base import _M
+
+
+class DeckWorldConfig(_M):
+    motion: Literal["static", "moving"] = "static"
+    sea_state: Literal["calm", "stewart", "ship_ss4"] = "stewart"
+    motion_scale: float = Field(1.0, ge=0, le=3, description="multiplies the sea state's amplitudes")
+    sinusoids: int = Field(1, ge=1, le=3, description="sinusoids per axis (eq. 5.11)")
+    size_m: float = Field(0.6, gt=0.1, le=30, description="side of the square deck plate")
+    lights_m: list[list[float]] = Field(
+        default_factory=lambda: [[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.0], [0.058, 0.0, 0.0]],
+        description="deck lights, deck frame (eq. 5.10)")
+
+    @field_validator("lights_m")
+    @classmethod
+    def _lights(cls, v):
+        from visnav.world.deck import validate_lights
+
+        validate_lights(v)
+        return v
+
+
+class MultirotorConfig(_M):
+    mass_kg: float = Field(2.4, gt=0.2, le=50)
+    thrust_to_weight: float = Field(2.0, gt=1.2, le=5)
+    attitude_bandwidth_rad_s: float = Field(12.0, gt=1, le=60)
+    attitude_damping: float = Field(0.8, gt=0.1, le=2)
+    thrust_time_constant_s: float = Field(0.04, gt=0, le=0.5)
+    drag_per_s: float = Field(0.3, ge=0, le=3)
+    gear_offset_m: float = Field(0.17, ge=0, le=1)
+    max_tilt_deg: float = Field(20.0, gt=2, le=40)
+
+
+class DeckCameraConfig(_M):
+    width_px: int = Field(752, ge=64, le=4096)
+    height_px: int = Field(480, ge=64, le=4096)
+    focal_px: float = Field(420.0, gt=50, le=5000)
+    distortion: bool = Field(True, description="lens distortion of eq. 5.6-5.7")
+    rate_hz: float = Field(30.0, gt=1, le=120)
+    position_m: list[float] = Field(default_factory=lambda: [0.101, 0.008, 0.11],
+                                    description="camera in the body frame (eq. 5.9; z read as 11.0 cm)")
+    depression_deg: float = Field(43.5, ge=0, le=90, description="optical axis below the body x axis (eq. 5.9: 0.76 rad)")
+    yaw_deg: float = Field(-3.4, ge=-45, le=45, description="eq. 5.9: -0.06 rad")
+    noise_gray: float = Field(2.0, ge=0, le=30)
+    blob_threshold: int = Field(150, ge=1, le=254)
+    extra_blobs_deck_m: list[list[float]] = Field(default_factory=list,
+                                                  description="bright points that are not deck lights (deck frame)")
+    hide_light: int = Field(-1, ge=-1, le=63, description="index of a light that drops out of view")
+    hide_after_s: float = Field(0.0, ge=0, le=3600)
+
+
+class DeckImuConfig(_M):
+    accel_noise_mps2: float = Field(0.05, ge=0, le=2)
+    gyro_noise_rad_s: float = Field(0.003, ge=0, le=0.5)
+    attitude_noise_deg: float = Field(0.1, ge=0, le=5, description="autopilot roll/pitch used for T_g g (eq. 3.4)")
+
+
+class DeckFilterConfig(_M):
+    alpha: float = Field(0.1, gt=0, le=1)
+    beta: float = Field(2.0, ge=0, le=10)
+    kappa: float = Field(0.0, ge=-11, le=10)
+    bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="sigma of each bearing (§3.1.2)")
+    bearing_rate_noise_deg_s: float = Field(2.0, gt=0, le=100, description="sigma of each bearing rate (§3.1.2)")
+    gate: float = Field(13.8, gt=0, le=1000, description="Mahalanobis gate / dummy cost (eq. 3.12)")
+    init: Literal["static", "truth"] = Field("static", description="eq. 5.12-5.17, or truth with small sigmas (§5.3.5)")
+    converged_bearing_rms_deg: float = Field(0.2, gt=0, le=10, description="hand over only when the RMS bearing "
+                                             "innovation of the last second is below this")
+    yaw_hypotheses_deg: list[float] = Field(default_factory=lambda: [45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0],
+                                            description="relative yaws the filter restarts from, in turn, while "
+                                                        "it has not converged (manual flight)")
+    ship_accel_scale: float = Field(1.0, ge=0, le=100, description="multiplies the eq. 3.7 bound in Q")
+    imu_noise_scale: float = Field(1.0, ge=0, le=100)
+
+
+class DeckGuidanceConfig(_M):
+    duration_s: float = Field(15.0, gt=1, le=120, description="static deck: trajectory duration (§5.3.3)")
+    k_static: float = Field(0.3, gt=0, lt=0.5)
+    k_rho: float = Field(0.5, gt=0, le=0.5)
+    k_alpha_beta: float = Field(0.45, gt=0, lt=0.5)
+    touchdown_accel_mps2: float = Field(2.5, gt=0.2, le=6, description="eq. 4.1-4.3 nominal")
+    hover_min_s: float = Field(5.0, ge=0, le=120)
+    max_wait_s: float = Field(30.0, ge=0, le=600, description="after this long in hover, drop the lambda condition")
+    lambda_max_deg: float = Field(45.0, gt=0, le=180, description="approach heading within this of the start")
+    gamma_min_deg: float = Field(20.0, ge=0, le=80)
+    gamma_max_deg: float = Field(60.0, ge=0, le=90, description="no near-horizontal terminal paths")
+    start_tolerance_m: float = Field(0.15, gt=0, le=2)
+    retarget_tau_s: float = Field(0.5, ge=0, le=10, description="low-pass of the re-aimed terminal path (0: none)")
+    feedforward_lead_s: float = Field(0.18, ge=0, le=1, description="trajectory acceleration taken this far "
+                                      "ahead (about 2 zeta / omega of the attitude loop)")
+    spring_per_s2: float = Field(6.0, gt=0, le=100, description="K of eq. 4.25")
+    damper_per_s: float = Field(4.0, gt=0, le=100, description="B of eq. 4.25")
+    overshoot_m: float = Field(0.04, ge=0, le=0.5, description="static deck: aim this far below the deck surface")
+    overshoot_moving_m: float = Field(0.015, ge=0, le=0.5, description="moving deck: the same (k_rho = 0.5 ends "
+                                      "at a_td, so the speed at contact is about sqrt(2 a_td overshoot))")
+    final_descent_mps: float = Field(0.25, gt=0, le=2)
+
+
+class DeckStartConfig(_M):
+    distance_min_m: float = Field(1.4, gt=0.3, le=50)
+    distance_max_m: float = Field(2.6, gt=0.3, le=50)
+    elevation_min_deg: float = Field(35.0, gt=5, le=89)
+    elevation_max_deg: float = Field(55.0, gt=5, le=89)
+    heading_offset_max_deg: float = Field(45.0, ge=0, le=90, description="start azimuth around 'behind the "
+                                          "deck', and so the relative heading (the vehicle faces the deck)")
+    manual_s: float = Field(5.0, ge=0, le=60, description="pilot holds the start (truth) while the filter converges")
+
+
+class DeckMissionConfig(_M):
+    type: Literal["deck"] = "deck"
+    deck: DeckWorldConfig = DeckWorldConfig()
+    vehicle: MultirotorConfig = MultirotorConfig()
+    camera: DeckCameraConfig = DeckCameraConfig()
+    imu: DeckImuConfig = DeckImuConfig()
+    filter: DeckFilterConfig = DeckFilterConfig()
+    guidance: DeckGuidanceConfig = DeckGuidanceConfig()
+    start: DeckStartConfig = DeckStartConfig()

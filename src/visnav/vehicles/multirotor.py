@@ -1,0 +1,106 @@
+"""A rigid-body multirotor (Y6 hexacopter preset) behind an attitude + thrust autopilot (seed 003 §2.2.2, §5.1).
+
+The thesis' vehicle is a Y6 whose Pixhawk tracks commanded roll, pitch, yaw rate and throttle;
+the Odroid closes the outer loops. Modelled here:
+
+* roll and pitch follow their commands as second-order systems of finite bandwidth
+  (natural frequency ``attitude_omega``, damping ``attitude_zeta``), yaw rate as a first-order lag;
+* thrust along body -z follows ``throttle * max_thrust`` through a first-order lag, multiplied by
+  the ground-effect factor of Cheeseman and Bennett, ``1 / (1 - (R / 4 z)^2)`` (z the rotor height
+  above the surface below, capped);
+* translation: m a = m g + C_b^n [0, 0, -T] - m c_d v (linear drag); the landing gear is
+  ``gear_offset`` below the body origin along body z.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from visnav.geometry.rotations import euler_rates_to_body_rates, euler_to_dcm
+
+G = 9.81
+
+
+@dataclass(frozen=True)
+class MultirotorParams:
+    mass: float = 2.4  # kg (3DR Y6 with Odroid and camera)
+    thrust_to_weight: float = 2.0
+    attitude_omega: float = 12.0  # rad/s
+    attitude_zeta: float = 0.8
+    yaw_rate_tau: float = 0.15  # s
+    thrust_tau: float = 0.04  # s
+    drag: float = 0.3  # 1/s
+    rotor_radius: float = 0.127  # m (10 in propellers)
+    rotor_height: float = 0.05  # rotor plane above the body origin [m]
+    gear_offset: float = 0.17  # landing gear below the body origin [m] (§5.3.3)
+
+    @property
+    def max_thrust(self) -> float:
+        return self.thrust_to_weight * self.mass * G
+
+    @property
+    def hover_throttle(self) -> float:
+        return 1.0 / self.thrust_to_weight
+
+    def ground_effect(self, rotor_height_m: float) -> float:
+        """Thrust ratio in / out of ground effect (Cheeseman-Bennett), capped at 1.3."""
+        z = max(rotor_height_m, 1e-3)
+        q = (self.rotor_radius / (4.0 * z)) ** 2
+        return float(min(1.0 / (1.0 - min(q, 0.9)), 1.3))
+
+
+@dataclass(frozen=True)
+class AttitudeThrustCommand:
+    t: float
+    roll: float  # rad
+    pitch: float  # rad
+    yaw_rate: float  # rad/s
+    throttle: float  # 0..1
+
+
+@dataclass
+class MultirotorState:
+    position: np.ndarray
+    velocity: np.ndarray
+    euler: np.ndarray
+    euler_rate: np.ndarray
+    thrust: float
+    specific_force: np.ndarray
+    body_rates: np.ndarray
+
+
+class Multirotor:
+    def __init__(self, params: MultirotorParams, position, yaw: float = 0.0, velocity=(0.0, 0.0, 0.0)):
+        self.p = params
+        T0 = params.mass * G
+        self.state = MultirotorState(position=np.array(position, float), velocity=np.array(velocity, float),
+                                     euler=np.array([0.0, 0.0, yaw]), euler_rate=np.zeros(3), thrust=T0,
+                                     specific_force=np.array([0.0, 0.0, -G]), body_rates=np.zeros(3))
+
+    def step(self, cmd: AttitudeThrustCommand, dt: float, rotor_height_m: float = np.inf) -> MultirotorState:
+        p, s = self.p, self.state
+        wn, z = p.attitude_omega, p.attitude_zeta
+        e, ed = s.euler.copy(), s.euler_rate.copy()
+        target = np.array([cmd.roll, cmd.pitch])
+        edd = wn * wn * (target - e[:2]) - 2.0 * z * wn * ed[:2]
+        ed[:2] += edd * dt  # semi-implicit Euler
+        ed[2] += (cmd.yaw_rate - ed[2]) * min(dt / p.yaw_rate_tau, 1.0)
+        e += ed * dt
+        ge = p.ground_effect(rotor_height_m)
+        T_cmd = float(np.clip(cmd.throttle, 0.0, 1.0)) * p.max_thrust * ge
+        thrust = s.thrust + (T_cmd - s.thrust) * min(dt / p.thrust_tau, 1.0)
+        C = euler_to_dcm(e)
+        f_n = C @ np.array([0.0, 0.0, -thrust / p.mass]) - p.drag * s.velocity  # specific force, NED
+        acc = f_n + np.array([0.0, 0.0, G])
+        vel = s.velocity + acc * dt
+        pos = s.position + (s.velocity + vel) * 0.5 * dt
+        self.state = MultirotorState(position=pos, velocity=vel, euler=e, euler_rate=ed, thrust=thrust,
+                                     specific_force=C.T @ f_n, body_rates=np.asarray(euler_rates_to_body_rates(e, ed)))
+        return self.state
+
+    def gear_point(self) -> np.ndarray:
+        """NED position of the landing gear (``gear_offset`` below the body origin along body z)."""
+        C = euler_to_dcm(self.state.euler)
+        return self.state.position + C @ np.array([0.0, 0.0, self.p.gear_offset])

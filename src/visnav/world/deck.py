@@ -1,0 +1,119 @@
+"""A moving landing deck: six sinusoidal degrees of freedom (seed 003 eq. 5.11) and its lights.
+
+Each degree of freedom (surge, sway, heave in metres along the deck's nominal heading axes; roll,
+pitch, yaw in radians) follows a sum of up to three sinusoids, as the thesis' Stewart platform:
+
+    d(t) = sum_n a_n sin(w_n t + phi_n)                                     (eq. 5.11)
+
+Sea-state presets give, per axis, a nominal amplitude and frequency with their standard
+deviations; the same numbers size the filter's process noise (eq. 3.7) and its sea-state
+initial covariance (eq. 3.14-3.15). The deck frame is FRD-like: x forward, y starboard, z down,
+origin at the landing point; the lights lie in it (eq. 5.10 by default).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from visnav.geometry.rotations import euler_rates_to_body_rates, euler_to_dcm
+
+#: the four LEDs of eq. 5.10 (deck frame, m)
+LEDS_EQ_5_10 = np.array([[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.0], [0.058, 0.0, 0.0]])
+
+#: axis order of every (6,) array here
+AXES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+
+# name -> (amplitude [m, m, m, rad, rad, rad], omega [rad/s], sigma_amplitude, sigma_omega)
+SEA_STATES: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {
+    "calm": (np.zeros(6), np.zeros(6), np.zeros(6), np.zeros(6)),
+    # the lab Stewart platform (Fig. 5.5 style: a few cm, a few degrees, periods of 5-10 s)
+    "stewart": (np.array([0.04, 0.04, 0.04, np.radians(6), np.radians(6), np.radians(3)]),
+                np.array([0.7, 0.8, 1.0, 0.9, 0.7, 0.5]),
+                np.array([0.01, 0.01, 0.01, np.radians(1), np.radians(1), np.radians(0.5)]),
+                np.array([0.1, 0.1, 0.1, 0.1, 0.1, 0.05])),
+    # a frigate in sea state 4 (full scale, for the process-noise sizing of eq. 3.7)
+    "ship_ss4": (np.array([0.5, 0.4, 0.8, np.radians(5), np.radians(2), np.radians(1)]),
+                 np.array([0.5, 0.5, 0.6, 0.5, 0.6, 0.4]),
+                 np.array([0.1, 0.1, 0.2, np.radians(1), np.radians(0.5), np.radians(0.3)]),
+                 np.array([0.05, 0.05, 0.05, 0.05, 0.05, 0.05])),
+}
+
+
+def validate_lights(lights) -> np.ndarray:
+    """A deck light layout (L, 3) in metres; fewer than 3 lights, or repeated / non-finite ones, refused."""
+    b = np.asarray(lights, dtype=float)
+    if b.ndim != 2 or b.shape[1] != 3:
+        raise ValueError(f"deck lights must be a list of [x, y, z] points, got shape {b.shape}")
+    if b.shape[0] < 3:
+        raise ValueError(f"deck layout has {b.shape[0]} lights; the relative pose needs at least 3")
+    if not np.all(np.isfinite(b)):
+        raise ValueError("deck light positions must be finite")
+    d = np.linalg.norm(b[:, None] - b[None], axis=-1) + np.eye(len(b))
+    if np.any(d < 1e-3):
+        raise ValueError("two deck lights are closer than 1 mm")
+    return b
+
+
+@dataclass(frozen=True)
+class DeckState:
+    t: float
+    position: np.ndarray  # NED of the deck origin (landing point) [m]
+    velocity: np.ndarray  # NED [m/s]
+    euler: np.ndarray  # deck attitude (roll, pitch, yaw) [rad]
+    body_rates: np.ndarray  # deck body rates (deck frame) [rad/s]
+    C: np.ndarray  # C_d^n (deck -> NED)
+
+
+class DeckMotion:
+    """Sum-of-sinusoids motion of eq. 5.11 around a nominal position and heading."""
+
+    def __init__(self, amplitude, omega, phase, position=(0.0, 0.0, 0.0), heading: float = 0.0):
+        self.a = np.atleast_2d(np.asarray(amplitude, float))  # (6, N)
+        self.w = np.atleast_2d(np.asarray(omega, float))
+        self.ph = np.atleast_2d(np.asarray(phase, float))
+        if self.a.shape[0] != 6 or self.a.shape != self.w.shape or self.a.shape != self.ph.shape:
+            raise ValueError("deck motion needs amplitude, omega and phase arrays of shape (6, N)")
+        if self.a.shape[1] > 3:
+            raise ValueError("the deck motion takes at most 3 sinusoids per axis (eq. 5.11)")
+        self.p0 = np.asarray(position, float)
+        self.heading = float(heading)
+        c, s = np.cos(heading), np.sin(heading)
+        self._Rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    @classmethod
+    def static(cls, position=(0.0, 0.0, 0.0), heading: float = 0.0) -> "DeckMotion":
+        z = np.zeros((6, 1))
+        return cls(z, z, z, position, heading)
+
+    @classmethod
+    def from_sea_state(cls, name: str, rng: np.random.Generator, n_sinusoids: int = 1, scale: float = 1.0,
+                       position=(0.0, 0.0, 0.0), heading: float = 0.0) -> "DeckMotion":
+        """Draw amplitudes and frequencies around the preset's nominal values, phases uniform."""
+        if name not in SEA_STATES:
+            raise ValueError(f"unknown sea state {name!r}; known: {', '.join(SEA_STATES)}")
+        if not 1 <= n_sinusoids <= 3:
+            raise ValueError("n_sinusoids must be 1, 2 or 3 (eq. 5.11)")
+        A, W, sA, sW = SEA_STATES[name]
+        n = n_sinusoids
+        amp = np.abs(A[:, None] + sA[:, None] * rng.standard_normal((6, n))) * scale / n
+        om = np.abs(W[:, None] + sW[:, None] * rng.standard_normal((6, n)))
+        ph = rng.uniform(0.0, 2 * np.pi, (6, n))
+        return cls(amp, om, ph, position, heading)
+
+    def displacement(self, t: float):
+        """(d, d_dot) of the six axes at time t (eq. 5.11 and its derivative)."""
+        arg = self.w * t + self.ph
+        d = np.sum(self.a * np.sin(arg), axis=1)
+        dd = np.sum(self.a * self.w * np.cos(arg), axis=1)
+        return d, dd
+
+    def state(self, t: float) -> DeckState:
+        d, dd = self.displacement(t)
+        pos = self.p0 + self._Rz @ d[:3]
+        vel = self._Rz @ dd[:3]
+        euler = np.array([d[3], d[4], self.heading + d[5]])
+        rates = euler_rates_to_body_rates(euler, dd[3:])
+        return DeckState(t=t, position=pos, velocity=vel, euler=euler, body_rates=np.asarray(rates),
+                         C=euler_to_dcm(euler))

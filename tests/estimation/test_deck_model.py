@@ -1,0 +1,92 @@
+"""The relative deck model (seed 003 eq. 2.25-2.29, 3.1-3.8, 5.12-5.17) against world-frame kinematics."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from visnav.estimation import deck as dm
+from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
+
+LIGHTS = np.array([[-0.128, 0, 0], [0, -0.102, 0], [0, 0.102, 0], [0.058, 0, 0]])
+CAM = dm.CameraGeometry(rho=np.array([0.101, 0.008, 0.11]),
+                        T_cam=np.array([[0, 1, 0], [-np.sin(0.76), 0, np.cos(0.76)], [np.cos(0.76), 0, np.sin(0.76)]]))
+G = np.array([0.0, 0.0, 9.81])
+W_H = np.array([0.3, -0.2, 0.4])  # vehicle body rates (constant)
+W_D = np.array([0.1, 0.15, -0.05])  # deck body rates (constant)
+A_H = np.array([0.5, -0.3, -0.8])  # vehicle acceleration (NED, constant)
+V_D = np.array([0.2, 0.1, -0.05])  # deck velocity (constant: zero deck acceleration)
+
+
+def world(t):
+    Ch = euler_to_dcm([0.1, -0.05, 0.3]) @ Rotation.from_rotvec(W_H * t).as_matrix()  # C_h^n
+    Cd = euler_to_dcm([0.05, 0.08, 0.9]) @ Rotation.from_rotvec(W_D * t).as_matrix()  # C_d^n
+    ph = np.array([-1.0, 0.2, -1.2]) + np.array([0.3, 0.0, 0.1]) * t + 0.5 * A_H * t * t
+    vh = np.array([0.3, 0.0, 0.1]) + A_H * t
+    pd = np.array([0.1, 0.0, 0.0]) + V_D * t
+    return Ch, Cd, ph, vh, pd
+
+
+def truth_state(t):
+    Ch, Cd, ph, vh, pd = world(t)
+    r = Ch.T @ (pd - ph)
+    e = dcm_to_euler(Cd.T @ Ch)  # C_h^d
+    v = Ch.T @ (V_D - vh) - np.cross(W_H, r)
+    return np.r_[r, e, v, W_D]
+
+
+def measured_bearings(t):
+    Ch, Cd, ph, _, pd = world(t)
+    p_h = (pd[None, :] + LIGHTS @ Cd.T - ph) @ Ch - CAM.rho
+    s = p_h @ CAM.T_cam.T
+    return np.stack([np.arctan(s[:, 0] / s[:, 2]), np.arctan(s[:, 1] / s[:, 2])], axis=-1)
+
+
+def test_bearings_and_rates_match_world_geometry():
+    t, h = 0.7, 1e-5
+    bear, rate = dm.bearings_and_rates(truth_state(t)[None, :], LIGHTS, CAM, W_H)
+    np.testing.assert_allclose(bear[0], measured_bearings(t), atol=1e-12)
+    fd = (measured_bearings(t + h) - measured_bearings(t - h)) / (2 * h)
+    np.testing.assert_allclose(rate[0], fd, atol=1e-7)
+
+
+def test_process_model_integrates_world_kinematics():
+    dt, t = 1e-3, 0.0
+    x = truth_state(0.0)
+    for _ in range(500):
+        Ch = world(t)[0]
+        u = dm.ImuInput(accel=Ch.T @ (A_H - G), gyro=W_H, gyro_dot=np.zeros(3), gravity_body=Ch.T @ G)
+        x = dm.process_model(x[None, :], dt, u)[0]
+        t += dt
+    err = dm.residual_x(x[None, :], truth_state(t)[None, :])[0]
+    assert np.max(np.abs(err[:3])) < 2e-3 and np.max(np.abs(err[3:6])) < 2e-3 and np.max(np.abs(err[6:9])) < 5e-3
+    # a wrong model (gravity with the wrong sign) is off by far more
+    x2 = truth_state(0.0)
+    t = 0.0
+    for _ in range(500):
+        Ch = world(t)[0]
+        u = dm.ImuInput(accel=Ch.T @ (A_H - G), gyro=W_H, gyro_dot=np.zeros(3), gravity_body=-Ch.T @ G)
+        x2 = dm.process_model(x2[None, :], dt, u)[0]
+        t += dt
+    assert np.max(np.abs(x2[:3] - truth_state(t)[:3])) > 0.1
+
+
+def test_process_noise_from_eq_3_8_is_symmetric_and_grows_with_imu_noise():
+    x, _ = dm.initial_state_static()
+    u = dm.ImuInput(np.array([0, 0, -9.81]), np.array([0.1, 0, 0]), np.zeros(3), G)
+    q1 = dm.process_noise(x, 0.01, u, np.diag([0.05**2] * 3 + [0.005**2] * 3), np.zeros((6, 6)))
+    q2 = dm.process_noise(x, 0.01, u, np.diag([0.1**2] * 3 + [0.005**2] * 3), np.zeros((6, 6)))
+    np.testing.assert_allclose(q1, q1.T)
+    assert q2[6, 6] - q1[6, 6] == pytest.approx(0.01**2 * (0.1**2 - 0.05**2))
+    assert np.all(np.linalg.eigvalsh(q1) >= -1e-18)
+
+
+def test_ship_acceleration_bound_eq_3_7():
+    assert dm.ship_acceleration_bound(0.1, 1.0, 0.01, 0.1) == pytest.approx(0.13 * 1.3**2)
+
+
+def test_initialisation_eq_5_12_to_5_17():
+    x0, P0 = dm.initial_state_static()
+    np.testing.assert_array_equal(x0, [1, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0])
+    np.testing.assert_allclose(np.sqrt(np.diag(P0)), np.repeat([0.5, np.radians(20), 0.05, np.radians(2)], 3))
+    P = dm.initial_covariance_sea_state([0.1] * 3, [1.0] * 3, [0.2] * 3, [0.5] * 3)
+    assert P[0, 0] == pytest.approx(0.005) and P[9, 9] == pytest.approx(0.04 * 0.25 / 2)

@@ -1,0 +1,98 @@
+"""The general UKF against filterpy (same model, same data) and against a linear Kalman filter."""
+
+import numpy as np
+import pytest
+from filterpy.kalman import MerweScaledSigmaPoints
+from filterpy.kalman import UnscentedKalmanFilter as FilterpyUKF
+
+from visnav.estimation import deck as dm
+from visnav.estimation.ukf import SigmaWeights, UnscentedKalmanFilter
+
+LIGHTS = np.array([[-0.128, 0, 0], [0, -0.102, 0], [0, 0.102, 0], [0.058, 0, 0]])
+CAM = dm.CameraGeometry(rho=np.array([0.101, 0.008, 0.11]),
+                        T_cam=np.array([[0, 1, 0], [-np.sin(0.76), 0, np.cos(0.76)], [np.cos(0.76), 0, np.sin(0.76)]]))
+
+
+def _imu(rng):
+    return dm.ImuInput(accel=np.array([0.0, 0.0, -9.81]) + rng.normal(0, 0.3, 3), gyro=rng.normal(0, 0.2, 3),
+                       gyro_dot=rng.normal(0, 0.5, 3), gravity_body=np.array([0.0, 0.0, 9.81]))
+
+
+def test_weights_sum_and_points_reproduce_mean_and_covariance():
+    w = SigmaWeights(5, alpha=0.3, beta=2.0, kappa=1.0)
+    assert w.wm.sum() == pytest.approx(1.0, abs=1e-12)
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(5, 5))
+    P = A @ A.T + np.eye(5)
+    x = rng.normal(size=5)
+    s = w.points(x, P)
+    m = w.wm @ s
+    d = s - m
+    np.testing.assert_allclose(m, x, atol=1e-12)
+    np.testing.assert_allclose((d * w.wc[:, None]).T @ d - (w.wc[0] - w.wm[0]) * np.outer(d[0], d[0]), P, atol=1e-10)
+
+
+def test_deck_model_matches_filterpy_to_1e8():
+    rng = np.random.default_rng(3)
+    x0, P0 = dm.initial_state_static()
+    x0 = x0 + np.r_[0.1, -0.05, 0.1, 0.05, -0.03, 0.2, 0.02, 0.0, -0.01, 0.01, 0.0, 0.02]
+    dt = 0.01
+    imu_cov = np.diag([0.05**2] * 3 + [0.005**2] * 3)
+    ship_cov = np.diag([0.1**2] * 3 + [0.05**2] * 3)
+    idx, ridx = np.arange(4), np.array([0, 2, 3])
+    R = np.diag([np.radians(2) ** 2] * 8 + [np.radians(2) ** 2] * 6)
+
+    ours = UnscentedKalmanFilter(x0, P0, dm.process_model, alpha=0.1, beta=2.0, kappa=0.0)
+    pts = MerweScaledSigmaPoints(12, alpha=0.1, beta=2.0, kappa=0.0)
+    holder = {}
+
+    def fx(x, dt):
+        return dm.process_model(x[None, :], dt, holder["u"])[0]
+
+    def hx(x):
+        return dm.measurement_model(x[None, :], LIGHTS, CAM, holder["u"].gyro, idx, ridx)[0]
+
+    ref = FilterpyUKF(dim_x=12, dim_z=14, dt=dt, hx=hx, fx=fx, points=pts)
+    ref.x, ref.P = x0.copy(), P0.copy()
+    truth = x0.copy()
+    for k in range(60):
+        u = _imu(rng)
+        holder["u"] = u
+        Q = dm.process_noise(ours.x, dt, u, imu_cov, ship_cov)
+        ours.predict(dt, Q, u=u)
+        ref.Q = Q
+        ref.predict()
+        truth = dm.process_model(truth[None, :], dt, u)[0]
+        if k % 3 == 2:
+            z = dm.measurement_model(truth[None, :], LIGHTS, CAM, u.gyro, idx, ridx)[0] + rng.normal(0, 0.01, 14)
+            ours.update(z, R, hx=dm.measurement_model, lights=LIGHTS, cam=CAM, gyro=u.gyro, idx=idx, rate_idx=ridx)
+            ref.update(z, R=R)
+        np.testing.assert_allclose(ours.x, ref.x, atol=1e-8, rtol=0)
+        np.testing.assert_allclose(ours.P, ref.P, atol=1e-8, rtol=0)
+
+
+def test_linear_model_equals_kalman_filter():
+    rng = np.random.default_rng(1)
+    dt = 0.1
+    F = np.array([[1, dt, 0, 0], [0, 1, 0, 0], [0, 0, 1, dt], [0, 0, 0, 1]])
+    H = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
+    Q = np.diag([1e-4, 1e-2, 1e-4, 1e-2])
+    R = np.diag([0.25, 0.25])
+    x, P = np.zeros(4), np.eye(4) * 4.0
+    ukf = UnscentedKalmanFilter(x, P, lambda s, dt: s @ F.T, lambda s: s @ H.T, alpha=0.5)
+    for _ in range(40):
+        x, P = F @ x, F @ P @ F.T + Q
+        ukf.predict(dt, Q)
+        z = rng.normal(0, 1, 2)
+        S = H @ P @ H.T + R
+        K = P @ H.T @ np.linalg.inv(S)
+        x, P = x + K @ (z - H @ x), (np.eye(4) - K @ H) @ P
+        ukf.update(z, R)
+        np.testing.assert_allclose(ukf.x, x, atol=1e-10)
+        np.testing.assert_allclose(ukf.P, P, atol=1e-10)
+
+
+def test_not_positive_definite_is_a_clear_error():
+    ukf = UnscentedKalmanFilter(np.zeros(2), -np.eye(2), lambda s, dt: s)
+    with pytest.raises(np.linalg.LinAlgError, match="positive definite"):
+        ukf.predict(0.1, np.eye(2))

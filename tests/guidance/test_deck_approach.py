@@ -1,0 +1,75 @@
+"""Touchdown acceleration, deck attitude prediction and tau-gap trajectories (seed 003 eq. 4.1-4.24)."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from visnav.geometry.rotations import euler_to_dcm
+from visnav.guidance.deck_approach import (StraightApproach, TauGapApproach, predict_deck_attitude,
+                                           touchdown_acceleration)
+
+G = np.array([0.0, 0.0, 9.81])
+
+
+def test_level_deck_lands_vertically_at_a_td():
+    a, lam, gam = touchdown_acceleration(np.array([0, 0, -1.0]), 2.5)
+    np.testing.assert_allclose(a, [0, 0, -2.5], atol=1e-12)
+    assert gam == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize("euler_deg", [(5, 0, 0), (0, -8, 0), (6, 7, 30), (-10, 9, 0)])
+def test_specific_force_is_along_the_deck_normal(euler_deg):
+    C = euler_to_dcm(np.radians(euler_deg))
+    n_up = -C[:, 2]
+    a, lam, gam = touchdown_acceleration(n_up, 2.5)
+    f = a - G  # specific force: thrust along the vehicle's -z
+    np.testing.assert_allclose(f / np.linalg.norm(f), n_up, atol=1e-12)  # attitudes match (eq. 4.2)
+    assert np.linalg.norm(a) == pytest.approx(2.5)  # eq. 4.3
+    assert a[2] < 0  # decelerating the descent
+    # small-angle check of eq. 4.10: lateral acceleration / thrust = tilt
+    tilt = np.arccos(-n_up[2])
+    assert np.hypot(a[0], a[1]) / np.linalg.norm(f) == pytest.approx(np.sin(tilt), rel=1e-9)
+
+
+def test_too_steep_deck_is_refused():
+    n_up = -euler_to_dcm(np.radians([16.0, 0, 0]))[:, 2]
+    with pytest.raises(ValueError, match="tilt"):
+        touchdown_acceleration(n_up, 2.5)
+    touchdown_acceleration(-euler_to_dcm(np.radians([14.5, 0, 0]))[:, 2], 2.5)  # 14.8 deg is the limit
+
+
+def test_euler_rodrigues_prediction_matches_scipy():
+    C0 = euler_to_dcm([0.1, -0.05, 0.3])
+    w = np.array([0.2, -0.1, 0.05])
+    got = predict_deck_attitude(C0, w, 1.7)
+    np.testing.assert_allclose(got, C0 @ Rotation.from_rotvec(w * 1.7).as_matrix(), atol=1e-12)
+    np.testing.assert_allclose(predict_deck_attitude(C0, np.zeros(3), 2.0), C0)
+
+
+def test_tau_gap_trajectory_boundary_conditions_and_derivatives():
+    start = np.array([-1.0, 0.3, -1.0])
+    a_td, _, _ = touchdown_acceleration(-euler_to_dcm(np.radians([4, -6, 0]))[:, 2], 2.5)
+    tr = TauGapApproach(start, a_td, k_rho=0.5, k_ab=0.45)
+    p0, v0, acc0 = tr.desired(0.0)
+    np.testing.assert_allclose(p0, start, atol=1e-12)
+    np.testing.assert_allclose(v0, 0, atol=1e-12)
+    np.testing.assert_allclose(acc0, 0, atol=1e-12)
+    pT, vT, aT = tr.desired(tr.T)
+    np.testing.assert_allclose(pT, 0, atol=1e-12)
+    np.testing.assert_allclose(vT, 0, atol=1e-12)
+    np.testing.assert_allclose(aT, a_td, atol=1e-9)  # touchdown acceleration along the terminal path (eq. 2.46)
+    h = 1e-5
+    for t in np.linspace(0.1, tr.T - 0.1, 7):
+        pm, vm, _ = tr.desired(t - h)
+        pp, vp, _ = tr.desired(t + h)
+        _, v, a = tr.desired(t)
+        np.testing.assert_allclose(v, (pp - pm) / (2 * h), atol=1e-6)
+        np.testing.assert_allclose(a, (vp - vm) / (2 * h), atol=1e-5)
+
+
+def test_straight_approach_is_a_line():
+    s = StraightApproach(np.array([-1.2, 0.4, -1.5]), 15.0, 0.3)
+    for t in (0.0, 3.0, 9.0, 14.0):
+        p, v, _ = s.desired(t)
+        assert np.linalg.norm(np.cross(p, [-1.2, 0.4, -1.5])) < 1e-12
+    np.testing.assert_allclose(s.desired(15.0)[0], 0.0)

@@ -1,0 +1,53 @@
+"""Blob centroids, undistorted bearings and bearing rates (seed 003 §5.1, eq. 2.25, 5.3-5.7)."""
+
+import numpy as np
+import pytest
+
+from visnav.geometry.camera import PinholeCamera
+from visnav.sensors.led_camera import LedCamera
+from visnav.sim.deck_loop import DIST_EQ_5_6_5_7, camera_rotation
+from visnav.vision.blobs import BearingTracker, find_blobs, pixels_to_bearings
+
+CAM = PinholeCamera(752, 480, 420.0, 420.0, 375.5, 239.5, DIST_EQ_5_6_5_7)
+
+
+def test_centroids_of_gaussian_spots_are_subpixel():
+    img = np.full((120, 160), 20, np.uint8)
+    yy, xx = np.mgrid[0:120, 0:160]
+    pts = np.array([[40.3, 30.7], [100.8, 80.2], [130.5, 20.5]])
+    f = np.zeros(img.shape)
+    for u, v in pts:
+        f = np.maximum(f, 230 * np.exp(-((xx - u) ** 2 + (yy - v) ** 2) / (2 * 1.3**2)))
+    img = np.clip(img + f, 0, 255).astype(np.uint8)
+    c = find_blobs(img, threshold=150)
+    c = c[np.argsort(c[:, 0])]
+    np.testing.assert_allclose(c, pts[np.argsort(pts[:, 0])], atol=0.1)  # thresholding biases < 0.1 px
+    assert find_blobs(np.zeros((10, 10), np.uint8)).shape == (0, 2)
+    with pytest.raises(ValueError, match="grayscale"):
+        find_blobs(np.zeros((0, 3)))
+
+
+def test_bearings_of_rendered_lights_match_geometry():
+    T = camera_rotation(np.radians(43.5), np.radians(-3.4))
+    rho = np.array([0.101, 0.008, 0.11])
+    cam = LedCamera(CAM, T, rho, np.random.default_rng(0), noise_gray=2.0)
+    lights = np.array([[0.9, -0.1, 1.1], [1.1, 0.1, 1.0], [1.0, 0.3, 0.95], [0.8, 0.35, 1.2]])
+    img = cam.render(np.zeros(3), np.eye(3), lights, lights[:3] + 0.5)
+    uv = find_blobs(img)
+    assert len(uv) == 4
+    b = pixels_to_bearings(uv, CAM)
+    s = (lights - rho) @ T.T
+    want = np.stack([np.arctan(s[:, 0] / s[:, 2]), np.arctan(s[:, 1] / s[:, 2])], axis=-1)
+    d = np.abs(b[:, None, :] - want[None]).max(axis=-1)
+    assert np.all(d.min(axis=1) < np.radians(0.05))  # each blob within 0.05 deg of its light
+
+
+def test_rates_from_frame_to_frame_matching_and_new_blobs():
+    tr = BearingTracker(PinholeCamera.ideal(640, 480, 500.0))
+    f0 = tr.from_pixels(0.0, np.array([[100.0, 100.0], [300.0, 200.0]]))
+    assert np.all(np.isnan(f0.rates))
+    f1 = tr.from_pixels(0.1, np.array([[305.0, 200.0], [101.0, 100.0], [500.0, 400.0], [np.nan, 3.0]]))
+    assert len(f1.bearings) == 3  # NaN row dropped
+    b0 = np.arctan((np.array([[300.0, 200.0], [100.0, 100.0]]) - [319.5, 239.5]) / 500.0)
+    np.testing.assert_allclose(f1.rates[:2], (f1.bearings[:2] - b0) / 0.1, rtol=1e-12)
+    assert np.all(np.isnan(f1.rates[2]))  # a new blob has no rate (§3.1.2)
