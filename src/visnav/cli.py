@@ -128,7 +128,7 @@ def margins(
     import time as _time
     from pathlib import Path
 
-    from visnav.analysis.frequency import margins_campaign
+    from visnav.analysis.margins_campaign import margins_campaign
     from visnav.scenarios.schema import ScenarioError, load_scenario
 
     try:

@@ -1,0 +1,205 @@
+"""Margins campaigns: closed-loop chirps flown in the simulator (seed 000 Tables 5.1/5.2).
+
+Each sweep is a hover with a chirp at one cyclic actuator (``palace-sweep``); from it come the
+broken-loop margins (``frequency``) and the sensor delays (``delay_id``). ``margins_campaign``
+flies the rows of Table 5.1 (GPS, MPE with late attitude) and, with compensation, the rows of
+Table 5.2 (MPE with the identified delays applied).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from visnav.analysis.delay_id import identify_imu_delay
+from visnav.analysis.frequency import AXIS_INDEX, broken_loop_response, margins_from_frd
+
+
+@dataclass(frozen=True)
+class SweepSettings:
+    """The chirp injected at the actuator (YACS units, Hz, s) and the analysis settings.
+
+    The amplitude shrinks below ``amplitude_ref_altitude_m`` (to ``min_amplitude_fraction``): close
+    to the ground the same tilt moves the tracked point faster and the tracker loses it. Phase
+    crossovers where the coherence stays below ``min_coherence`` (MPE noise grows with height) are
+    read from points down to ``gm_min_coherence`` and flagged."""
+
+    amplitude: float = 40.0
+    f0_hz: float = 0.08
+    f1_hz: float = 2.5
+    duration_s: float = 80.0
+    start_s: float = 3.0
+    amplitude_ref_altitude_m: float = 12.0
+    min_amplitude_fraction: float = 0.75
+    delay_band_hz: tuple[float, float] = (0.5, 2.5)
+    min_coherence: float = 0.6
+    gm_min_coherence: float = 0.3
+
+    def amplitude_at(self, altitude_m: float) -> float:
+        scale = min(1.0, max(self.min_amplitude_fraction, altitude_m / self.amplitude_ref_altitude_m))
+        return self.amplitude * scale
+
+    def overrides(self, altitude_m: float) -> list[str]:
+        return [f"mission.sweep_amplitude={self.amplitude_at(altitude_m)}", f"mission.sweep_f0_hz={self.f0_hz}",
+                f"mission.sweep_f1_hz={self.f1_hz}", f"mission.sweep_duration_s={self.duration_s}",
+                f"mission.sweep_start_s={self.start_s}", f"mission.hold_s={self.start_s + self.duration_s + 1.0}",
+                f"run.duration_s={self.start_s + self.duration_s + 30.0}"]
+
+
+def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: float = 0.0,
+              attitude_delay_s: float = 0.0, seed: int = 1, sweep: SweepSettings = SweepSettings(),
+              scenario: str = "palace-sweep", overrides: tuple[str, ...] = ()) -> dict:
+    """One hover with a chirp at the ``axis`` actuator: its margins (NaN when the sweep did not
+    complete), the IMU delay identified from the same sweep (roll for lateral, pitch for
+    longitudinal) and notes (track lost, sweep cut short, point near the image edge)."""
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.loop import Simulation
+
+    if axis not in AXIS_INDEX:
+        raise ValueError(f"axis must be one of {sorted(AXIS_INDEX)}, got {axis!r}")
+    ov = [*overrides, f"mission.altitude_m={altitude_m}", f'mission.source="{source}"',
+          f'mission.sweep_axis="{axis}"', f"sensors.imu.delay_s={imu_delay_s}",
+          f"navigation.mpe.attitude_delay_s={attitude_delay_s}", *sweep.overrides(altitude_m)]
+    sc = load_scenario(scenario, ov, seed=seed)
+    res = Simulation(sc).run()
+    log, notes = res.log, []
+    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, delay_s=math.nan,
+               delay_std_s=math.nan, notes=notes)
+    if res.error:
+        notes.append(res.error)
+    modes = list(log.get("mode").get("mode", [])) if "mode" in log else []
+    if "lost" in modes:
+        notes.append(f"track lost at {log.get('mode')['t'][modes.index('lost')]:.1f} s")
+    a = log.get("actuator") if "actuator" in log else {}
+    if not a or a["t"][-1] - a["t"][0] < 0.95 * sweep.duration_s:
+        notes.append("sweep incomplete: loop unstable or track lost")
+        return out
+    cam = sc.sensors.camera
+    tr = log.get("tracker")
+    sel = (tr["t"] >= a["t"][0]) & (tr["t"] <= a["t"][-1])
+    x, y = tr["x"][sel], tr["y"][sel]
+    edge = min(x.min(), cam.width - x.max(), y.min(), cam.height - y.max())
+    if edge < 40:
+        notes.append(f"tracked point within {edge:.0f} px of the image edge")
+    fr = broken_loop_response(log, axis, sweep.f0_hz, 0.9 * sweep.f1_hz)  # the chirp's ends are weak
+    try:
+        m = margins_from_frd(fr.w_rad_s, fr.H, fr.coherence, sweep.min_coherence)
+        out.update(pm_deg=m.pm_deg, w_gc=m.w_gc, gm_db=m.gm_db, w_pc=m.w_pc)
+        if not np.isfinite(m.w_pc):
+            g = margins_from_frd(fr.w_rad_s, fr.H, fr.coherence, sweep.gm_min_coherence)
+            if np.isfinite(g.w_pc):
+                i = np.argmin(np.abs(fr.w_rad_s - g.w_pc))
+                out.update(gm_db=g.gm_db, w_pc=g.w_pc)
+                notes.append(f"GM read at coherence {fr.coherence[i]:.2f} (low confidence)")
+    except ValueError as exc:
+        notes.append(f"margins: {exc}")
+    lo, hi = sweep.delay_band_hz
+    try:
+        d = identify_imu_delay(log, cam.focal_px, (cam.width / 2, cam.height / 2), cam.depression_deg,
+                               "roll" if axis == "lateral" else "pitch", lo, min(hi, sweep.f1_hz))
+        out.update(delay_s=d.delay_s, delay_std_s=d.std_s)
+    except ValueError as exc:
+        notes.append(f"delay: {exc}")
+    return out
+
+
+def _combine_delays(*runs: dict) -> float:
+    """Inverse-variance mean of the finite delay estimates of several sweeps (NaN if none)."""
+    d = np.array([r["delay_s"] for r in runs], float)
+    s = np.array([r["delay_std_s"] for r in runs], float)
+    ok = np.isfinite(d) & np.isfinite(s) & (s > 0)
+    return float(np.sum(d[ok] / s[ok] ** 2) / np.sum(1 / s[ok] ** 2)) if ok.any() else math.nan
+
+
+def _call(kwargs: dict) -> dict:
+    return sweep_run(**kwargs)
+
+
+def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
+                     sweep: SweepSettings = SweepSettings(), scenario: str = "palace-sweep",
+                     overrides: tuple[str, ...] = (), workers: int = 1, executor=None,
+                     progress=None) -> list[dict]:
+    """Tables 5.1/5.2: per altitude a GPS row and per delay an MPE row with the IMU ``delay``
+    uncompensated; with ``compensate`` also an MPE row with ``navigation.mpe.attitude_delay_s`` =
+    the delay identified from a lateral + longitudinal sweep flown on GPS (MPE open loop, so the
+    identification never rides on a loop the delay may destabilise); where identification fails
+    the true delay is used and the row's notes say so. Each row is two sweeps (lateral,
+    longitudinal). ``executor``: anything with ``submit`` (a process pool, a Dask client's
+    executor); else ``workers`` local processes. ``progress(done, total)`` after each run."""
+    alts = [float(a) for a in altitudes]
+    dls = [float(d) for d in delays]
+    if not alts or any(not (np.isfinite(a) and a > 0) for a in alts):
+        raise ValueError(f"altitudes must be a non-empty list of heights > 0 m, got {altitudes}")
+    if any(not (np.isfinite(d) and d >= 0) for d in dls):
+        raise ValueError(f"delays must be >= 0 s, got {delays}")
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    base = dict(seed=seed, sweep=sweep, scenario=scenario, overrides=tuple(overrides))
+    runs: dict[tuple, dict] = {}
+
+    def key(alt, src, delay, comp, axis):
+        return (alt, src, delay, round(comp, 6), axis)
+
+    def execute(keys: list[tuple]) -> None:
+        todo = [k for k in dict.fromkeys(keys) if k not in runs]
+        jobs = [dict(altitude_m=k[0], source=k[1], imu_delay_s=k[2], attitude_delay_s=k[3], axis=k[4], **base)
+                for k in todo]
+        pool = executor
+        own = pool is None and workers > 1
+        if own:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+        total = len(runs) + len(todo)
+        try:
+            futures = [pool.submit(_call, j) for j in jobs] if pool is not None else None
+            for i, k in enumerate(todo):
+                runs[k] = futures[i].result() if futures is not None else _call(jobs[i])
+                if progress is not None:
+                    progress(len(runs), total)
+        finally:
+            if own:
+                pool.shutdown()
+
+    axes = ("lateral", "longitudinal")
+    first = [key(a, "gps", 0.0, 0.0, ax) for a in alts for ax in axes]
+    first += [key(a, "mpe", d, 0.0, ax) for a in alts for d in dls for ax in axes]
+    if compensate:
+        first += [key(a, "gps", d, 0.0, ax) for a in alts for d in dls for ax in axes]
+    execute(first)
+    ident = {}
+    if compensate:
+        for a in alts:
+            for d in dls:
+                tau = _combine_delays(*(runs[key(a, "gps", d, 0.0, ax)] for ax in axes))
+                ident[a, d] = (tau, True) if np.isfinite(tau) else (d, False)
+        execute([key(a, "mpe", d, max(ident[a, d][0], 0.0), ax) for a in alts for d in dls for ax in axes])
+
+    def row(a, delay, comp, pair, tau, notes):
+        r = dict(altitude_m=a, delay_s=delay, compensated=comp)
+        for ax, res in zip(axes, pair):
+            r.update({f"{ax}_pm_deg": res["pm_deg"], f"{ax}_pm_wc_rps": res["w_gc"], f"{ax}_gm_db": res["gm_db"]})
+        r["identified_imu_delay_s"] = tau
+        for ax, res in zip(axes, pair):
+            r[f"{ax}_gm_wc_rps"] = res["w_pc"]
+        r["notes"] = "; ".join(notes + [f"{ax}: {n}" for ax, res in zip(axes, pair) for n in res["notes"]])
+        return r
+
+    rows = []
+    for a in alts:
+        pair = [runs[key(a, "gps", 0.0, 0.0, ax)] for ax in axes]
+        rows.append(row(a, None, "gps", pair, _combine_delays(*pair), []))
+        for d in dls:
+            pair = [runs[key(a, "mpe", d, 0.0, ax)] for ax in axes]
+            tau = _combine_delays(*pair)
+            if not np.isfinite(tau) and compensate and ident[a, d][1]:
+                tau = ident[a, d][0]
+            rows.append(row(a, d, False, pair, tau, []))
+            if compensate:
+                tau, ok = ident[a, d]
+                pair = [runs[key(a, "mpe", d, max(tau, 0.0), ax)] for ax in axes]
+                rows.append(row(a, d, True, pair, tau if ok else math.nan,
+                                [] if ok else ["identification failed: compensated with the true delay"]))
+    return rows
