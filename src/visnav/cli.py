@@ -117,7 +117,9 @@ def margins(
     scenario: str = typer.Argument("palace-sweep", help="a hover scenario (mission.type = hover)"),
     altitudes: str = typer.Option("6,12,18,30,54", help="heights AGL [m], comma separated"),
     delays: str = typer.Option("0,0.1", help="simulated IMU delays [s], comma separated"),
-    compensate: bool = typer.Option(False, help="also fly each delay compensated by the identified delay"),
+    compensate: bool = typer.Option(False, help="also fly each delay compensated by the identified delays"),
+    laser_delay: float = typer.Option(0.0, help="simulated laser delay [s] for every sweep"),
+    identify_altitude: float = typer.Option(12.0, help="height [m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
@@ -145,7 +147,8 @@ def margins(
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), console=console) as prog:
         task = prog.add_task("sweeps", total=None)
         rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario,
-                                overrides=tuple(set_), workers=workers,
+                                overrides=tuple(set_), workers=workers, laser_delay_s=laser_delay,
+                                identify_altitude_m=identify_altitude,
                                 progress=lambda *a, **k: prog.advance(task))
     cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
             "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from visnav.analysis.delay_id import camera_attitude, identify_delay, identify_delay_series
+from visnav.analysis.delay_id import camera_attitude, identify_delay, identify_delay_series, laser_attitude
 from visnav.estimation.mpe import MonocularPositionEstimator
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
@@ -79,3 +79,15 @@ def test_late_attitude_shifts_mpe_by_height_times_angle():
         assert err[k] == pytest.approx(sign * h * d, rel=0.05)
 
 
+
+
+def test_laser_attitude_inverts_the_range_to_flat_ground():
+    """R = h / sin(δ + o − θ) over flat ground (the beam along the optical axis, scan offsets o)."""
+    rng = np.random.default_rng(5)
+    dep, h = math.radians(60.0), 20.0
+    theta = np.radians(2.0) * np.sin(np.linspace(0, 20, 400))
+    off = np.radians(rng.choice([0.0, 1.0, -1.0], size=theta.size))
+    r = h / np.sin(dep + off - theta)
+    est = laser_attitude(r, off, dep)
+    # up to a constant (the height is taken from the record's mean)
+    assert np.std((est - est.mean()) - (theta - theta.mean())) < np.radians(0.02)

@@ -29,3 +29,19 @@ def test_model_trend_of_table_5_1():
     assert comp.pm_deg == pytest.approx(model_margins(18.0, None, "lateral").pm_deg, abs=5.0)
 
 
+
+
+def test_an_image_10ms_late_makes_the_0ms_margins_fall_with_altitude():
+    """Table 5.1's "0 ms" rows fall with altitude (lateral PM 47.4° at 6 m to 28.8° at 54 m): the
+    image paired with the attitude of ~10 ms later (§5.1) is a mismatch the height magnifies.
+    Compensating it (attitude looked up 10 ms before the stamp) restores the GPS margins to < 5°."""
+    gps = model_margins(12.0, None, "lateral")
+    pm = [model_margins(h, 0.0, "lateral", image_delay_s=0.01) for h in (6.0, 18.0, 54.0)]
+    assert np.all(np.diff([m.pm_deg for m in pm]) < -1.0) and np.all(np.diff([m.gm_db for m in pm]) < -1.0)
+    assert pm[0].pm_deg < gps.pm_deg
+    for h in (6.0, 54.0):
+        for axis in ("lateral", "longitudinal"):
+            comp = model_margins(h, 0.1, axis, compensation_s=0.1 - 0.01, image_delay_s=0.01)
+            assert comp.pm_deg == pytest.approx(model_margins(h, None, axis).pm_deg, abs=5.0)
+    with pytest.raises(ValueError, match="image_delay_s"):
+        model_margins(12.0, 0.0, image_delay_s=-0.01)

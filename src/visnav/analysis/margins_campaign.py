@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from visnav.analysis.delay_id import identify_imu_delay
+from visnav.analysis.delay_id import identify_imu_delay, identify_laser_delays
 from visnav.analysis.frequency import AXIS_INDEX, broken_loop_response, margins_from_frd
 
 
@@ -22,7 +22,9 @@ class SweepSettings:
     """The chirp injected at the actuator (YACS units, Hz, s) and the analysis settings.
 
     The amplitude shrinks below ``amplitude_ref_altitude_m`` (to ``min_amplitude_fraction``): close
-    to the ground the same tilt moves the tracked point faster and the tracker loses it. Phase
+    to the ground the same tilt moves the tracked point faster and the tracker loses it. Above it
+    the amplitude grows with height (up to ``max_amplitude_fraction``): the MPE noise grows with
+    the range while the response to a given tilt does not, so the same chirp loses coherence. Phase
     crossovers where the coherence stays below ``min_coherence`` (MPE noise grows with height) are
     read from points down to ``gm_min_coherence`` and flagged."""
 
@@ -33,12 +35,14 @@ class SweepSettings:
     start_s: float = 3.0
     amplitude_ref_altitude_m: float = 12.0
     min_amplitude_fraction: float = 0.75
+    max_amplitude_fraction: float = 1.0
     delay_band_hz: tuple[float, float] = (0.5, 2.5)
     min_coherence: float = 0.6
     gm_min_coherence: float = 0.3
 
     def amplitude_at(self, altitude_m: float) -> float:
-        scale = min(1.0, max(self.min_amplitude_fraction, altitude_m / self.amplitude_ref_altitude_m))
+        scale = min(self.max_amplitude_fraction,
+                    max(self.min_amplitude_fraction, altitude_m / self.amplitude_ref_altitude_m))
         return self.amplitude * scale
 
     def overrides(self, altitude_m: float) -> list[str]:
@@ -50,10 +54,15 @@ class SweepSettings:
 
 def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: float = 0.0,
               attitude_delay_s: float = 0.0, seed: int = 1, sweep: SweepSettings = SweepSettings(),
-              scenario: str = "palace-sweep", overrides: tuple[str, ...] = ()) -> dict:
+              scenario: str = "palace-sweep", overrides: tuple[str, ...] = (), laser_delay_s: float = 0.0,
+              laser_compensation_s: float = 0.0) -> dict:
     """One hover with a chirp at the ``axis`` actuator: its margins (NaN when the sweep did not
-    complete), the IMU delay identified from the same sweep (roll for lateral, pitch for
-    longitudinal) and notes (track lost, sweep cut short, point near the image edge)."""
+    complete), the IMU delay behind the camera identified from the same sweep (roll for lateral,
+    pitch for longitudinal; ``delay_s``), on longitudinal sweeps the laser's delay behind the
+    camera (``laser_delay_s``, Fig. 5.2) and the IMU's behind the laser (``imu_vs_laser_s``, Fig.
+    5.4), and notes (track lost, sweep cut short, point near the image edge). ``imu_delay_s`` and
+    ``laser_delay_s`` are the simulated (unknown) sensor delays; ``attitude_delay_s`` and
+    ``laser_compensation_s`` the navigator's compensation (``navigation.mpe.*``)."""
     from visnav.scenarios.schema import load_scenario
     from visnav.sim.loop import Simulation
 
@@ -61,12 +70,14 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
         raise ValueError(f"axis must be one of {sorted(AXIS_INDEX)}, got {axis!r}")
     ov = [*overrides, f"mission.altitude_m={altitude_m}", f'mission.source="{source}"',
           f'mission.sweep_axis="{axis}"', f"sensors.imu.delay_s={imu_delay_s}",
-          f"navigation.mpe.attitude_delay_s={attitude_delay_s}", *sweep.overrides(altitude_m)]
+          f"navigation.mpe.attitude_delay_s={attitude_delay_s}", f"sensors.laser.delay_s={laser_delay_s}",
+          f"navigation.mpe.laser_delay_s={laser_compensation_s}", *sweep.overrides(altitude_m)]
     sc = load_scenario(scenario, ov, seed=seed)
     res = Simulation(sc).run()
     log, notes = res.log, []
     out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, delay_s=math.nan,
-               delay_std_s=math.nan, notes=notes)
+               delay_std_s=math.nan, laser_delay_s=math.nan, laser_delay_std_s=math.nan,
+               imu_vs_laser_s=math.nan, notes=notes)
     if res.error:
         notes.append(res.error)
     modes = list(log.get("mode").get("mode", [])) if "mode" in log else []
@@ -102,13 +113,21 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
         out.update(delay_s=d.delay_s, delay_std_s=d.std_s)
     except ValueError as exc:
         notes.append(f"delay: {exc}")
+    if axis == "longitudinal":  # the laser sees pitch (its range along the optical axis), not roll
+        try:
+            ld = identify_laser_delays(log, cam.focal_px, (cam.width / 2, cam.height / 2), cam.depression_deg,
+                                       lo, min(hi, sweep.f1_hz))
+            out.update(laser_delay_s=ld["laser_vs_camera"].delay_s, laser_delay_std_s=ld["laser_vs_camera"].std_s,
+                       imu_vs_laser_s=ld["imu_vs_laser"].delay_s)
+        except ValueError as exc:
+            notes.append(f"laser delay: {exc}")
     return out
 
 
-def _combine_delays(*runs: dict) -> float:
+def _combine_delays(*runs: dict, key: str = "delay_s") -> float:
     """Inverse-variance mean of the finite delay estimates of several sweeps (NaN if none)."""
-    d = np.array([r["delay_s"] for r in runs], float)
-    s = np.array([r["delay_std_s"] for r in runs], float)
+    d = np.array([r.get(key, math.nan) for r in runs], float)
+    s = np.array([r.get(key[:-2] + "_std_s", math.nan) for r in runs], float)
     ok = np.isfinite(d) & np.isfinite(s) & (s > 0)
     return float(np.sum(d[ok] / s[ok] ** 2) / np.sum(1 / s[ok] ** 2)) if ok.any() else math.nan
 
@@ -117,17 +136,27 @@ def _call(kwargs: dict) -> dict:
     return sweep_run(**kwargs)
 
 
+#: The identification sweep (flown on GPS, MPE open loop): starts at 0.4 Hz, where the vehicle no
+#: longer drifts far enough to lose the tracked point, so it can be 1.6x the margins chirp; the
+#: laser's pitch (range noise ~0.3° at 24 m) needs that amplitude for ±5 ms (±10 ms at 40 units).
+IDENT_SWEEP = SweepSettings(amplitude=64.0, f0_hz=0.4, f1_hz=2.5, duration_s=40.0, start_s=1.0)
+
+
 def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
                      sweep: SweepSettings = SweepSettings(), scenario: str = "palace-sweep",
                      overrides: tuple[str, ...] = (), workers: int = 1, executor=None,
-                     progress=None) -> list[dict]:
-    """Tables 5.1/5.2: per altitude a GPS row and per delay an MPE row with the IMU ``delay``
-    uncompensated; with ``compensate`` also an MPE row with ``navigation.mpe.attitude_delay_s`` =
-    the delay identified from a lateral + longitudinal sweep flown on GPS (MPE open loop, so the
-    identification never rides on a loop the delay may destabilise); where identification fails
-    the true delay is used and the row's notes say so. Each row is two sweeps (lateral,
-    longitudinal). ``executor``: anything with ``submit`` (a process pool, a Dask client's
-    executor); else ``workers`` local processes. ``progress(done, total)`` after each run."""
+                     progress=None, identify_altitude_m: float = 12.0, laser_delay_s: float = 0.0,
+                     ident_sweep: SweepSettings = IDENT_SWEEP) -> list[dict]:
+    """Tables 5.1/5.2: per altitude a GPS row and per IMU ``delay`` an MPE row, uncompensated;
+    with ``compensate`` also an MPE row flown with the delays identified from a lateral and a
+    longitudinal ``ident_sweep`` on GPS at ``identify_altitude_m`` (MPE open loop, so the identification
+    never rides on a loop the delay may destabilise; once per delay, as the thesis identified its
+    sensors once, on the ground): ``navigation.mpe.attitude_delay_s`` = the IMU's delay behind the
+    camera, ``navigation.mpe.laser_delay_s`` = the laser's. Where identification fails the true
+    delays are used and the row's notes say so. ``laser_delay_s``: a simulated laser delay for
+    every sweep. Each row is two sweeps (lateral, longitudinal). ``executor``: anything with
+    ``submit`` (a process pool, a Dask client's executor); else ``workers`` local processes.
+    ``progress(done, total)`` after each run."""
     alts = [float(a) for a in altitudes]
     dls = [float(d) for d in delays]
     if not alts or any(not (np.isfinite(a) and a > 0) for a in alts):
@@ -136,16 +165,19 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         raise ValueError(f"delays must be >= 0 s, got {delays}")
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
-    base = dict(seed=seed, sweep=sweep, scenario=scenario, overrides=tuple(overrides))
+    if not (np.isfinite(laser_delay_s) and 0 <= laser_delay_s <= 1):
+        raise ValueError(f"laser_delay_s must be in [0, 1] s, got {laser_delay_s}")
+    base = dict(seed=seed, sweep=sweep, scenario=scenario, overrides=tuple(overrides), laser_delay_s=laser_delay_s)
     runs: dict[tuple, dict] = {}
 
-    def key(alt, src, delay, comp, axis):
-        return (alt, src, delay, round(comp, 6), axis)
+    def key(alt, src, delay, comp, axis, lcomp=0.0):
+        return (alt, src, delay, round(comp, 6), axis, round(lcomp, 6))
 
     def execute(keys: list[tuple]) -> None:
         todo = [k for k in dict.fromkeys(keys) if k not in runs]
-        jobs = [dict(altitude_m=k[0], source=k[1], imu_delay_s=k[2], attitude_delay_s=k[3], axis=k[4], **base)
-                for k in todo]
+        jobs = [dict(base, altitude_m=k[0], source="gps" if k[1] == "ident" else k[1], imu_delay_s=k[2],
+                     attitude_delay_s=k[3], axis=k[4], laser_compensation_s=k[5],
+                     **({"sweep": ident_sweep} if k[1] == "ident" else {})) for k in todo]
         pool = executor
         own = pool is None and workers > 1
         if own:
@@ -164,24 +196,32 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
                 pool.shutdown()
 
     axes = ("lateral", "longitudinal")
+    ia = float(identify_altitude_m)
     first = [key(a, "gps", 0.0, 0.0, ax) for a in alts for ax in axes]
     first += [key(a, "mpe", d, 0.0, ax) for a in alts for d in dls for ax in axes]
     if compensate:
-        first += [key(a, "gps", d, 0.0, ax) for a in alts for d in dls for ax in axes]
+        first += [key(ia, "ident", d, 0.0, ax) for d in dls for ax in axes]
     execute(first)
     ident = {}
-    if compensate:
-        for a in alts:
-            for d in dls:
-                tau = _combine_delays(*(runs[key(a, "gps", d, 0.0, ax)] for ax in axes))
-                ident[a, d] = (tau, True) if np.isfinite(tau) else (d, False)
-        execute([key(a, "mpe", d, max(ident[a, d][0], 0.0), ax) for a in alts for d in dls for ax in axes])
 
-    def row(a, delay, comp, pair, tau, notes):
+    def comp_key(a, d, ax):
+        ca, cl = _compensation(ident[d], d, laser_delay_s)
+        return key(a, "mpe", d, ca, ax, cl)
+
+    if compensate:
+        for d in dls:
+            pair = [runs[key(ia, "ident", d, 0.0, ax)] for ax in axes]
+            tau, lt = _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s")
+            ok = np.isfinite(tau) and np.isfinite(lt)
+            ident[d] = (tau if np.isfinite(tau) else math.nan, lt if np.isfinite(lt) else math.nan, bool(ok))
+        execute([comp_key(a, d, ax) for a in alts for d in dls for ax in axes])
+
+    def row(a, delay, comp, pair, tau, ltau, notes):
         r = dict(altitude_m=a, delay_s=delay, compensated=comp)
         for ax, res in zip(axes, pair):
             r.update({f"{ax}_pm_deg": res["pm_deg"], f"{ax}_pm_wc_rps": res["w_gc"], f"{ax}_gm_db": res["gm_db"]})
         r["identified_imu_delay_s"] = tau
+        r["identified_laser_delay_s"] = ltau
         for ax, res in zip(axes, pair):
             r[f"{ax}_gm_wc_rps"] = res["w_pc"]
         r["notes"] = "; ".join(notes + [f"{ax}: {n}" for ax, res in zip(axes, pair) for n in res["notes"]])
@@ -190,16 +230,25 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
     rows = []
     for a in alts:
         pair = [runs[key(a, "gps", 0.0, 0.0, ax)] for ax in axes]
-        rows.append(row(a, None, "gps", pair, _combine_delays(*pair), []))
+        rows.append(row(a, None, "gps", pair, _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s"),
+                        []))
         for d in dls:
             pair = [runs[key(a, "mpe", d, 0.0, ax)] for ax in axes]
-            tau = _combine_delays(*pair)
-            if not np.isfinite(tau) and compensate and ident[a, d][1]:
-                tau = ident[a, d][0]
-            rows.append(row(a, d, False, pair, tau, []))
+            rows.append(row(a, d, False, pair, _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s"),
+                            []))
             if compensate:
-                tau, ok = ident[a, d]
-                pair = [runs[key(a, "mpe", d, max(tau, 0.0), ax)] for ax in axes]
-                rows.append(row(a, d, True, pair, tau if ok else math.nan,
-                                [] if ok else ["identification failed: compensated with the true delay"]))
+                tau, ltau, ok = ident[d]
+                pair = [runs[comp_key(a, d, ax)] for ax in axes]
+                rows.append(row(a, d, True, pair, tau, ltau,
+                                [] if ok else ["identification failed: compensated with the true delays"]))
     return rows
+
+
+def _compensation(ident: tuple[float, float, bool], imu_delay_s: float, laser_delay_s: float) -> tuple[float, float]:
+    """(attitude_delay_s, laser_delay_s) for the navigator: the identified delays behind the camera
+    (the true ones, without the camera's unknown delay, where identification failed), clipped to
+    the config's range."""
+    tau, ltau, ok = ident
+    a = tau if ok else imu_delay_s
+    b = ltau if ok else laser_delay_s
+    return float(np.clip(a, -0.5, 1.0)), float(np.clip(b, -0.5, 1.0))

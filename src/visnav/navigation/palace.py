@@ -168,6 +168,7 @@ class PalaceNavigator:
             return
         if m.sensor == "laser":
             self.lasers.append(m)
+            self.recorder("laser", m.t, range=r, beam_offset=m.beam_offset)  # laser delay identification
             self.h.laser_ok = bool(np.isfinite(r))
             return
         if not np.isfinite(r):

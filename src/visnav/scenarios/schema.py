@@ -96,6 +96,7 @@ class CameraConfig(_M):
     capture_hz: float = Field(30.0, ge=1, le=120)
     noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
     latency_s: float = Field(0.03, ge=0, le=1.0, description="exposure to memory (stamped correctly)")
+    delay_s: float = Field(0.0, ge=0, le=1.0, description="UNKNOWN delay: image stamped delay_s too late")
 
 
 class SensorsConfig(_M):
@@ -118,8 +119,9 @@ class TrackerConfig(_M):
 
 class MpeConfig(_M):
     model: Literal["thesis", "plane"] = "plane"
-    attitude_delay_s: float = Field(0.0, ge=0, le=1.0, description="compensation applied to attitude lookups")
-    laser_delay_s: float = Field(0.0, ge=0, le=1.0)
+    attitude_delay_s: float = Field(0.0, ge=-0.5, le=1.0, description="compensation applied to attitude "
+                                    "lookups: IMU delay minus camera delay (negative when the image is the late one)")
+    laser_delay_s: float = Field(0.0, ge=-0.5, le=1.0, description="laser delay minus camera delay")
     rate_hz: float = Field(10.0, ge=1, le=30)
     jump_limit_m: float = Field(1.5, gt=0, le=50)
 
