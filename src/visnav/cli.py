@@ -121,6 +121,7 @@ def margins(
     laser_delay: float = typer.Option(0.0, help="simulated laser delay [s] for every sweep"),
     identify_altitude: float = typer.Option(12.0, help="height [m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
+    seeds: int = typer.Option(1, help="seeds per sweep, merged (weighted by coherence)"),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
@@ -146,9 +147,10 @@ def margins(
     out_dir.mkdir(parents=True, exist_ok=True)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), console=console) as prog:
         task = prog.add_task("sweeps", total=None)
-        rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario,
+        frfs: dict = {}
+        rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario, frf_sink=frfs,
                                 overrides=tuple(set_), workers=workers, laser_delay_s=laser_delay,
-                                identify_altitude_m=identify_altitude,
+                                identify_altitude_m=identify_altitude, seeds=seeds,
                                 progress=lambda *a, **k: prog.advance(task))
     cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
             "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]
@@ -159,6 +161,9 @@ def margins(
         w.writeheader()
         for r in rows:
             w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in cols})
+    from visnav.analysis.palace_report import save_frfs
+
+    save_frfs(out_dir / "frf.npz", frfs)
     table = Table(title="margins at the cyclic actuators")
     for c in cols[:10]:
         table.add_column(c.replace("_", " "), justify="right")

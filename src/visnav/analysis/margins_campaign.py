@@ -77,7 +77,7 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
     log, notes = res.log, []
     out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, delay_s=math.nan,
                delay_std_s=math.nan, laser_delay_s=math.nan, laser_delay_std_s=math.nan,
-               imu_vs_laser_s=math.nan, notes=notes)
+               imu_vs_laser_s=math.nan, frf=None, notes=notes)
     if res.error:
         notes.append(res.error)
     modes = list(log.get("mode").get("mode", [])) if "mode" in log else []
@@ -95,17 +95,8 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
     if edge < 40:
         notes.append(f"tracked point within {edge:.0f} px of the image edge")
     fr = broken_loop_response(log, axis, sweep.f0_hz, 0.9 * sweep.f1_hz)  # the chirp's ends are weak
-    try:
-        m = margins_from_frd(fr.w_rad_s, fr.H, fr.coherence, sweep.min_coherence)
-        out.update(pm_deg=m.pm_deg, w_gc=m.w_gc, gm_db=m.gm_db, w_pc=m.w_pc)
-        if not np.isfinite(m.w_pc):
-            g = margins_from_frd(fr.w_rad_s, fr.H, fr.coherence, sweep.gm_min_coherence)
-            if np.isfinite(g.w_pc):
-                i = np.argmin(np.abs(fr.w_rad_s - g.w_pc))
-                out.update(gm_db=g.gm_db, w_pc=g.w_pc)
-                notes.append(f"GM read at coherence {fr.coherence[i]:.2f} (low confidence)")
-    except ValueError as exc:
-        notes.append(f"margins: {exc}")
+    out["frf"] = dict(w=fr.w_rad_s, H=fr.H, coherence=fr.coherence)
+    out.update(_margins(fr.w_rad_s, fr.H, fr.coherence, sweep, notes))
     lo, hi = sweep.delay_band_hz
     try:
         d = identify_imu_delay(log, cam.focal_px, (cam.width / 2, cam.height / 2), cam.depression_deg,
@@ -121,6 +112,59 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
                        imu_vs_laser_s=ld["imu_vs_laser"].delay_s)
         except ValueError as exc:
             notes.append(f"laser delay: {exc}")
+    return out
+
+
+def _margins(w, H, coherence, sweep: SweepSettings, notes: list[str]) -> dict:
+    """Margins from points with coherence >= ``sweep.min_coherence``; a phase crossover found only
+    below that is read from points down to ``gm_min_coherence`` and flagged in ``notes``."""
+    out = {}
+    try:
+        m = margins_from_frd(w, H, coherence, sweep.min_coherence)
+        out.update(pm_deg=m.pm_deg, w_gc=m.w_gc, gm_db=m.gm_db, w_pc=m.w_pc)
+        if not np.isfinite(m.w_pc):
+            g = margins_from_frd(w, H, coherence, sweep.gm_min_coherence)
+            if np.isfinite(g.w_pc):
+                i = np.argmin(np.abs(w - g.w_pc))
+                out.update(gm_db=g.gm_db, w_pc=g.w_pc)
+                notes.append(f"GM read at coherence {coherence[i]:.2f} (low confidence)")
+    except ValueError as exc:
+        notes.append(f"margins: {exc}")
+    return out
+
+
+def merge_sweeps(results: list[dict], sweep: SweepSettings) -> dict:
+    """One result from the same sweep flown with several seeds: the broken-loop responses averaged
+    per frequency with weights γ²/(1 − γ²) (the inverse variance of H, as CIPHER's composite
+    windows weigh), whose sum S gives the merged coherence S/(1 + S) (the information of the
+    records adds); margins from the merged response; delays inverse-variance averaged. A seed
+    whose sweep did not complete is named in the notes and left out."""
+    if len(results) == 1:
+        return results[0]
+    notes = [f"seed {i + 1}: {n}" for i, r in enumerate(results) for n in r["notes"]]
+    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, notes=notes)
+    for k in ("delay_s", "laser_delay_s"):
+        d = _combine_delays(*results, key=k)
+        s = np.array([r.get(k[:-2] + "_std_s", math.nan) for r in results], float)
+        ok = np.isfinite(s) & (s > 0) & np.isfinite([r.get(k, math.nan) for r in results])
+        out[k], out[k[:-2] + "_std_s"] = d, (float(1 / np.sqrt(np.sum(1 / s[ok] ** 2))) if ok.any() else math.nan)
+    il = np.array([r.get("imu_vs_laser_s", math.nan) for r in results], float)
+    out["imu_vs_laser_s"] = float(np.nanmean(il)) if np.isfinite(il).any() else math.nan
+    frfs = [r["frf"] for r in results if r.get("frf") is not None]
+    if not frfs:
+        return out
+    w = frfs[0]["w"]
+    if any(f["w"].shape != w.shape or not np.allclose(f["w"], w) for f in frfs):
+        raise ValueError("sweeps to merge must share one frequency grid")
+    g = np.clip(np.nan_to_num(np.array([f["coherence"] for f in frfs], float)), 0.0, 0.999)
+    wt = g / (1.0 - g)
+    S = wt.sum(axis=0)
+    H = np.array([f["H"] for f in frfs])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Hm = np.where(S > 0, (wt * np.nan_to_num(H)).sum(axis=0) / S, np.nanmean(H, axis=0))
+    coh = S / (1.0 + S)
+    out["frf"] = dict(w=w, H=Hm, coherence=coh)
+    out.update(_margins(w, Hm, coh, sweep, notes))
     return out
 
 
@@ -146,7 +190,8 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
                      sweep: SweepSettings = SweepSettings(), scenario: str = "palace-sweep",
                      overrides: tuple[str, ...] = (), workers: int = 1, executor=None,
                      progress=None, identify_altitude_m: float = 12.0, laser_delay_s: float = 0.0,
-                     ident_sweep: SweepSettings = IDENT_SWEEP) -> list[dict]:
+                     ident_sweep: SweepSettings = IDENT_SWEEP, seeds: int = 1,
+                     frf_sink: dict | None = None) -> list[dict]:
     """Tables 5.1/5.2: per altitude a GPS row and per IMU ``delay`` an MPE row, uncompensated;
     with ``compensate`` also an MPE row flown with the delays identified from a lateral and a
     longitudinal ``ident_sweep`` on GPS at ``identify_altitude_m`` (MPE open loop, so the identification
@@ -156,7 +201,10 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
     delays are used and the row's notes say so. ``laser_delay_s``: a simulated laser delay for
     every sweep. Each row is two sweeps (lateral, longitudinal). ``executor``: anything with
     ``submit`` (a process pool, a Dask client's executor); else ``workers`` local processes.
-    ``progress(done, total)`` after each run."""
+    ``seeds``: each sweep flown with seeds ``seed`` .. ``seed + seeds − 1`` and merged
+    (``merge_sweeps``: where the MPE noise drowns the phase crossover of one record, several
+    records average it out). ``progress(done, total)`` after each run. ``frf_sink``: a dict that
+    receives each row's broken-loop responses, keyed (altitude, delay, compensated, axis)."""
     alts = [float(a) for a in altitudes]
     dls = [float(d) for d in delays]
     if not alts or any(not (np.isfinite(a) and a > 0) for a in alts):
@@ -165,9 +213,11 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         raise ValueError(f"delays must be >= 0 s, got {delays}")
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
+    if seeds < 1:
+        raise ValueError(f"seeds must be >= 1, got {seeds}")
     if not (np.isfinite(laser_delay_s) and 0 <= laser_delay_s <= 1):
         raise ValueError(f"laser_delay_s must be in [0, 1] s, got {laser_delay_s}")
-    base = dict(seed=seed, sweep=sweep, scenario=scenario, overrides=tuple(overrides), laser_delay_s=laser_delay_s)
+    base = dict(scenario=scenario, overrides=tuple(overrides), laser_delay_s=laser_delay_s)
     runs: dict[tuple, dict] = {}
 
     def key(alt, src, delay, comp, axis, lcomp=0.0):
@@ -176,21 +226,24 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
     def execute(keys: list[tuple]) -> None:
         todo = [k for k in dict.fromkeys(keys) if k not in runs]
         jobs = [dict(base, altitude_m=k[0], source="gps" if k[1] == "ident" else k[1], imu_delay_s=k[2],
-                     attitude_delay_s=k[3], axis=k[4], laser_compensation_s=k[5],
-                     **({"sweep": ident_sweep} if k[1] == "ident" else {})) for k in todo]
+                     attitude_delay_s=k[3], axis=k[4], laser_compensation_s=k[5], seed=seed + i,
+                     sweep=ident_sweep if k[1] == "ident" else sweep) for k in todo for i in range(seeds)]
         pool = executor
         own = pool is None and workers > 1
         if own:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
-        total = len(runs) + len(todo)
+        total = (len(runs) + len(todo)) * seeds
         try:
             futures = [pool.submit(_call, j) for j in jobs] if pool is not None else None
             for i, k in enumerate(todo):
-                runs[k] = futures[i].result() if futures is not None else _call(jobs[i])
-                if progress is not None:
-                    progress(len(runs), total)
+                res = []
+                for j in range(i * seeds, (i + 1) * seeds):
+                    res.append(futures[j].result() if futures is not None else _call(jobs[j]))
+                    if progress is not None:
+                        progress(len(runs) * seeds + len(res), total)
+                runs[k] = merge_sweeps(res, jobs[i * seeds]["sweep"])
         finally:
             if own:
                 pool.shutdown()
@@ -225,6 +278,10 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         for ax, res in zip(axes, pair):
             r[f"{ax}_gm_wc_rps"] = res["w_pc"]
         r["notes"] = "; ".join(notes + [f"{ax}: {n}" for ax, res in zip(axes, pair) for n in res["notes"]])
+        if frf_sink is not None:
+            for ax, res in zip(axes, pair):
+                if res.get("frf") is not None:
+                    frf_sink[a, delay, comp, ax] = res["frf"]
         return r
 
     rows = []
