@@ -173,6 +173,23 @@ def margins(
     console.print(f"written: {out_dir / 'margins.csv'}")
 
 
+@app.command("palace-report")
+def palace_report(
+    drift: List[str] = typer.Option([], "--drift", help="palace-hover-drift campaign directory (repeatable)"),
+    margins: Optional[str] = typer.Option(None, "--margins", help="visnav margins output directory or margins.csv"),
+    out: str = typer.Option("runs/palace-report.html", help="HTML file to write"),
+) -> None:
+    """PALACE report page: drift vs altitude per surface, MPE noise vs range, Tables 5.1/5.2, Bode plots."""
+    from visnav.analysis.palace_report import write_palace_report
+
+    try:
+        path = write_palace_report(out, drift, margins)
+    except (ValueError, FileNotFoundError, KeyError) as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2)
+    console.print(f"written: {path}")
+
+
 @app.command()
 def scenarios() -> None:
     """List the built-in scenarios."""
