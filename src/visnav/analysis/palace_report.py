@@ -140,8 +140,8 @@ def drift_summary(table: list[dict]) -> dict:
 
 def _at(v, w) -> str:
     v, w = _num(v), _num(w)
-    if not math.isfinite(v):
-        return "unstable" if math.isnan(v) else "none in band"
+    if not math.isfinite(v):  # NaN: the sweep did not complete; inf: no crossover among coherent points
+        return "n/a (sweep lost)" if math.isnan(v) else "no crossover found"
     return f"{v:.2f} at {w:.2f}" if math.isfinite(w) else f"{v:.2f}"
 
 
