@@ -124,6 +124,9 @@ class MpeConfig(_M):
     laser_delay_s: float = Field(0.0, ge=-0.5, le=1.0, description="laser delay minus camera delay")
     rate_hz: float = Field(10.0, ge=1, le=30)
     jump_limit_m: float = Field(1.5, gt=0, le=50)
+    range_sigma0_m: float = Field(0.0, ge=0, le=1, description="laser noise the filter assumes (0: pixels only)")
+    range_sigma_per_m: float = Field(0.0, ge=0, le=0.1, description="its growth with range (seed 000 Fig. 3.4)")
+    attitude_sigma_deg: float = Field(0.0, ge=0, le=5, description="attitude noise the filter assumes")
 
 
 class NavigationConfig(_M):
