@@ -103,10 +103,13 @@ def test_identification_sweep_gives_each_sensors_delay_within_5ms():
 def test_mpe_sweeps_late_and_compensated_at_12m():
     """100 ms of IMU delay destabilises the 12 m MPE hover (the model's lateral loop is unstable
     there); compensating the identified 90 ms (IMU 100 ms late, image 10 ms late: palace-sweep's
-    baseline) restores the GPS margins."""
-    gps = sweep_run(12.0, "lateral", source="gps", seed=2)
+    baseline) restores the GPS margins. Seeds 1 and 2 merged, as the campaign does: one MPE sweep's
+    PM scatters by several degrees (single seeds gave +3.4°, +8.4°, +3.4° from GPS for seeds 1-3)."""
+    sweep = SweepSettings()
+    gps = mc.merge_sweeps([sweep_run(12.0, "lateral", source="gps", seed=s) for s in (1, 2)], sweep)
     late = sweep_run(12.0, "lateral", imu_delay_s=0.1, seed=2)
-    comp = sweep_run(12.0, "lateral", imu_delay_s=0.1, attitude_delay_s=0.09, laser_compensation_s=-0.01, seed=2)
+    comp = mc.merge_sweeps([sweep_run(12.0, "lateral", imu_delay_s=0.1, attitude_delay_s=0.09,
+                                      laser_compensation_s=-0.01, seed=s) for s in (1, 2)], sweep)
     assert not model_stable(12.0, 0.1, "lateral")
     assert math.isnan(late["pm_deg"]) and any("sweep incomplete" in n for n in late["notes"])
     assert comp["pm_deg"] == pytest.approx(gps["pm_deg"], abs=5.0)
