@@ -8,9 +8,10 @@ the horizon, the horizontal MPE error is, per axis,
 * across track (image x):  σ_y = R/(f√12)                       (the laser does not enter),
 * along track (image y):   σ_x = √((R sin δ/(f√12))² + (σ_L cos δ)²),
 
-for the ``thesis`` range model (R is the depth along the axis); with ``plane`` (the range fixes the
-height) the along-track pixel share is R/(f√12)/sin δ and the laser's σ_L/tan δ... ``closed_form``
-takes every share from the estimator's own derivatives rather than assume one model.
+for the ``thesis`` range model (R is the depth along the axis: the pixel error is perpendicular to
+the line of sight); with ``plane`` (the range fixes the height and the ray slides along the ground)
+the along-track pixel share is R/(f√12)/sin δ instead (the laser's stays σ_L cos δ: the offset is
+linear in R). ``closed_form`` takes every share from the estimator's own derivatives.
 ``mpe_error_series`` runs the real estimator open loop on quantised pixels and noisy ranges, so
 the slope of its σ against R can be set beside 1/(f√12).
 """
