@@ -124,8 +124,11 @@ def margins(
     scenario: str = typer.Argument("palace-sweep", help="a hover scenario (mission.type = hover)"),
     altitudes: str = typer.Option("6,12,18,30,54", help="heights AGL [m], comma separated"),
     delays: str = typer.Option("0,0.1", help="simulated IMU delays [s], comma separated"),
-    compensate: bool = typer.Option(False, help="also fly each delay compensated by the identified delay"),
+    compensate: bool = typer.Option(False, help="also fly each delay compensated by the identified delays"),
+    laser_delay: float = typer.Option(0.0, help="simulated laser delay [s] for every sweep"),
+    identify_altitude: float = typer.Option(12.0, help="height [m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
+    seeds: int = typer.Option(1, help="seeds per sweep, merged (weighted by coherence)"),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
@@ -135,7 +138,7 @@ def margins(
     import time as _time
     from pathlib import Path
 
-    from visnav.analysis.frequency import margins_campaign
+    from visnav.analysis.margins_campaign import margins_campaign
     from visnav.scenarios.schema import ScenarioError, load_scenario
 
     try:
@@ -151,8 +154,10 @@ def margins(
     out_dir.mkdir(parents=True, exist_ok=True)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), console=console) as prog:
         task = prog.add_task("sweeps", total=None)
-        rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario,
-                                overrides=tuple(set_), workers=workers,
+        frfs: dict = {}
+        rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario, frf_sink=frfs,
+                                overrides=tuple(set_), workers=workers, laser_delay_s=laser_delay,
+                                identify_altitude_m=identify_altitude, seeds=seeds,
                                 progress=lambda *a, **k: prog.advance(task))
     cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
             "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]
@@ -163,6 +168,9 @@ def margins(
         w.writeheader()
         for r in rows:
             w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in cols})
+    from visnav.analysis.palace_report import save_frfs
+
+    save_frfs(out_dir / "frf.npz", frfs)
     table = Table(title="margins at the cyclic actuators")
     for c in cols[:10]:
         table.add_column(c.replace("_", " "), justify="right")
@@ -170,6 +178,23 @@ def margins(
         table.add_row(*(_fmt(r.get(c)) if r.get(c) is not None else "" for c in cols[:10]))
     console.print(table)
     console.print(f"written: {out_dir / 'margins.csv'}")
+
+
+@app.command("palace-report")
+def palace_report(
+    drift: List[str] = typer.Option([], "--drift", help="palace-hover-drift campaign directory (repeatable)"),
+    margins: Optional[str] = typer.Option(None, "--margins", help="visnav margins output directory or margins.csv"),
+    out: str = typer.Option("runs/palace-report.html", help="HTML file to write"),
+) -> None:
+    """PALACE report page: drift vs altitude per surface, MPE noise vs range, Tables 5.1/5.2, Bode plots."""
+    from visnav.analysis.palace_report import write_palace_report
+
+    try:
+        path = write_palace_report(out, drift, margins)
+    except (ValueError, FileNotFoundError, KeyError) as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2)
+    console.print(f"written: {path}")
 
 
 @app.command()

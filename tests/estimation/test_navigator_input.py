@@ -63,3 +63,22 @@ def test_late_gps_velocity_is_carried_to_the_filter_time():
             nav.update(GpsSample(tg, np.array([0.5 * a * tg**2, 0.0, -10.0]), np.array([a * tg, 0.0, 0.0])))
     v = nav.estimate(3.0).velocity[0]
     assert abs(v - a * 3.0) < 0.01, v
+
+
+def test_mpe_fix_sigma_adds_the_laser_and_attitude_noise_per_axis():
+    """Default: eq. 3.3's pixel share only (floored at 2 cm); configured: the laser's σ0 + k R along
+    the ground offset (linear in R) and the attitude noise times its length, in quadrature."""
+    from visnav.estimation.mpe import MpeFix
+    from visnav.scenarios.schema import MpeConfig
+
+    off = np.array([31.0, 0.0, 54.0])  # camera -> point at 60° down, R = 62.3 m
+    R = float(np.linalg.norm(off))
+    fix = MpeFix(t=0.0, camera_position=np.zeros(3), position=np.zeros(3), ground_offset=off,
+                 sigma_px_m=R / (1073.0 * np.sqrt(12.0)))
+    assert _nav()._fix_sigma(fix, R) == 0.02
+    cfg = NavigationConfig(mpe=MpeConfig(range_sigma0_m=0.015, range_sigma_per_m=0.003, attitude_sigma_deg=0.03))
+    s = PalaceNavigator(cfg, PinholeCamera.ideal(), FixedMount.depressed(60.0))._fix_sigma(fix, R)
+    sl = 0.015 + 0.003 * R
+    sa = np.radians(0.03) * R
+    np.testing.assert_allclose(s, np.sqrt(0.02**2 + (sl * off / R) ** 2 + sa**2))
+    assert s[0] > 5 * 0.02 and s[1] < 0.04  # along track the laser dominates; across it does not enter

@@ -75,3 +75,25 @@ def test_sonar_reads_height_when_level():
     h.push(_state(0.0, h=1.3))
     s = Sonar(np.random.default_rng(0), sigma_m=0.0)
     assert abs(s.sample(0.0, h).range - 1.3) < 1e-12
+
+
+def test_camera_unknown_delay_renders_the_past_with_todays_stamp():
+    """An image ``delay_s`` older than its stamp (seed 000 §5.1: the frame paired with the attitude
+    at the end of its processing) is rendered from the pose of t − delay_s."""
+    from visnav.geometry.camera import PinholeCamera
+    from visnav.sensors.camera import Camera
+
+    h = TruthHistory(0.01)
+    for k in range(100):
+        h.push(_state(k * 0.01, x=k * 0.01 * 2.0))  # 2 m/s north
+    seen = []
+    cam = Camera(PinholeCamera.ideal(64, 48, 100.0), FixedMount.depressed(60.0), np.random.default_rng(0),
+                 delay_s=0.05)
+    cam.renderer.render = lambda cam_pos, C_cn, world: seen.append(cam_pos) or np.zeros((48, 64), np.uint8)
+    frame = cam.sample(0.9, h, None)
+    ref = Camera(PinholeCamera.ideal(64, 48, 100.0), FixedMount.depressed(60.0), np.random.default_rng(0))
+    ref.renderer.render = cam.renderer.render
+    ref.sample(0.85, h, None)
+    assert frame.t == 0.9
+    assert np.allclose(seen[0], seen[1]) and abs(seen[0][0] - seen[1][0]) < 1e-12
+    assert not np.allclose(seen[0], FixedMount.depressed(60.0).camera_pose(h(0.9).position, np.eye(3))[0])

@@ -168,6 +168,7 @@ class PalaceNavigator:
             return
         if m.sensor == "laser":
             self.lasers.append(m)
+            self.recorder("laser", m.t, range=r, beam_offset=m.beam_offset)  # laser delay identification
             self.h.laser_ok = bool(np.isfinite(r))
             return
         if not np.isfinite(r):
@@ -263,8 +264,21 @@ class PalaceNavigator:
                       range=laser.range, sigma=fix.sigma_px_m, jump=jump)
         if self.source == "mpe" and not jump:
             lag = (self.filter.t or f.t) - f.t
-            sigma = max(fix.sigma_px_m, 0.02)
+            sigma = self._fix_sigma(fix, laser.range)
             self.filter.update_position(fix.position + self.filter.v * lag, sigma)
+
+    def _fix_sigma(self, fix, range_m: float):
+        """σ of the fix per axis for the filter: eq. 3.3's pixel share (``sigma_px_m``, floored at
+        2 cm) plus, when configured, the laser's σ_L = σ0 + k·R carried along the offset (the offset
+        is linear in R) and the attitude noise times the offset's length (seed 000 Figs. 3.4, 4.5-4.7)."""
+        c = self.cfg.mpe
+        q = max(fix.sigma_px_m, 0.02)
+        if c.range_sigma0_m == 0 and c.range_sigma_per_m == 0 and c.attitude_sigma_deg == 0:
+            return q
+        off = np.abs(np.asarray(fix.ground_offset, float))
+        sl = (c.range_sigma0_m + c.range_sigma_per_m * range_m) * off / max(range_m, 1e-6)
+        sa = math.radians(c.attitude_sigma_deg) * float(np.linalg.norm(off))
+        return np.sqrt(q * q + sl * sl + sa * sa)
 
     def _start_track(self, f: Frame, C_bn: np.ndarray, laser: RangeSample | None) -> None:
         req = self._request

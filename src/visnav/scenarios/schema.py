@@ -99,6 +99,7 @@ class CameraConfig(_M):
     capture_hz: float = Field(30.0, ge=1, le=120)
     noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
     latency_s: float = Field(0.03, ge=0, le=1.0, description="exposure to memory (stamped correctly)")
+    delay_s: float = Field(0.0, ge=0, le=1.0, description="UNKNOWN delay: image stamped delay_s too late")
 
 
 class SensorsConfig(_M):
@@ -121,10 +122,14 @@ class TrackerConfig(_M):
 
 class MpeConfig(_M):
     model: Literal["thesis", "plane"] = "plane"
-    attitude_delay_s: float = Field(0.0, ge=0, le=1.0, description="compensation applied to attitude lookups")
-    laser_delay_s: float = Field(0.0, ge=0, le=1.0)
+    attitude_delay_s: float = Field(0.0, ge=-0.5, le=1.0, description="compensation applied to attitude "
+                                    "lookups: IMU delay minus camera delay (negative when the image is the late one)")
+    laser_delay_s: float = Field(0.0, ge=-0.5, le=1.0, description="laser delay minus camera delay")
     rate_hz: float = Field(10.0, ge=1, le=30)
     jump_limit_m: float = Field(1.5, gt=0, le=50)
+    range_sigma0_m: float = Field(0.0, ge=0, le=1, description="laser noise the filter assumes (0: pixels only)")
+    range_sigma_per_m: float = Field(0.0, ge=0, le=0.1, description="its growth with range (seed 000 Fig. 3.4)")
+    attitude_sigma_deg: float = Field(0.0, ge=0, le=5, description="attitude noise the filter assumes")
 
 
 class NavigationConfig(_M):

@@ -180,6 +180,7 @@ class Camera:
         process_hz: float = 10.0,
         noise_sigma: float = 2.0,
         latency_s: float = 0.0,
+        delay_s: float = 0.0,
     ):
         self.camera = camera
         self.mount = mount
@@ -187,11 +188,12 @@ class Camera:
         self.decimation = max(1, int(round(capture_hz / process_hz)))
         self.rate_hz = capture_hz / self.decimation
         self.latency_s = latency_s
+        self.delay_s = delay_s  # unknown: the image shows the instant delay_s before its stamp
         self.renderer = CameraRenderer(camera, noise_sigma, rng)
         self.frames = 0
 
     def sample(self, t: float, truth_at: TruthAt, world) -> Frame:
-        s = truth_at(t)
+        s = truth_at(t - self.delay_s)
         cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
         img = self.renderer.render(cam_pos, C_cn, world)
         self.frames += 1
@@ -201,7 +203,7 @@ class Camera:
         """Like ``sample`` but renders on ``executor`` (one worker: frames stay in order and the
         noise draws stay reproducible); OpenCV releases the GIL, so the frame renders on the second
         core while the simulation steps on through the camera's latency."""
-        s = truth_at(t)
+        s = truth_at(t - self.delay_s)
         cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
         self.frames += 1
         fut = executor.submit(self.renderer.render, cam_pos, C_cn, world)

@@ -64,7 +64,8 @@ class Simulation:
         self.laser = LaserRangeFinder(rng[3], self.mount, surface=sc.world.surface, **s.laser.model_dump())
         self.sonar = Sonar(rng[4], **s.sonar.model_dump())
         self.camera = Camera(self.camera_model, self.mount, rng[5], capture_hz=c.capture_hz,
-                             process_hz=sc.navigation.mpe.rate_hz, noise_sigma=c.noise_sigma, latency_s=c.latency_s)
+                             process_hz=sc.navigation.mpe.rate_hz, noise_sigma=c.noise_sigma, latency_s=c.latency_s,
+                             delay_s=c.delay_s)
 
         self.nav = PalaceNavigator(sc.navigation, self.camera_model, self.mount, recorder=self.log.record)
         parts = build_mission(self)

@@ -1,0 +1,311 @@
+"""Margins campaigns: closed-loop chirps flown in the simulator (seed 000 Tables 5.1/5.2).
+
+Each sweep is a hover with a chirp at one cyclic actuator (``palace-sweep``); from it come the
+broken-loop margins (``frequency``) and the sensor delays (``delay_id``). ``margins_campaign``
+flies the rows of Table 5.1 (GPS, MPE with late attitude) and, with compensation, the rows of
+Table 5.2 (MPE with the identified delays applied).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from visnav.analysis.delay_id import identify_imu_delay, identify_laser_delays
+from visnav.analysis.frequency import AXIS_INDEX, broken_loop_response, margins_from_frd
+
+
+@dataclass(frozen=True)
+class SweepSettings:
+    """The chirp injected at the actuator (YACS units, Hz, s) and the analysis settings.
+
+    The amplitude shrinks below ``amplitude_ref_altitude_m`` (to ``min_amplitude_fraction``): close
+    to the ground the same tilt moves the tracked point faster and the tracker loses it. Above it
+    the amplitude grows with height (up to ``max_amplitude_fraction``): the MPE noise grows with
+    the range while the response to a given tilt does not, so the same chirp loses coherence. Phase
+    crossovers where the coherence stays below ``min_coherence`` (MPE noise grows with height) are
+    read from points down to ``gm_min_coherence`` and flagged."""
+
+    amplitude: float = 40.0
+    f0_hz: float = 0.08
+    f1_hz: float = 2.5
+    duration_s: float = 80.0
+    start_s: float = 3.0
+    amplitude_ref_altitude_m: float = 12.0
+    min_amplitude_fraction: float = 0.75
+    max_amplitude_fraction: float = 1.0
+    delay_band_hz: tuple[float, float] = (0.5, 2.5)
+    min_coherence: float = 0.6
+    gm_min_coherence: float = 0.3
+
+    def amplitude_at(self, altitude_m: float) -> float:
+        scale = min(self.max_amplitude_fraction,
+                    max(self.min_amplitude_fraction, altitude_m / self.amplitude_ref_altitude_m))
+        return self.amplitude * scale
+
+    def overrides(self, altitude_m: float) -> list[str]:
+        return [f"mission.sweep_amplitude={self.amplitude_at(altitude_m)}", f"mission.sweep_f0_hz={self.f0_hz}",
+                f"mission.sweep_f1_hz={self.f1_hz}", f"mission.sweep_duration_s={self.duration_s}",
+                f"mission.sweep_start_s={self.start_s}", f"mission.hold_s={self.start_s + self.duration_s + 1.0}",
+                f"run.duration_s={self.start_s + self.duration_s + 30.0}"]
+
+
+def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: float = 0.0,
+              attitude_delay_s: float = 0.0, seed: int = 1, sweep: SweepSettings = SweepSettings(),
+              scenario: str = "palace-sweep", overrides: tuple[str, ...] = (), laser_delay_s: float = 0.0,
+              laser_compensation_s: float = 0.0) -> dict:
+    """One hover with a chirp at the ``axis`` actuator: its margins (NaN when the sweep did not
+    complete), the IMU delay behind the camera identified from the same sweep (roll for lateral,
+    pitch for longitudinal; ``delay_s``), on longitudinal sweeps the laser's delay behind the
+    camera (``laser_delay_s``, Fig. 5.2) and the IMU's behind the laser (``imu_vs_laser_s``, Fig.
+    5.4), and notes (track lost, sweep cut short, point near the image edge). ``imu_delay_s`` and
+    ``laser_delay_s`` are the simulated (unknown) sensor delays; ``attitude_delay_s`` and
+    ``laser_compensation_s`` the navigator's compensation (``navigation.mpe.*``)."""
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.loop import Simulation
+
+    if axis not in AXIS_INDEX:
+        raise ValueError(f"axis must be one of {sorted(AXIS_INDEX)}, got {axis!r}")
+    ov = [*overrides, f"mission.altitude_m={altitude_m}", f'mission.source="{source}"',
+          f'mission.sweep_axis="{axis}"', f"sensors.imu.delay_s={imu_delay_s}",
+          f"navigation.mpe.attitude_delay_s={attitude_delay_s}", f"sensors.laser.delay_s={laser_delay_s}",
+          f"navigation.mpe.laser_delay_s={laser_compensation_s}", *sweep.overrides(altitude_m)]
+    sc = load_scenario(scenario, ov, seed=seed)
+    res = Simulation(sc).run()
+    log, notes = res.log, []
+    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, delay_s=math.nan,
+               delay_std_s=math.nan, laser_delay_s=math.nan, laser_delay_std_s=math.nan,
+               imu_vs_laser_s=math.nan, frf=None, notes=notes)
+    if res.error:
+        notes.append(res.error)
+    modes = list(log.get("mode").get("mode", [])) if "mode" in log else []
+    if "lost" in modes:
+        notes.append(f"track lost at {log.get('mode')['t'][modes.index('lost')]:.1f} s")
+    a = log.get("actuator") if "actuator" in log else {}
+    if not a or a["t"][-1] - a["t"][0] < 0.95 * sweep.duration_s:
+        notes.append("sweep incomplete: loop unstable or track lost")
+        return out
+    cam = sc.sensors.camera
+    tr = log.get("tracker")
+    sel = (tr["t"] >= a["t"][0]) & (tr["t"] <= a["t"][-1])
+    x, y = tr["x"][sel], tr["y"][sel]
+    edge = min(x.min(), cam.width - x.max(), y.min(), cam.height - y.max())
+    if edge < 40:
+        notes.append(f"tracked point within {edge:.0f} px of the image edge")
+    fr = broken_loop_response(log, axis, sweep.f0_hz, 0.9 * sweep.f1_hz)  # the chirp's ends are weak
+    out["frf"] = dict(w=fr.w_rad_s, H=fr.H, coherence=fr.coherence)
+    out.update(_margins(fr.w_rad_s, fr.H, fr.coherence, sweep, notes))
+    lo, hi = sweep.delay_band_hz
+    try:
+        d = identify_imu_delay(log, cam.focal_px, (cam.width / 2, cam.height / 2), cam.depression_deg,
+                               "roll" if axis == "lateral" else "pitch", lo, min(hi, sweep.f1_hz))
+        out.update(delay_s=d.delay_s, delay_std_s=d.std_s)
+    except ValueError as exc:
+        notes.append(f"delay: {exc}")
+    if axis == "longitudinal":  # the laser sees pitch (its range along the optical axis), not roll
+        try:
+            ld = identify_laser_delays(log, cam.focal_px, (cam.width / 2, cam.height / 2), cam.depression_deg,
+                                       lo, min(hi, sweep.f1_hz))
+            out.update(laser_delay_s=ld["laser_vs_camera"].delay_s, laser_delay_std_s=ld["laser_vs_camera"].std_s,
+                       imu_vs_laser_s=ld["imu_vs_laser"].delay_s)
+        except ValueError as exc:
+            notes.append(f"laser delay: {exc}")
+    return out
+
+
+def _margins(w, H, coherence, sweep: SweepSettings, notes: list[str]) -> dict:
+    """Margins from points with coherence >= ``sweep.min_coherence``; a phase crossover found only
+    below that is read from points down to ``gm_min_coherence`` and flagged in ``notes``."""
+    out = {}
+    try:
+        m = margins_from_frd(w, H, coherence, sweep.min_coherence)
+        out.update(pm_deg=m.pm_deg, w_gc=m.w_gc, gm_db=m.gm_db, w_pc=m.w_pc)
+        if not np.isfinite(m.w_pc):
+            g = margins_from_frd(w, H, coherence, sweep.gm_min_coherence)
+            if np.isfinite(g.w_pc):
+                i = np.argmin(np.abs(w - g.w_pc))
+                out.update(gm_db=g.gm_db, w_pc=g.w_pc)
+                notes.append(f"GM read at coherence {coherence[i]:.2f} (low confidence)")
+    except ValueError as exc:
+        notes.append(f"margins: {exc}")
+    return out
+
+
+def merge_sweeps(results: list[dict], sweep: SweepSettings) -> dict:
+    """One result from the same sweep flown with several seeds: the broken-loop responses averaged
+    per frequency with weights γ²/(1 − γ²) (the inverse variance of H, as CIPHER's composite
+    windows weigh), whose sum S gives the merged coherence S/(1 + S) (the information of the
+    records adds); margins from the merged response; delays inverse-variance averaged. A seed
+    whose sweep did not complete is named in the notes and left out."""
+    if len(results) == 1:
+        return results[0]
+    notes = [f"seed {i + 1}: {n}" for i, r in enumerate(results) for n in r["notes"]]
+    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, notes=notes)
+    for k in ("delay_s", "laser_delay_s"):
+        d = _combine_delays(*results, key=k)
+        s = np.array([r.get(k[:-2] + "_std_s", math.nan) for r in results], float)
+        ok = np.isfinite(s) & (s > 0) & np.isfinite([r.get(k, math.nan) for r in results])
+        out[k], out[k[:-2] + "_std_s"] = d, (float(1 / np.sqrt(np.sum(1 / s[ok] ** 2))) if ok.any() else math.nan)
+    il = np.array([r.get("imu_vs_laser_s", math.nan) for r in results], float)
+    out["imu_vs_laser_s"] = float(np.nanmean(il)) if np.isfinite(il).any() else math.nan
+    frfs = [r["frf"] for r in results if r.get("frf") is not None]
+    if not frfs:
+        return out
+    w = frfs[0]["w"]
+    if any(f["w"].shape != w.shape or not np.allclose(f["w"], w) for f in frfs):
+        raise ValueError("sweeps to merge must share one frequency grid")
+    g = np.clip(np.nan_to_num(np.array([f["coherence"] for f in frfs], float)), 0.0, 0.999)
+    wt = g / (1.0 - g)
+    S = wt.sum(axis=0)
+    H = np.array([f["H"] for f in frfs])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Hm = np.where(S > 0, (wt * np.nan_to_num(H)).sum(axis=0) / S, np.nanmean(H, axis=0))
+    coh = S / (1.0 + S)
+    out["frf"] = dict(w=w, H=Hm, coherence=coh)
+    out.update(_margins(w, Hm, coh, sweep, notes))
+    return out
+
+
+def _combine_delays(*runs: dict, key: str = "delay_s") -> float:
+    """Inverse-variance mean of the finite delay estimates of several sweeps (NaN if none)."""
+    d = np.array([r.get(key, math.nan) for r in runs], float)
+    s = np.array([r.get(key[:-2] + "_std_s", math.nan) for r in runs], float)
+    ok = np.isfinite(d) & np.isfinite(s) & (s > 0)
+    return float(np.sum(d[ok] / s[ok] ** 2) / np.sum(1 / s[ok] ** 2)) if ok.any() else math.nan
+
+
+def _call(kwargs: dict) -> dict:
+    return sweep_run(**kwargs)
+
+
+#: The identification sweep (flown on GPS, MPE open loop): starts at 0.4 Hz, where the vehicle no
+#: longer drifts far enough to lose the tracked point, so it can be 1.6x the margins chirp; the
+#: laser's pitch (range noise ~0.3° at 24 m) needs that amplitude for ±5 ms (±10 ms at 40 units).
+IDENT_SWEEP = SweepSettings(amplitude=64.0, f0_hz=0.4, f1_hz=2.5, duration_s=40.0, start_s=1.0)
+
+
+def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
+                     sweep: SweepSettings = SweepSettings(), scenario: str = "palace-sweep",
+                     overrides: tuple[str, ...] = (), workers: int = 1, executor=None,
+                     progress=None, identify_altitude_m: float = 12.0, laser_delay_s: float = 0.0,
+                     ident_sweep: SweepSettings = IDENT_SWEEP, seeds: int = 1,
+                     frf_sink: dict | None = None) -> list[dict]:
+    """Tables 5.1/5.2: per altitude a GPS row and per IMU ``delay`` an MPE row, uncompensated;
+    with ``compensate`` also an MPE row flown with the delays identified from a lateral and a
+    longitudinal ``ident_sweep`` on GPS at ``identify_altitude_m`` (MPE open loop, so the identification
+    never rides on a loop the delay may destabilise; once per delay, as the thesis identified its
+    sensors once, on the ground): ``navigation.mpe.attitude_delay_s`` = the IMU's delay behind the
+    camera, ``navigation.mpe.laser_delay_s`` = the laser's. Where identification fails the true
+    delays are used and the row's notes say so. ``laser_delay_s``: a simulated laser delay for
+    every sweep. Each row is two sweeps (lateral, longitudinal). ``executor``: anything with
+    ``submit`` (a process pool, a Dask client's executor); else ``workers`` local processes.
+    ``seeds``: each sweep flown with seeds ``seed`` .. ``seed + seeds − 1`` and merged
+    (``merge_sweeps``: where the MPE noise drowns the phase crossover of one record, several
+    records average it out). ``progress(done, total)`` after each run. ``frf_sink``: a dict that
+    receives each row's broken-loop responses, keyed (altitude, delay, compensated, axis)."""
+    alts = [float(a) for a in altitudes]
+    dls = [float(d) for d in delays]
+    if not alts or any(not (np.isfinite(a) and a > 0) for a in alts):
+        raise ValueError(f"altitudes must be a non-empty list of heights > 0 m, got {altitudes}")
+    if any(not (np.isfinite(d) and d >= 0) for d in dls):
+        raise ValueError(f"delays must be >= 0 s, got {delays}")
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    if seeds < 1:
+        raise ValueError(f"seeds must be >= 1, got {seeds}")
+    if not (np.isfinite(laser_delay_s) and 0 <= laser_delay_s <= 1):
+        raise ValueError(f"laser_delay_s must be in [0, 1] s, got {laser_delay_s}")
+    base = dict(scenario=scenario, overrides=tuple(overrides), laser_delay_s=laser_delay_s)
+    runs: dict[tuple, dict] = {}
+
+    def key(alt, src, delay, comp, axis, lcomp=0.0):
+        return (alt, src, delay, round(comp, 6), axis, round(lcomp, 6))
+
+    def execute(keys: list[tuple]) -> None:
+        todo = [k for k in dict.fromkeys(keys) if k not in runs]
+        jobs = [dict(base, altitude_m=k[0], source="gps" if k[1] == "ident" else k[1], imu_delay_s=k[2],
+                     attitude_delay_s=k[3], axis=k[4], laser_compensation_s=k[5], seed=seed + i,
+                     sweep=ident_sweep if k[1] == "ident" else sweep) for k in todo for i in range(seeds)]
+        pool = executor
+        own = pool is None and workers > 1
+        if own:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+        total = (len(runs) + len(todo)) * seeds
+        try:
+            futures = [pool.submit(_call, j) for j in jobs] if pool is not None else None
+            for i, k in enumerate(todo):
+                res = []
+                for j in range(i * seeds, (i + 1) * seeds):
+                    res.append(futures[j].result() if futures is not None else _call(jobs[j]))
+                    if progress is not None:
+                        progress(len(runs) * seeds + len(res), total)
+                runs[k] = merge_sweeps(res, jobs[i * seeds]["sweep"])
+        finally:
+            if own:
+                pool.shutdown()
+
+    axes = ("lateral", "longitudinal")
+    ia = float(identify_altitude_m)
+    first = [key(a, "gps", 0.0, 0.0, ax) for a in alts for ax in axes]
+    first += [key(a, "mpe", d, 0.0, ax) for a in alts for d in dls for ax in axes]
+    if compensate:
+        first += [key(ia, "ident", d, 0.0, ax) for d in dls for ax in axes]
+    execute(first)
+    ident = {}
+
+    def comp_key(a, d, ax):
+        ca, cl = _compensation(ident[d], d, laser_delay_s)
+        return key(a, "mpe", d, ca, ax, cl)
+
+    if compensate:
+        for d in dls:
+            pair = [runs[key(ia, "ident", d, 0.0, ax)] for ax in axes]
+            tau, lt = _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s")
+            ok = np.isfinite(tau) and np.isfinite(lt)
+            ident[d] = (tau if np.isfinite(tau) else math.nan, lt if np.isfinite(lt) else math.nan, bool(ok))
+        execute([comp_key(a, d, ax) for a in alts for d in dls for ax in axes])
+
+    def row(a, delay, comp, pair, tau, ltau, notes):
+        r = dict(altitude_m=a, delay_s=delay, compensated=comp)
+        for ax, res in zip(axes, pair):
+            r.update({f"{ax}_pm_deg": res["pm_deg"], f"{ax}_pm_wc_rps": res["w_gc"], f"{ax}_gm_db": res["gm_db"]})
+        r["identified_imu_delay_s"] = tau
+        r["identified_laser_delay_s"] = ltau
+        for ax, res in zip(axes, pair):
+            r[f"{ax}_gm_wc_rps"] = res["w_pc"]
+        r["notes"] = "; ".join(notes + [f"{ax}: {n}" for ax, res in zip(axes, pair) for n in res["notes"]])
+        if frf_sink is not None:
+            for ax, res in zip(axes, pair):
+                if res.get("frf") is not None:
+                    frf_sink[a, delay, comp, ax] = res["frf"]
+        return r
+
+    rows = []
+    for a in alts:
+        pair = [runs[key(a, "gps", 0.0, 0.0, ax)] for ax in axes]
+        rows.append(row(a, None, "gps", pair, _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s"),
+                        []))
+        for d in dls:
+            pair = [runs[key(a, "mpe", d, 0.0, ax)] for ax in axes]
+            rows.append(row(a, d, False, pair, _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s"),
+                            []))
+            if compensate:
+                tau, ltau, ok = ident[d]
+                pair = [runs[comp_key(a, d, ax)] for ax in axes]
+                rows.append(row(a, d, True, pair, tau, ltau,
+                                [] if ok else ["identification failed: compensated with the true delays"]))
+    return rows
+
+
+def _compensation(ident: tuple[float, float, bool], imu_delay_s: float, laser_delay_s: float) -> tuple[float, float]:
+    """(attitude_delay_s, laser_delay_s) for the navigator: the identified delays behind the camera
+    (the true ones, without the camera's unknown delay, where identification failed), clipped to
+    the config's range."""
+    tau, ltau, ok = ident
+    a = tau if ok else imu_delay_s
+    b = ltau if ok else laser_delay_s
+    return float(np.clip(a, -0.5, 1.0)), float(np.clip(b, -0.5, 1.0))
