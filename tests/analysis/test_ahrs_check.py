@@ -1,26 +1,17 @@
 """Real-data check (issue #5 item 2): our AHRS on the PX4 sample log vs PX4's vehicle_attitude."""
 
 import json
-import os
-from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
+from tests.shared_data import missing_reason, shared_data_dir
 from visnav.analysis.ahrs_check import ahrs_check
 from visnav.cli import app
 
 
-def _data_dir() -> Path:
-    p = Path(__file__).resolve().parents[2].parent / "shared" / "data"
-    if not p.is_dir() and os.environ.get("VISNAV_SHARED_DATA"):
-        p = Path(os.environ["VISNAV_SHARED_DATA"])
-    return p
-
-
-LOG = _data_dir() / "px4" / "sample_px4_events.ulg"
-pytestmark = pytest.mark.skipif(not LOG.is_file(), reason=f"PX4 sample log not found at {LOG} "
-                                "(set VISNAV_SHARED_DATA to the shared data folder)")
+LOG = shared_data_dir() / "px4" / "sample_px4_events.ulg"
+pytestmark = pytest.mark.skipif(not LOG.is_file(), reason=missing_reason(LOG))
 
 
 @pytest.fixture(scope="module")

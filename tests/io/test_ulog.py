@@ -1,24 +1,15 @@
 """PX4 ULog reader: the sample log of ../shared/data, repaired and refused logs built from it."""
 
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.shared_data import missing_reason, shared_data_dir
 from visnav.io.ulog import clean_series, read_ulog
 
 
-def _data_dir() -> Path:
-    p = Path(__file__).resolve().parents[2].parent / "shared" / "data"
-    if not p.is_dir() and os.environ.get("VISNAV_SHARED_DATA"):
-        p = Path(os.environ["VISNAV_SHARED_DATA"])
-    return p
-
-
-LOG = _data_dir() / "px4" / "sample_px4_events.ulg"
-needs_log = pytest.mark.skipif(not LOG.is_file(), reason=f"PX4 sample log not found at {LOG} "
-                               "(set VISNAV_SHARED_DATA to the shared data folder)")
+LOG = shared_data_dir() / "px4" / "sample_px4_events.ulg"
+needs_log = pytest.mark.skipif(not LOG.is_file(), reason=missing_reason(LOG))
 
 
 @needs_log

@@ -1,14 +1,14 @@
 """The same landing over a real geo-referenced orthophoto (../shared/data), when it is present."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.shared_data import shared_data_dir
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.loop import Simulation
 
-DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data"
+DATA = shared_data_dir()
 MAP = DATA / "satellite_column.png"
 
 

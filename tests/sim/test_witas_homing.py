@@ -1,22 +1,19 @@
 """Closed-loop WITAS homing (seed 002 §5.9.1): a short loop by default, the 1 km loop and the real maps
 marked slow or skipped without the data."""
 
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.shared_data import shared_data_dir
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.missions import make_simulation
 
 
 def _data() -> Path | None:
-    for p in (Path(__file__).resolve().parents[2] / ".." / "shared" / "data",
-              Path(os.environ.get("VISNAV_SHARED_DATA", "/nonexistent"))):
-        if (p / "satellite_column.png").is_file():
-            return p
-    return None
+    d = shared_data_dir()
+    return d if (d / "satellite_column.png").is_file() else None
 
 
 def _fly(*sets):

@@ -12,9 +12,10 @@ import pymap3d
 import pytest
 from scipy import ndimage
 
+from tests.shared_data import shared_data_dir
 from visnav.world.maps import GeoImage
 
-DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data"
+DATA = shared_data_dir()
 
 
 def _blob_image(h: int, w: int, c0: float, r0: float, sigma: float) -> np.ndarray:
