@@ -5,7 +5,8 @@ per seed, on GPS and on MPE uncompensated, at each altitude, and keeps every see
 (``visnav margins`` keeps only the merged one). Resumable: rows go to ``<out>/sweeps.csv`` as they
 finish, each seed's broken-loop response to ``<out>/frf/``.
 
-    python scripts/palace_pm_trend.py fly  [--seeds 1-6] [--out runs/pm-trend]
+    python scripts/palace_pm_trend.py fly  [--seeds 1-6] [--out runs/pm-trend] [--set k=v] [--altitudes 6,54]
+                                           [--sources gps]
     python scripts/palace_pm_trend.py table [--out runs/pm-trend]
 """
 
@@ -34,7 +35,7 @@ def _done(path: Path) -> set:
         return {(int(r["seed"]), float(r["altitude_m"]), r["source"]) for r in csv.DictReader(f)}
 
 
-def fly(out: Path, seeds) -> None:
+def fly(out: Path, seeds, sets=(), altitudes=ALTITUDES, sources=SOURCES) -> None:
     from visnav.analysis.margins_campaign import SweepSettings, sweep_run
 
     out.mkdir(parents=True, exist_ok=True)
@@ -47,11 +48,12 @@ def fly(out: Path, seeds) -> None:
         if new:
             w.writeheader()
         for seed in seeds:  # seed outermost: an interrupted run leaves whole seeds
-            for alt in ALTITUDES:
-                for src in SOURCES:
+            for alt in altitudes:
+                for src in sources:
                     if (seed, alt, src) in done:
                         continue
-                    r = sweep_run(alt, "lateral", source=src, seed=seed, sweep=SweepSettings())
+                    r = sweep_run(alt, "lateral", source=src, seed=seed, sweep=SweepSettings(),
+                                  overrides=tuple(sets))
                     if r.get("frf") is not None:
                         np.savez(out / "frf" / f"{src}_{alt:g}_{seed}.npz", **r["frf"])
                     w.writerow(dict(seed=seed, altitude_m=alt, source=src, pm_deg=r["pm_deg"], w_gc=r["w_gc"],
@@ -127,7 +129,10 @@ def main(argv: list[str]) -> None:
     out = Path(_arg(argv, "--out", "runs/pm-trend"))
     if argv and argv[0] == "fly":
         a, b = _arg(argv, "--seeds", "1-6").split("-")
-        fly(out, range(int(a), int(b) + 1))
+        sets = [argv[i + 1] for i, x in enumerate(argv) if x == "--set"]
+        alts = [float(x) for x in _arg(argv, "--altitudes", ",".join(f"{a:g}" for a in ALTITUDES)).split(",")]
+        srcs = _arg(argv, "--sources", ",".join(SOURCES)).split(",")
+        fly(out, range(int(a), int(b) + 1), sets, alts, srcs)
     elif argv and argv[0] == "table":
         print(table(out))
     else:
