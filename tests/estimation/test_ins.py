@@ -146,3 +146,20 @@ def test_bad_imu_values_are_refused():
         ins.propagate(NavState(0.0), [np.nan, 0, 0], [0, 0, 0], 0.01)
     with pytest.raises(ValueError, match="dt"):
         ins.propagate(NavState(0.0), [0, 0, -9.8], [0, 0, 0], 0.0)
+
+
+def test_quat_to_euler_scalar_path_matches_vectorised_dcm_to_euler():
+    """The single-quaternion fast path of quat_to_euler must give dcm_to_euler's angles,
+    including gimbal lock (pitch = +-90 deg) and yaw = pi (wrapped into (-pi, pi])."""
+    from visnav.estimation.ins import quat_to_dcm, quat_to_euler
+    from visnav.geometry.rotations import dcm_to_euler
+
+    rng = np.random.default_rng(7)
+    qs = list(rng.normal(size=(200, 4)))
+    qs += [np.array([np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0]),  # pitch +90
+           np.array([np.cos(np.pi / 4), 0.3, -np.sin(np.pi / 4), 0.1]),  # near -90
+           np.array([0.0, 0.0, 0.0, 1.0])]  # yaw = pi
+    ref = dcm_to_euler(quat_to_dcm(np.array(qs)))
+    got = np.array([quat_to_euler(q) for q in qs])
+    np.testing.assert_allclose(got, ref, atol=1e-12)
+    assert got[-1, 2] == pytest.approx(np.pi)

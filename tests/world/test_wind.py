@@ -142,3 +142,19 @@ def test_wind_is_steady_plus_rotated_gust() -> None:
         np.testing.assert_allclose(v, steady.ned + to_ned(g, 135.0), atol=1e-12)
     assert np.linalg.norm(wind.velocity_ned(1.0, 0.1) - steady.ned) > 0
     np.testing.assert_allclose(Wind(steady).velocity_ned(0.0, 0.1), steady.ned)
+
+
+def test_closed_form_discretisation_matches_scipy_expm():
+    """Both unit shaping filters have all poles at -1: the closed form e^(-h)(I + hN) used by
+    discretize() must equal scipy's expm over the whole range of steps (1e-4 to 30 time constants)."""
+    from scipy import linalg
+
+    from visnav.world.wind import _UNIT_U, _UNIT_VW
+
+    for f in (_UNIT_U, _UNIT_VW):
+        assert f._nil is not None
+        for h in (1e-4, 3e-3, 0.05, 0.7, 2.0, 30.0):
+            ad, lq = f.discretize(h)
+            ref = linalg.expm(f.a * h)
+            np.testing.assert_allclose(ad, ref, rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(lq @ lq.T, np.eye(f.order) - ref @ ref.T, rtol=1e-9, atol=1e-15)

@@ -267,7 +267,7 @@ class ErrorStateKF:
             return UpdateResult(kind, False, math.nan, y, math.nan)
         PHt = self.P @ H.T
         S = H @ PHt + R
-        Sinv = np.linalg.inv(S)
+        Sinv = 1.0 / S if S.shape == (1, 1) else np.linalg.inv(S)  # (scalar: baro, heading)
         nis = float(y @ Sinv @ y)
         thr = math.inf if (not gate or self.cfg.gate_probability >= 1.0) else self._gate(len(y))
         if nis > thr:

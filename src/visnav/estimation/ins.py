@@ -137,6 +137,15 @@ def dcm_to_quat(C) -> np.ndarray:
 
 def quat_to_euler(q) -> np.ndarray:
     """(roll, pitch, yaw) [rad] of quaternion(s), ZYX as in geometry/rotations.py."""
+    q = np.asarray(q, dtype=float)
+    if q.shape == (4,):  # scalar fast path (the navigators call this at 50-100 Hz): dcm_to_euler's
+        (c00, c01, _), (c10, c11, _), (c20, c21, c22) = quat_to_dcm(q).tolist()
+        pitch = -math.asin(min(max(c20, -1.0), 1.0))  # formulas, without its array overhead
+        if math.hypot(c21, c22) < 1e-9:
+            roll, yaw = 0.0, math.atan2(-c01, c11)
+        else:
+            roll, yaw = math.atan2(c21, c22), math.atan2(c10, c00)
+        return np.array([roll, pitch, yaw if yaw > -math.pi else yaw + 2.0 * math.pi])
     return dcm_to_euler(quat_to_dcm(q))
 
 
