@@ -384,7 +384,7 @@ class DeckSimulation:
         return True
 
     def _log(self, t, x_true, ds, cmd):
-        x, P = self.nav.x, self.nav.P
+        x, P = self.nav.x, self.nav.covariance()
         err = dm.residual_x(x_true[None, :], x[None, :])[0]
         try:
             nees = float(err @ np.linalg.solve(P, err))
