@@ -30,13 +30,13 @@ def test_static_deck_landing():
     modes = list(sim.log.get("mode")["mode"])
     assert modes == ["manual", "approach", "landed"]
     # after hand-over R is the camera's own noise: the innovations fit it (NIS per measurement ~ 1; with
-    # the thesis' 2 deg it was 0.007), and the filter is no longer conservative. Its NEES lies about a
-    # factor 2 above the chi2(12) mean (docs/results-deck.md: a process-side mismatch not yet found)
+    # the thesis' 2 deg it was 0.007), and with the gyro noise the velocity carries (navigator.covariance)
+    # the NEES lies in the chi2(12) band (seed 1: 9.7; 23.6 without that term)
     t_ho = sim.log.get("mode")["t"][1]
     cam = sim.log.get("camera")
     ok = (cam["t"] > t_ho) & (cam["dof"] > 0)
     assert 0.5 <= np.sum(cam["nis"][ok]) / np.sum(cam["dof"][ok]) <= 2.0
-    assert NEES_BAND_12[0] <= m["nees_mean"] <= 3 * 12
+    assert NEES_BAND_12[0] <= m["nees_mean"] <= NEES_BAND_12[1]
     # the estimator started from eq. 5.12 while the truth was elsewhere, and converged
     init = sim.log.get("filter_init")
     np.testing.assert_array_equal(init["x0"][0][:3], [1.0, 0.0, 1.0])
