@@ -124,6 +124,10 @@ class DeckStartConfig(_M):
     heading_offset_max_deg: float = Field(45.0, ge=0, le=90, description="start azimuth around 'behind the "
                                           "deck', and so the relative heading (the vehicle faces the deck)")
     manual_s: float = Field(5.0, ge=0, le=60, description="pilot holds the start (truth) while the filter converges")
+    pilot: Literal["truth", "imu"] = Field("imu", description="before hand-over: 'truth' holds the start point "
+                                           "(the thesis' safety pilot / motion capture); 'imu' hovers level on the "
+                                           "IMU alone (no truth), the hand-over and the first plan then use the "
+                                           "filter's estimate")
 
 
 class DeckMissionConfig(_M):

@@ -202,6 +202,11 @@ class DeckSimulation:
                     self._restart_filter(t)
             elif mode == "hover":
                 self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
+            if self.mission.mode == "manual" and self.cfg.start.pilot == "imu":
+                # no truth: hover level on the IMU (vertical acceleration PI), heading held
+                thr = self.throttle.command(0.0, acc_meas_up, 1.0, np.cos(roll) * np.cos(pitch), dt)
+                self.log.record("reference", t, position=np.full(3, np.nan), velocity=np.zeros(3), accel=np.zeros(3))
+                return AttitudeThrustCommand(t=t, roll=0.0, pitch=0.0, yaw_rate=0.0, throttle=thr)
         elif mode == "approach":
             if isinstance(self.approach, TauGapApproach):
                 c, n_up = self._target(Cd0, wd, psi_d, max(self.approach.T - tm, 0.0))
@@ -329,7 +334,8 @@ class DeckSimulation:
                 x_true = self.truth_state(t, ds)
                 if k % 2 == 0:
                     acc_up = -(euler_to_dcm([att[0], att[1], 0.0]) @ acc)[2] - G
-                    x_ctrl = x_true if self.mission.mode == "manual" else self.nav.x
+                    truth_pilot = self.mission.mode == "manual" and cfg.start.pilot == "truth"
+                    x_ctrl = x_true if truth_pilot else self.nav.x
                     cmd = self._control(t, x_ctrl, gyro, att[0], att[1], acc_up, 2 * dt)
                 self._log(t, x_true, ds, cmd)
                 if self._contact(t, ds):
