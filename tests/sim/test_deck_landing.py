@@ -123,3 +123,21 @@ def test_filter_noise_matches_the_simulated_camera():
     # the thesis' R can still be chosen
     sc2 = load_scenario("deck-static", ["mission.filter.bearing_noise_deg=2", "mission.filter.bearing_rate_noise_deg_s=2"])
     assert make_simulation(sc2).measurement_sigmas() == pytest.approx((np.radians(2), np.radians(2)))
+
+
+def test_imu_pilot_hovers_level_without_truth_before_hand_over():
+    # start.pilot = "imu" (default): before the hand-over the commands are level with no heading rate,
+    # thrust from the vertical-acceleration PI only; the vehicle stays near its start (no wind)
+    sim = make_simulation(load_scenario("deck-static", ["run.duration_s=4.0"], seed=1))
+    assert sim.cfg.start.pilot == "imu"
+    sim.run()
+    cmd, veh = sim.log.get("command"), sim.log.get("vehicle")
+    assert set(sim.log.get("mode")["mode"]) == {"manual"}
+    np.testing.assert_array_equal(cmd["roll"], 0.0)
+    np.testing.assert_array_equal(cmd["pitch"], 0.0)
+    np.testing.assert_array_equal(cmd["yaw_rate"], 0.0)
+    assert np.linalg.norm(veh["position"][-1] - veh["position"][0]) < 0.05
+    # the truth pilot (the thesis' safety pilot) steers
+    sim = make_simulation(load_scenario("deck-static", ["run.duration_s=4.0", "mission.start.pilot=truth"], seed=1))
+    sim.run()
+    assert np.any(sim.log.get("command")["roll"] != 0.0)
