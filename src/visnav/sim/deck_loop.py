@@ -3,8 +3,9 @@
 One dynamics / IMU step of ``run.dt_s``; the camera frame every ``round(1 / (rate dt))`` steps, the
 guidance and control every second step. Modes (logged in the ``mode`` stream):
 
-* ``manual`` - the pilot holds the start point (truth-based hold, as in §5.3.2 and §5.3.5 the
-  vehicle was flown by hand while the estimator started and converged); the filter runs. After
+* ``manual`` - before the hand-over (in §5.3.2 and §5.3.5 the vehicle was flown by hand while the
+  estimator started and converged): with ``start.pilot = "imu"`` a level hover on the IMU alone, with
+  ``"truth"`` a truth-based hold of the start point (the thesis' safety pilot); the filter runs. After
   ``start.manual_s`` the hand-over waits for the operator's check (§5.3.1): every frame of the last
   second with >= 3 lights and an RMS bearing innovation below ``filter.converged_bearing_rms_deg``;
   failing it, the filter restarts (as the thesis' operator reset it, Fig. 5.7) from the next relative
@@ -19,8 +20,8 @@ guidance and control every second step. Modes (logged in the ``mode`` stream):
   thesis, whose runs end at the trajectory's end);
 * ``landed`` / ``missed`` - the gear met the deck plane on / off the plate; the run ends.
 
-Truth reaches the navigator only as the pilot's hold in ``manual`` and, with ``filter.init =
-"truth"``, as the logged initial estimate (the thesis' Vicon start).
+Truth reaches the control only as the ``"truth"`` pilot's hold in ``manual`` and the navigator only
+with ``filter.init = "truth"``, as the initial estimate (the thesis' Vicon start).
 """
 
 from __future__ import annotations
