@@ -144,17 +144,22 @@ class DeckSimulation:
         self.touchdown: dict | None = None
         self._ahrs = np.zeros(3)
 
+    @property
+    def frame_steps(self) -> int:
+        """Steps between camera frames: ``camera.rate_hz`` rounded to a whole number of ``run.dt_s``."""
+        return max(1, int(round(1.0 / (self.cfg.camera.rate_hz * self.dt))))
+
     def measurement_sigmas(self) -> tuple[float, float]:
         """Filter R [rad, rad/s]: the configured values, or those of the simulated camera (§3.1.2).
 
         A bearing is the centroid through the focal length, ``sigma_px / f``; a bearing rate the difference of
-        two frames' bearings over the frame interval, ``sqrt(2) sigma_b rate_hz``.
+        two frames' bearings over the frame interval the loop realises, ``sqrt(2) sigma_b / (d_cam dt)``.
         """
         f, c = self.cfg.filter, self.cfg.camera
         sig_b = (np.radians(f.bearing_noise_deg) if f.bearing_noise_deg is not None
                  else np.hypot(c.centroid_noise_px, RENDER_CENTROID_PX) / c.focal_px)
         sig_r = (np.radians(f.bearing_rate_noise_deg_s) if f.bearing_rate_noise_deg_s is not None
-                 else np.sqrt(2.0) * sig_b * c.rate_hz)
+                 else np.sqrt(2.0) * sig_b / (self.frame_steps * self.dt))
         return float(sig_b), float(sig_r)
 
     # --- truth ---------------------------------------------------------------------------------
@@ -312,7 +317,7 @@ class DeckSimulation:
 
         sc, dt, cfg = self.sc, self.dt, self.cfg
         n = int(round(sc.run.duration_s / dt))
-        d_cam = max(1, int(round(1.0 / (cfg.camera.rate_hz * dt))))
+        d_cam = self.frame_steps
         imu_rng, ahrs_rng = self.rng[4], self.rng[5]
         imu = cfg.imu
         cmd = AttitudeThrustCommand(0.0, 0.0, 0.0, 0.0, self.params.hover_throttle)
