@@ -52,3 +52,25 @@ def test_true_bearings_with_a_nan_row_and_a_distractor_converge():
     assert np.linalg.norm(nav.x[:3] - truth[:3]) < 0.05
     assert abs(nav.x[5] - 0.3) < np.radians(3)
     assert nav.stats.blobs_rejected > 0 and nav.stats.lights_used_last == 4
+
+
+def test_gyro_noise_telescopes_into_the_velocity_and_covariance_holds_it():
+    # vehicle and deck at rest: the only velocity error comes from the numerical angular acceleration,
+    # sum (n_k - n_k-1) x r = (n_N - n_0) x r, bounded (not a random walk); covariance() carries the
+    # newest sample's part, [r]x Sigma_g [r]x^T, on top of P
+    x0, P0 = dm.initial_state_static()
+    sg = 0.003
+    imu_cov = np.diag([0.0] * 3 + [sg**2] * 3)
+    nav = DeckNavigator(LEDS_EQ_5_10, CAM, x0, P0, imu_cov, np.zeros((6, 6)), np.radians(2), np.radians(2))
+    rng = np.random.default_rng(0)
+    n = sg * rng.standard_normal((50, 3))
+    for k in range(50):
+        nav.imu(0.01 * k, -G, n[k], G)
+    r = nav.x[0:3]
+    np.testing.assert_allclose(nav.x[6:9] - x0[6:9], -np.cross(n[-1] - n[0], r), atol=2e-4)
+    assert np.linalg.norm(np.cross(n[-1] - n[0], r)) > 2e-3  # the effect is ten times the tolerance
+    S = np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
+    extra = nav.covariance() - nav.P
+    np.testing.assert_allclose(extra[6:9, 6:9], S @ S.T * sg**2, rtol=1e-12)
+    extra[6:9, 6:9] = 0.0
+    np.testing.assert_array_equal(extra, 0.0)

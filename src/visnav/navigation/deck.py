@@ -66,6 +66,20 @@ class DeckNavigator:
     def P(self) -> np.ndarray:
         return self.ukf.P
 
+    def covariance(self) -> np.ndarray:
+        """Covariance of the estimate including the gyro's white noise in the velocity (what NEES should use).
+
+        The numerical angular acceleration telescopes in the velocity (``sum (w_k - w_k-1) x r``), so the
+        estimate carries ``-n x r`` with ``n`` the newest gyro sample's noise: a white error that the
+        process noise cannot hold (it does not accumulate) and that ``P`` therefore lacks. It adds
+        ``[r]x Sigma_gyro [r]x^T`` to the velocity block (``v = (v + w x r) - w x r``, d/dw = ``[r]x``).
+        """
+        r = self.ukf.x[0:3]
+        S = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+        P = self.ukf.P.copy()
+        P[6:9, 6:9] += S @ self.imu_cov[3:6, 3:6] @ S.T
+        return P
+
     def imu(self, t: float, accel, gyro, gravity_body) -> bool:
         """Predict to ``t`` with one IMU sample; False (and counted) when the sample is dropped."""
         accel, gyro, gb = (np.asarray(a, float) for a in (accel, gyro, gravity_body))

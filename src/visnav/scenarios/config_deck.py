@@ -50,6 +50,9 @@ class DeckCameraConfig(_M):
     depression_deg: float = Field(43.5, ge=0, le=90, description="optical axis below the body x axis (eq. 5.9: 0.76 rad)")
     yaw_deg: float = Field(-3.4, ge=-45, le=45, description="eq. 5.9: -0.06 rad")
     noise_gray: float = Field(2.0, ge=0, le=30)
+    centroid_noise_px: float = Field(0.3, ge=0, le=20, description="white noise added to each blob centroid "
+                                     "(real LED blobs: flicker, blooming, rolling shutter; the rendered image alone "
+                                     "gives about 0.02 px)")
     blob_threshold: int = Field(150, ge=1, le=254)
     extra_blobs_deck_m: list[list[float]] = Field(default_factory=list,
                                                   description="bright points that are not deck lights (deck frame)")
@@ -67,8 +70,15 @@ class DeckFilterConfig(_M):
     alpha: float = Field(0.1, gt=0, le=1)
     beta: float = Field(2.0, ge=0, le=10)
     kappa: float = Field(0.0, ge=-11, le=10)
-    bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="sigma of each bearing (§3.1.2)")
-    bearing_rate_noise_deg_s: float = Field(2.0, gt=0, le=100, description="sigma of each bearing rate (§3.1.2)")
+    bearing_noise_deg: float | None = Field(None, gt=0, le=20, description="sigma of each bearing (§3.1.2; the "
+                                            "thesis used 2); None: from the camera's centroid noise and focal length")
+    bearing_rate_noise_deg_s: float | None = Field(None, gt=0, le=100, description="sigma of each bearing rate "
+                                                   "(§3.1.2; the thesis used 2); None: sqrt(2) x the bearing sigma x "
+                                                   "the frame rate (a difference of two frames)")
+    acquisition_bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="bearing sigma while the filter "
+                                                 "converges before hand-over (the thesis' R; from a far-off start "
+                                                 "a sensor-sized R collapses P before the nonlinear errors are gone)")
+    acquisition_rate_noise_deg_s: float = Field(2.0, gt=0, le=100, description="bearing-rate sigma, the same")
     gate: float = Field(13.8, gt=0, le=1000, description="Mahalanobis gate / dummy cost (eq. 3.12)")
     init: Literal["static", "truth"] = Field("static", description="eq. 5.12-5.17, or truth with small sigmas (§5.3.5)")
     converged_bearing_rms_deg: float = Field(0.2, gt=0, le=10, description="hand over only when the RMS bearing "
@@ -101,6 +111,9 @@ class DeckGuidanceConfig(_M):
     overshoot_moving_m: float = Field(0.015, ge=0, le=0.5, description="moving deck: the same (k_rho = 0.5 ends "
                                       "at a_td, so the speed at contact is about sqrt(2 a_td overshoot))")
     final_descent_mps: float = Field(0.25, gt=0, le=2)
+    descent_hold: bool = Field(True, description="descend mode: horizontal spring-damper on the touchdown point "
+                                "(tilts the thrust off the deck normal; off: the vehicle drifts, moving seed 17 "
+                                "missed the plate)")
 
 
 class DeckStartConfig(_M):
@@ -111,6 +124,10 @@ class DeckStartConfig(_M):
     heading_offset_max_deg: float = Field(45.0, ge=0, le=90, description="start azimuth around 'behind the "
                                           "deck', and so the relative heading (the vehicle faces the deck)")
     manual_s: float = Field(5.0, ge=0, le=60, description="pilot holds the start (truth) while the filter converges")
+    pilot: Literal["truth", "imu"] = Field("imu", description="before hand-over: 'truth' holds the start point "
+                                           "(the thesis' safety pilot / motion capture); 'imu' hovers level on the "
+                                           "IMU alone (no truth), the hand-over and the first plan then use the "
+                                           "filter's estimate")
 
 
 class DeckMissionConfig(_M):

@@ -3,8 +3,9 @@
 One dynamics / IMU step of ``run.dt_s``; the camera frame every ``round(1 / (rate dt))`` steps, the
 guidance and control every second step. Modes (logged in the ``mode`` stream):
 
-* ``manual`` - the pilot holds the start point (truth-based hold, as in §5.3.2 and §5.3.5 the
-  vehicle was flown by hand while the estimator started and converged); the filter runs. After
+* ``manual`` - before the hand-over (in §5.3.2 and §5.3.5 the vehicle was flown by hand while the
+  estimator started and converged): with ``start.pilot = "imu"`` a level hover on the IMU alone, with
+  ``"truth"`` a truth-based hold of the start point (the thesis' safety pilot); the filter runs. After
   ``start.manual_s`` the hand-over waits for the operator's check (§5.3.1): every frame of the last
   second with >= 3 lights and an RMS bearing innovation below ``filter.converged_bearing_rms_deg``;
   failing it, the filter restarts (as the thesis' operator reset it, Fig. 5.7) from the next relative
@@ -19,8 +20,8 @@ guidance and control every second step. Modes (logged in the ``mode`` stream):
   thesis, whose runs end at the trajectory's end);
 * ``landed`` / ``missed`` - the gear met the deck plane on / off the plate; the run ends.
 
-Truth reaches the navigator only as the pilot's hold in ``manual`` and, with ``filter.init =
-"truth"``, as the logged initial estimate (the thesis' Vicon start).
+Truth reaches the control only as the ``"truth"`` pilot's hold in ``manual`` and the navigator only
+with ``filter.init = "truth"``, as the initial estimate (the thesis' Vicon start).
 """
 
 from __future__ import annotations
@@ -39,10 +40,11 @@ from visnav.sensors.led_camera import LedCamera
 from visnav.sim.log import FlightLog
 from visnav.sim.loop import RunResult
 from visnav.vehicles.multirotor import AttitudeThrustCommand, Multirotor, MultirotorParams
-from visnav.vision.blobs import BearingTracker
+from visnav.vision.blobs import BearingTracker, find_blobs
 from visnav.world.deck import SEA_STATES, DeckMotion, validate_lights
 
 G = 9.81
+RENDER_CENTROID_PX = 0.025  # centroid error of the rendered spots alone (measured: 0.0033 deg at f = 420 px)
 DIST_EQ_5_6_5_7 = (-0.188, -0.1631, 0.00136, 0.001605, 0.1631, 0.131, -0.366, 0.2436)  # OpenCV order
 
 
@@ -108,6 +110,7 @@ class DeckSimulation:
         self.cam_geom = dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=T_cam)
         self.led_camera = LedCamera(self.camera_model, T_cam, self.cam_geom.rho, rng[2], noise_gray=c.noise_gray)
         self.tracker = BearingTracker(self.camera_model, threshold=c.blob_threshold)
+        self._centroid_rng = rng[6]
 
         f = cfg.filter
         A, W, sA, sW = SEA_STATES[d.sea_state if d.motion == "moving" else "calm"]
@@ -125,8 +128,10 @@ class DeckSimulation:
             sig = np.repeat([0.03, np.radians(3), 0.05, np.radians(2)], 3)
             P0 = np.diag(sig**2)
             x0 = dm.wrap_state(x_true0 + sig * rng[3].standard_normal(12))
+        # acquisition (manual flight, before the hand-over check) with the thesis' R, tracking with the sensor's
         self.nav = DeckNavigator(self.lights, self.cam_geom, x0, P0, imu_cov, np.diag(ship_var),
-                                 np.radians(f.bearing_noise_deg), np.radians(f.bearing_rate_noise_deg_s), f.gate,
+                                 np.radians(f.acquisition_bearing_noise_deg), np.radians(f.acquisition_rate_noise_deg_s),
+                                 f.gate,
                                  f.alpha, f.beta, f.kappa)
         self.log.record("filter_init", 0.0, x0=x0, sigma=np.sqrt(np.diag(P0)), source=f.init)
         self._x0, self._P0, self._n_restarts = x0, P0, 0
@@ -138,6 +143,24 @@ class DeckSimulation:
         self.t_mode = 0.0
         self.touchdown: dict | None = None
         self._ahrs = np.zeros(3)
+
+    @property
+    def frame_steps(self) -> int:
+        """Steps between camera frames: ``camera.rate_hz`` rounded to a whole number of ``run.dt_s``."""
+        return max(1, int(round(1.0 / (self.cfg.camera.rate_hz * self.dt))))
+
+    def measurement_sigmas(self) -> tuple[float, float]:
+        """Filter R [rad, rad/s]: the configured values, or those of the simulated camera (§3.1.2).
+
+        A bearing is the centroid through the focal length, ``sigma_px / f``; a bearing rate the difference of
+        two frames' bearings over the frame interval the loop realises, ``sqrt(2) sigma_b / (d_cam dt)``.
+        """
+        f, c = self.cfg.filter, self.cfg.camera
+        sig_b = (np.radians(f.bearing_noise_deg) if f.bearing_noise_deg is not None
+                 else np.hypot(c.centroid_noise_px, RENDER_CENTROID_PX) / c.focal_px)
+        sig_r = (np.radians(f.bearing_rate_noise_deg_s) if f.bearing_rate_noise_deg_s is not None
+                 else np.sqrt(2.0) * sig_b / (self.frame_steps * self.dt))
+        return float(sig_b), float(sig_r)
 
     # --- truth ---------------------------------------------------------------------------------
     def truth_state(self, t: float, ds=None) -> np.ndarray:
@@ -185,6 +208,11 @@ class DeckSimulation:
                     self._restart_filter(t)
             elif mode == "hover":
                 self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
+            if self.mission.mode == "manual" and self.cfg.start.pilot == "imu":
+                # no truth: hover level on the IMU (vertical acceleration PI), heading held
+                thr = self.throttle.command(0.0, acc_meas_up, 1.0, np.cos(roll) * np.cos(pitch), dt)
+                self.log.record("reference", t, position=np.full(3, np.nan), velocity=np.zeros(3), accel=np.zeros(3))
+                return AttitudeThrustCommand(t=t, roll=0.0, pitch=0.0, yaw_rate=0.0, throttle=thr)
         elif mode == "approach":
             if isinstance(self.approach, TauGapApproach):
                 c, n_up = self._target(Cd0, wd, psi_d, max(self.approach.T - tm, 0.0))
@@ -210,9 +238,9 @@ class DeckSimulation:
             p_des, v_des = np.array([c[0], c[1], p_ld[2]]), np.array([0.0, 0.0, g.final_descent_mps])
             a_z = g.damper_per_s * (g.final_descent_mps - v_ld[2])
             a_ff = np.array([0.0, 0.0, G]) + (G - a_z) / max(-n_up[2], 0.5) * n_up
-        if mode == "descend":  # plus the spring-damper on the horizontal error (no sliding off)
+        if mode == "descend":  # optionally plus the spring-damper on the horizontal error (tilts the thrust)
             fb = follow(p_des, np.zeros(3), np.zeros(3), p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
-            a_cmd_ld = a_ff + np.array([fb[0], fb[1], 0.0])
+            a_cmd_ld = a_ff + (np.array([fb[0], fb[1], 0.0]) if g.descent_hold else 0.0)
         else:
             a_cmd_ld = follow(p_des, v_des, a_ff, p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
         a_cmd = Rz @ a_cmd_ld
@@ -250,6 +278,8 @@ class DeckSimulation:
 
     def _begin(self, t, mode, p_ld, Cd0, wd, psi_d):
         g = self.cfg.guidance
+        sig_b, sig_r = self.measurement_sigmas()  # converged: from now on the sensor's own noise
+        self.nav.bearing_var, self.nav.rate_var = sig_b**2, sig_r**2
         if mode == "approach" and self.cfg.deck.motion == "static":
             self._c0, _ = self._target(Cd0, wd, psi_d, 0.0)
             self.approach = StraightApproach(p_ld - self._c0, g.duration_s, g.k_static)
@@ -287,7 +317,7 @@ class DeckSimulation:
 
         sc, dt, cfg = self.sc, self.dt, self.cfg
         n = int(round(sc.run.duration_s / dt))
-        d_cam = max(1, int(round(1.0 / (cfg.camera.rate_hz * dt))))
+        d_cam = self.frame_steps
         imu_rng, ahrs_rng = self.rng[4], self.rng[5]
         imu = cfg.imu
         cmd = AttitudeThrustCommand(0.0, 0.0, 0.0, 0.0, self.params.hover_throttle)
@@ -310,7 +340,8 @@ class DeckSimulation:
                 x_true = self.truth_state(t, ds)
                 if k % 2 == 0:
                     acc_up = -(euler_to_dcm([att[0], att[1], 0.0]) @ acc)[2] - G
-                    x_ctrl = x_true if self.mission.mode == "manual" else self.nav.x
+                    truth_pilot = self.mission.mode == "manual" and cfg.start.pilot == "truth"
+                    x_ctrl = x_true if truth_pilot else self.nav.x
                     cmd = self._control(t, x_ctrl, gyro, att[0], att[1], acc_up, 2 * dt)
                 self._log(t, x_true, ds, cmd)
                 if self._contact(t, ds):
@@ -334,7 +365,10 @@ class DeckSimulation:
         to_ned = lambda b: ds.position + b @ ds.C.T  # noqa: E731
         img = self.led_camera.render(s.position, euler_to_dcm(s.euler), to_ned(lights), to_ned(self.deck_corners),
                                      to_ned(self.extra) if len(self.extra) else None)
-        frame = self.tracker.process(t, img)
+        uv = find_blobs(img, self.tracker.threshold)
+        if c.centroid_noise_px > 0 and len(uv):
+            uv = uv + c.centroid_noise_px * self._centroid_rng.standard_normal(uv.shape)
+        frame = self.tracker.from_pixels(t, uv)
         used = self.nav.camera(frame.bearings, frame.rates)
         self.log.record("camera", t, blobs=len(frame.bearings), lights_used=used,
                         nis=self.nav.last_nis if used else float("nan"), dof=self.nav.last_dof if used else 0,
@@ -362,7 +396,7 @@ class DeckSimulation:
         return True
 
     def _log(self, t, x_true, ds, cmd):
-        x, P = self.nav.x, self.nav.P
+        x, P = self.nav.x, self.nav.covariance()
         err = dm.residual_x(x_true[None, :], x[None, :])[0]
         try:
             nees = float(err @ np.linalg.solve(P, err))
