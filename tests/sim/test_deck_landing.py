@@ -141,3 +141,20 @@ def test_imu_pilot_hovers_level_without_truth_before_hand_over():
     sim = make_simulation(load_scenario("deck-static", ["run.duration_s=4.0", "mission.start.pilot=truth"], seed=1))
     sim.run()
     assert np.any(sim.log.get("command")["roll"] != 0.0)
+
+
+def test_thesis_camera_loses_every_light_over_the_landing_point():
+    """Eq. 5.9 camera pose with the eq. 5.10 layout: the lights leave the image before touchdown.
+
+    Closed form: the lowest image row looks atan(240 / 420) = 29.7 deg below the 43.5 deg axis, 73.2 deg
+    below the body's x axis, but every light lies behind the camera (x <= 0.058 m against the camera's
+    0.101 m) once the body is over the landing point, so no height keeps one in view.
+    """
+    sim = make_simulation(load_scenario("deck-static", seed=1))
+    cam, lights, go = sim.led_camera, sim.lights, sim.params.gear_offset
+    assert np.max(lights[:, 0]) < sim.cfg.camera.position_m[0]
+    for gear_h in (0.05, 0.1, 0.2, 0.3, 0.5, 0.8):  # level, deck frame = NED at the deck origin
+        _, over = cam.project(lights, np.array([0.0, 0.0, -(gear_h + go)]), np.eye(3))
+        assert not over.any()
+        _, behind = cam.project(lights, np.array([-0.3, 0.0, -(gear_h + go)]), np.eye(3))
+        assert behind.sum() >= 3
