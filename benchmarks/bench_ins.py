@@ -46,7 +46,7 @@ def _filter(gyro_bias: bool, disc: str) -> ErrorStateKF:
 
 def main() -> dict:
     rng = np.random.default_rng(0)
-    res: dict[str, float] = {}
+    res: dict[str, float | str] = {}
     acc = np.array([0.3, -0.2, -9.7])
     gyr = np.array([0.01, -0.02, 0.05])
     ins = StrapdownINS()
@@ -75,7 +75,7 @@ def main() -> dict:
         res["filterpy_predict_12_us"] = _per_call(lambda i: kf.predict(), 2000)
         res["filterpy_update_3_us"] = _per_call(lambda i: kf.update(z3[i % 4000]), 2000)
     except ImportError:
-        pass
+        res["filterpy_reference"] = "not installed (pip install filterpy): no reference timings"
     if LOG.is_file():
         from visnav.estimation.ahrs import AhrsConfig, run_ahrs
         from visnav.io.ulog import read_ulog
@@ -99,6 +99,8 @@ def main() -> dict:
             print(f"| {k} | {v:,.1f} µs |")
         elif k.endswith("_s"):
             print(f"| {k} | {v:.3f} s |")
+        elif isinstance(v, str):
+            print(f"| {k} | {v} |")
         else:
             print(f"| {k} | {v:,.1f} |")
     return res

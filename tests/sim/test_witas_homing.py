@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.shared_data import shared_data_dir
+from tests.shared_data import missing_reason, shared_data_dir
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.missions import make_simulation
 
@@ -57,7 +57,7 @@ def test_one_km_loop():
 def test_real_map(name):
     d = _data()
     if d is None:
-        pytest.skip("real satellite maps not found in ../shared/data (or VISNAV_SHARED_DATA)")
+        pytest.skip(missing_reason(shared_data_dir() / "satellite_column.png"))
     sim, res = _fly(f"mission.map.file={d / f'satellite_{name}.png'}", "mission.path.size_north_m=140",
                     "mission.path.size_east_m=140", "run.duration_s=120")
     m = res.metrics

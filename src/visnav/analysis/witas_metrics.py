@@ -110,8 +110,8 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         img = ground.level(min(2, ground.max_level))
         for a in axs:
             a.imshow(img, cmap="gray", extent=(e0, e1, n0, n1), origin="upper")
-    except Exception:  # the map is decoration: the tracks are drawn anyway
-        pass
+    except (OSError, ValueError) as exc:  # the map is decoration: the tracks are drawn anyway
+        axs[0].set_title(f"(reference map not drawn: {exc})", fontsize=8)
     tp = tr["position"]
     lim_e = (tp[:, 1].min() - 60, tp[:, 1].max() + 60)
     lim_n = (tp[:, 0].min() - 60, tp[:, 0].max() + 60)

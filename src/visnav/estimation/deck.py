@@ -37,6 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from visnav.geometry.rotations import skew
+
 N_STATE = 12
 POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 
@@ -79,10 +81,6 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack(np.broadcast_arrays(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 @dataclass(frozen=True)
@@ -139,7 +137,7 @@ def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, sh
     Fz = np.zeros((N_STATE, 6))
     Fz[POS, 0:3] = -dt2 * I3
     Fz[VEL, 0:3] = -dt * I3
-    dvdw = 2.0 * _skew(v) + 2.0 * np.outer(r, w) - np.dot(w, r) * I3 - np.outer(w, r)
+    dvdw = 2.0 * skew(v) + 2.0 * np.outer(r, w) - np.dot(w, r) * I3 - np.outer(w, r)
     Fz[VEL, 3:6] = dt * dvdw
     Fz[POS, 3:6] = dt2 * dvdw
     Fz[ATT, 3:6] = dt * E
@@ -160,8 +158,9 @@ class CameraGeometry:
 
 
 def light_vectors(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry):
-    """s_i (eq. 2.26) and ds_i/dt (eq. 2.28) in camera axes for every state and light: (N, L, 3) each."""
-    r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
+    """s_i (eq. 2.26) in camera axes (N, L, 3), the lights C_d^h b_i (N, L, 3) and C_h^d (N, 3, 3) for
+    every state and light (the rates of eq. 2.28 are formed from these in ``bearings_and_rates``)."""
+    r, e = sig[:, POS], sig[:, ATT]
     C = euler_dcm_batch(e)  # C_h^d
     b_h = np.einsum("nji,lj->nli", C, lights)  # C_d^h b_i
     p = r[:, None, :] + b_h - cam.rho

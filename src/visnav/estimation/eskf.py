@@ -44,18 +44,12 @@ from visnav.estimation.ins import (
     quat_to_dcm,
     radii_of_curvature,
 )
-from visnav.geometry.rotations import wrap_angle
+from visnav.geometry.rotations import skew, wrap_angle
 from visnav.measurements import ImuSample, NavEstimate
 
 __all__ = ["EskfConfig", "ErrorStateKF", "UpdateResult", "heading_from_mag"]
 
 R_, V_, E_, BA_, BG_ = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
-
-
-def skew(v) -> np.ndarray:
-    """Cross-product matrix of one 3-vector (the fast form of geometry.rotations.skew)."""
-    x, y, z = np.asarray(v, dtype=float).tolist()
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def _expm(A: np.ndarray) -> np.ndarray:

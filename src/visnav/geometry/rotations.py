@@ -41,6 +41,9 @@ def wrap_angle(a):
 
 def skew(v) -> np.ndarray:
     """Cross-product matrix: ``skew(v) @ u == np.cross(v, u)``; shape (..., 3, 3)."""
+    if isinstance(v, np.ndarray) and v.shape == (3,):  # fast path for the per-step filter algebra
+        x, y, z = v.tolist()
+        return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
     v = _vec3(v, "v")
     z = np.zeros(v.shape[:-1])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]

@@ -63,7 +63,9 @@ class _AhrsBackend:
         self.f.update_position(np.array([0.0, 0.0, -alt]), sigma, axes=(2,))
 
     def update_heading(self, yaw, sigma) -> None:
-        pass
+        """No-op by design: this backend takes its heading from the AHRS attitude solution; only the
+        ESKF backend fuses compass samples (seed 002 §5.8.3)."""
+        return None
 
     def state(self):
         return self.f.t, self.f.p.copy(), self.f.v.copy(), self.euler.copy(), self.f.covariance()

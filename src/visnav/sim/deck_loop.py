@@ -222,8 +222,8 @@ class DeckSimulation:
                     w = min(dt / g.retarget_tau_s, 1.0) if g.retarget_tau_s > 0 else 1.0
                     self._a_td = self._a_td + w * (a_td - self._a_td)
                     self.approach.retarget(self._a_td)
-                except ValueError:
-                    pass
+                except ValueError as exc:  # predicted deck too steep to match: keep the last aim, say so
+                    self.log.record("retarget_skipped", t, reason=str(exc))
             else:
                 c = self._c0
             pd, vd, a_now = self.approach.desired(tm)
