@@ -143,18 +143,31 @@ def test_imu_pilot_hovers_level_without_truth_before_hand_over():
     assert np.any(sim.log.get("command")["roll"] != 0.0)
 
 
-def test_thesis_camera_loses_every_light_over_the_landing_point():
-    """Eq. 5.9 camera pose with the eq. 5.10 layout: the lights leave the image before touchdown.
+def test_thesis_camera_loses_every_light_over_the_deck_origin():
+    """Eq. 5.9 camera pose with the eq. 5.10 layout: over the deck origin no light is in the image.
 
     Closed form: the lowest image row looks atan(240 / 420) = 29.7 deg below the 43.5 deg axis, 73.2 deg
     below the body's x axis, but every light lies behind the camera (x <= 0.058 m against the camera's
-    0.101 m) once the body is over the landing point, so no height keeps one in view.
+    0.101 m) once the body is over the deck origin, so no height keeps one in view. Over the moving
+    scenario's landing point (0.2 m behind the origin, §2.3's "desired landing location") three stay in
+    view down to contact, as the thesis' deck "within view during the whole duration of the flights".
     """
     sim = make_simulation(load_scenario("deck-static", seed=1))
     cam, lights, go = sim.led_camera, sim.lights, sim.params.gear_offset
     assert np.max(lights[:, 0]) < sim.cfg.camera.position_m[0]
+    np.testing.assert_array_equal(sim.landing_point, 0.0)
+    land = make_simulation(load_scenario("deck-moving", seed=1)).landing_point
+    np.testing.assert_allclose(land, [-0.2, 0.0, 0.0])
     for gear_h in (0.05, 0.1, 0.2, 0.3, 0.5, 0.8):  # level, deck frame = NED at the deck origin
         _, over = cam.project(lights, np.array([0.0, 0.0, -(gear_h + go)]), np.eye(3))
         assert not over.any()
         _, behind = cam.project(lights, np.array([-0.3, 0.0, -(gear_h + go)]), np.eye(3))
         assert behind.sum() >= 3
+        if gear_h <= 0.3:
+            _, at_land = cam.project(lights, land - [0.0, 0.0, gear_h + go], np.eye(3))
+            assert at_land.sum() >= 3
+
+
+def test_landing_point_off_the_plate_is_refused():
+    with pytest.raises(ScenarioError, match="landing_point_m"):
+        load_scenario("deck-moving", ["mission.guidance.landing_point_m=[0.35, 0.0, 0.0]"])

@@ -50,4 +50,7 @@ def deck_metrics(sim, sim_time_s: float, wall_time_s: float, error: str | None) 
     out["blobs_rejected"] = int(st.blobs_rejected)
     out["imu_dropped"] = int(st.imu_dropped)
     out["touchdown_time_s"] = td["t"] if td else nan
+    # time flown without a 3-light fix before contact (the camera of eq. 5.9 loses the lights over the deck origin)
+    seen = cam["t"][cam["lights_used"] >= 3] if cam else np.zeros(0)
+    out["blind_before_touchdown_s"] = float(td["t"] - seen[-1]) if td and seen.size else nan
     return finish_metrics(out, sim_time_s, wall_time_s, error)

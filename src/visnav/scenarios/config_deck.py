@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator
+import numpy as np
+from pydantic import Field, field_validator, model_validator
 
 from visnav.scenarios.base import _M
 
@@ -108,8 +109,14 @@ class DeckGuidanceConfig(_M):
     spring_per_s2: float = Field(6.0, gt=0, le=100, description="K of eq. 4.25")
     damper_per_s: float = Field(4.0, gt=0, le=100, description="B of eq. 4.25")
     overshoot_m: float = Field(0.04, ge=0, le=0.5, description="static deck: aim this far below the deck surface")
-    overshoot_moving_m: float = Field(0.015, ge=0, le=0.5, description="moving deck: the same (k_rho = 0.5 ends "
+    overshoot_moving_m: float = Field(0.025, ge=0, le=0.5, description="moving deck: the same (k_rho = 0.5 ends "
                                       "at a_td, so the speed at contact is about sqrt(2 a_td overshoot))")
+    landing_point_m: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0], min_length=3, max_length=3,
+                                         description="the desired landing location of the gear (deck frame, "
+                                         "§2.3: landing is the gear reaching it); the deck origin by default")
+    flare_s: float = Field(0.3, ge=0, le=3, description="moving deck: over this last part of the trajectory turn "
+                           "the commanded specific force onto the predicted deck normal (attitude before the "
+                           "position and velocity feedback; 0: off, the thesis' follower throughout)")
     final_descent_mps: float = Field(0.25, gt=0, le=2)
     descent_hold: bool = Field(True, description="descend mode: horizontal spring-damper on the touchdown point "
                                 "(tilts the thrust off the deck normal; off: the vehicle drifts, moving seed 17 "
@@ -139,3 +146,12 @@ class DeckMissionConfig(_M):
     filter: DeckFilterConfig = DeckFilterConfig()
     guidance: DeckGuidanceConfig = DeckGuidanceConfig()
     start: DeckStartConfig = DeckStartConfig()
+
+    @model_validator(mode="after")
+    def _landing_point_on_plate(self):
+        x, y, z = self.guidance.landing_point_m
+        h = self.deck.size_m / 2
+        if not (np.isfinite([x, y, z]).all() and abs(x) < h and abs(y) < h and abs(z) <= 0.1):
+            raise ValueError(f"guidance.landing_point_m {self.guidance.landing_point_m} must lie on the "
+                             f"{self.deck.size_m} m deck plate (|x|, |y| < {h}, |z| <= 0.1)")
+        return self
