@@ -53,4 +53,8 @@ def deck_metrics(sim, sim_time_s: float, wall_time_s: float, error: str | None) 
     # time flown without a 3-light fix before contact (the camera of eq. 5.9 loses the lights over the deck origin)
     seen = cam["t"][cam["lights_used"] >= 3] if cam else np.zeros(0)
     out["blind_before_touchdown_s"] = float(td["t"] - seen[-1]) if td and seen.size else nan
+    # time past the trajectory's end without contact (the descend mode; 0 when contact came during the approach)
+    md = log.get("mode")
+    t_desc = [t for t, m in zip(md["t"], md["mode"]) if m == "descend"] if md else []
+    out["descend_s"] = float((td["t"] if td else sim_time_s) - t_desc[0]) if t_desc else 0.0
     return finish_metrics(out, sim_time_s, wall_time_s, error)

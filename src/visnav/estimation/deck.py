@@ -45,16 +45,17 @@ POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 
 def euler_dcm_batch(e: np.ndarray) -> np.ndarray:
     """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3)."""
-    cf, sf = np.cos(e[:, 0]), np.sin(e[:, 0])
-    ct, st = np.cos(e[:, 1]), np.sin(e[:, 1])
-    cp, sp = np.cos(e[:, 2]), np.sin(e[:, 2])
+    c, s = np.cos(e), np.sin(e)  # one call each for the three angles (the batches are small)
+    cf, ct, cp = c[:, 0], c[:, 1], c[:, 2]
+    sf, st, sp = s[:, 0], s[:, 1], s[:, 2]
     C = np.empty((e.shape[0], 3, 3))
+    stcp, stsp = st * cp, st * sp
     C[:, 0, 0] = ct * cp
-    C[:, 0, 1] = -cf * sp + sf * st * cp
-    C[:, 0, 2] = sf * sp + cf * st * cp
+    C[:, 0, 1] = sf * stcp - cf * sp
+    C[:, 0, 2] = sf * sp + cf * stcp
     C[:, 1, 0] = ct * sp
-    C[:, 1, 1] = cf * cp + sf * st * sp
-    C[:, 1, 2] = -sf * cp + cf * st * sp
+    C[:, 1, 1] = cf * cp + sf * stsp
+    C[:, 1, 2] = cf * stsp - sf * cp
     C[:, 2, 0] = -st
     C[:, 2, 1] = sf * ct
     C[:, 2, 2] = cf * ct
@@ -80,7 +81,11 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b along the last axis with broadcasting (numpy's cross is slow for small batches)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack(np.broadcast_arrays(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 @dataclass(frozen=True)
@@ -177,8 +182,10 @@ def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry,
     sdot = pdot @ cam.T_cam.T
     sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
     dx, dy, dz = sdot[..., 0], sdot[..., 1], sdot[..., 2]
-    bear = np.stack([np.arctan(sx / sz), np.arctan(sy / sz)], axis=-1)
-    rate = np.stack([(dx * sz - sx * dz) / (sx * sx + sz * sz), (dy * sz - sy * dz) / (sy * sy + sz * sz)], axis=-1)
+    bear = np.arctan(s[..., :2] / sz[..., None])
+    rate = np.empty_like(bear)
+    rate[..., 0] = (dx * sz - sx * dz) / (sx * sx + sz * sz)
+    rate[..., 1] = (dy * sz - sy * dz) / (sy * sy + sz * sz)
     return bear, rate
 
 
@@ -198,7 +205,7 @@ def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry) -> n
 def wrap_state(sig: np.ndarray) -> np.ndarray:
     """Keep the relative Euler angles' roll and yaw in (-pi, pi]."""
     out = np.array(sig, dtype=float, copy=True)
-    out[..., [3, 5]] = np.mod(out[..., [3, 5]] + np.pi, 2 * np.pi) - np.pi
+    out[..., 3:6:2] = np.mod(out[..., 3:6:2] + np.pi, 2 * np.pi) - np.pi  # indices 3 and 5, a view
     return out
 
 
