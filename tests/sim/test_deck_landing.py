@@ -198,3 +198,17 @@ def test_truth_start_uses_the_sensor_noise_from_the_first_frame():
     assert sim.nav.bearing_var == pytest.approx(sb**2) and sim.nav.rate_var == pytest.approx(sr**2)
     sim = make_simulation(load_scenario("deck-static", seed=1))  # eq. 5.12 start: the thesis' 2 deg while acquiring
     assert sim.nav.bearing_var == pytest.approx(np.radians(2.0) ** 2)
+
+
+def test_go_around_when_the_trajectory_ends_without_contact():
+    """Deck motion 1.3x the preset, seed 3: the first trajectory ends with the gear above the deck. Without a
+    go-around the descend mode holds the matched tilt and touches down 9 deg off; with it the vehicle climbs
+    back to the start point and lands on the second approach within the targets."""
+    sets = ("mission.deck.motion_scale=1.3",)
+    sim, m = _run("deck-moving", 3, *sets)
+    modes = list(sim.log.get("mode")["mode"])
+    assert modes == ["manual", "hover", "approach", "hover", "approach", "landed"]
+    assert "go-around 1" in sim.log.get("mode")["reason"][3]
+    assert m["touchdown_rel_speed_mps"] <= 0.5 and m["touchdown_attitude_mismatch_deg"] <= 5.0
+    _, m0 = _run("deck-moving", 3, *sets, "mission.guidance.go_arounds=0")
+    assert m0["descend_s"] > 0.2 and m0["touchdown_attitude_mismatch_deg"] > 5.0

@@ -117,6 +117,9 @@ class DeckGuidanceConfig(_M):
     flare_s: float = Field(0.3, ge=0, le=3, description="moving deck: over this last part of the trajectory turn "
                            "the commanded specific force onto the predicted deck normal (attitude before the "
                            "position and velocity feedback; 0: off, the thesis' follower throughout)")
+    go_arounds: int = Field(2, ge=0, le=10, description="moving deck: a trajectory that ends without contact "
+                            "returns to the start point and tries again, this many times, before the descend mode")
+    go_around_hover_s: float = Field(2.0, ge=0, le=60, description="hover before the next approach of a go-around")
     final_descent_mps: float = Field(0.25, gt=0, le=2)
     descent_hold: bool = Field(True, description="descend mode: horizontal spring-damper on the touchdown point "
                                 "(tilts the thrust off the deck normal; off: the vehicle drifts, moving seed 17 "

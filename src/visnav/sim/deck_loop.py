@@ -15,9 +15,13 @@ guidance and control every second step. Modes (logged in the ``mode`` stream):
   ``lambda_max_deg`` of the start azimuth and at least ``gamma_min_deg`` from vertical);
 * ``approach`` - the tau trajectory (static: three straight gaps, k = 0.3, 15 s; moving: alpha,
   beta, rho gaps of ch. 4, re-aimed at every control step at the latest touchdown prediction);
-* ``descend`` - past the trajectory's end without contact: thrust along the estimated deck normal
-  (attitude kept matched) with the vertical speed servoed to ``final_descent_mps`` (not in the
-  thesis, whose runs end at the trajectory's end);
+* the last ``guidance.flare_s`` before contact of a moving-deck approach: the commanded specific force
+  is turned onto the predicted deck normal (attitude before the position feedback, not in the thesis);
+* a moving-deck trajectory that ends without contact goes around (back to ``hover`` at the start
+  point, a new approach once the start conditions hold) up to ``guidance.go_arounds`` times;
+* ``descend`` - past the trajectory's end without contact (static deck, or no go-around left): thrust
+  along the estimated deck normal with the vertical speed servoed to ``final_descent_mps`` and a
+  horizontal hold (not in the thesis, whose runs end at the trajectory's end);
 * ``landed`` / ``missed`` - the gear met the deck plane on / off the plate; the run ends.
 
 Truth reaches the control only as the ``"truth"`` pilot's hold in ``manual`` and the navigator only
@@ -143,6 +147,7 @@ class DeckSimulation:
             v.gear_offset_m + self.params.rotor_height))
         self.mission = _Mode()
         self.approach = None
+        self._go_arounds = 0
         self.t_mode = 0.0
         self.touchdown: dict | None = None
         self._ahrs = np.zeros(3)
@@ -237,7 +242,13 @@ class DeckSimulation:
             _, _, a_lead = self.approach.desired(min(tm + g.feedforward_lead_s, self.approach.T))
             p_des, v_des, a_ff = c + pd, vd, np.array([a_lead[0], a_lead[1], a_now[2]])
             if tm >= self.approach.T:
-                self._set_mode(t, "descend", "trajectory ended without contact")
+                if isinstance(self.approach, TauGapApproach) and self._go_arounds < g.go_arounds:
+                    # no contact at the trajectory's end: back to the start point, a new approach when the
+                    # start conditions hold again (the descend mode would hold the matched tilt for too long)
+                    self._go_arounds += 1
+                    self._set_mode(t, "hover", f"trajectory ended without contact: go-around {self._go_arounds}")
+                else:
+                    self._set_mode(t, "descend", "trajectory ended without contact")
         else:  # descend: thrust along the deck normal (attitude matched), sink at final_descent_mps
             c, n_up = self._target(Cd0, wd, psi_d, 0.0)
             p_des, v_des = np.array([c[0], c[1], p_ld[2]]), np.array([0.0, 0.0, g.final_descent_mps])
@@ -323,7 +334,7 @@ class DeckSimulation:
 
     def _maybe_start(self, t, tm, p_ld, Cd0, wd, psi_d):
         g = self.cfg.guidance
-        if tm < g.hover_min_s:
+        if tm < (g.go_around_hover_s if self._go_arounds else g.hover_min_s):
             return
         rho0 = float(np.linalg.norm(p_ld))
         T = np.sqrt(18.0 * rho0 / g.touchdown_accel_mps2)
