@@ -104,8 +104,9 @@ def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
     r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
     w, wdot = u.gyro, u.gyro_dot
     a_h = u.accel + u.gravity_body  # vehicle's inertial acceleration, h components (eq. 3.4)
-    wxr = _cross(w, r)
-    vdot = -a_h - _cross(wdot, r) - 2.0 * _cross(w, v) - _cross(w, wxr)  # eq. 3.5
+    # eq. 3.5: -a_h - wdot x r - 2 w x v - w x (w x r), the rate terms as two 3x3 products for the batch
+    Sw = skew(w)
+    vdot = -a_h - r @ (skew(wdot) + Sw @ Sw).T - v @ (2.0 * Sw).T
     C = euler_dcm_batch(e)  # C_h^d
     w_rel = w - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
     edot = np.einsum("nij,nj->ni", euler_rate_matrix(e), w_rel)
