@@ -47,6 +47,7 @@ from typing import Callable
 import numpy as np
 
 from visnav.control.rmax import CLIMB_GAIN, PITCH_DC, ROLL_DC, YAW_RATE_DC, design_position_loop
+from visnav.control.rmax_roll import ROLL_COMPENSATOR, RollCompensator, _check, roll_loop
 from visnav.guidance.pfcm import PathReference, heading_rotation
 from visnav.measurements import NavEstimate, YacsCommand
 
@@ -55,6 +56,11 @@ G = 9.81
 
 def _clip(x: float, lo: float, hi: float) -> float:
     return min(max(float(x), lo), hi)
+
+
+#: lateral gains K1r, K2r, K3r designed on the eq. 4.26 inner roll loop (``design_path_loop`` with
+#: ``base=PathLoopGains(roll_compensator=True)``; tests/control/test_rmax_roll.py checks them)
+COMPENSATED_LATERAL = {"k1r": 2.421091, "k2r": 2.619277, "k3r": 0.559475}
 
 
 @dataclass(frozen=True)
@@ -85,8 +91,14 @@ class PathLoopGains:
     integral_limit: float = 1.5  # |K ∫| per channel [m/s²]
     derivative_tau: float = 0.1  # low-pass on d δv_x/dt [s]
     input_limit: float = 500.0
+    roll_compensator: bool = False  # eq. 4.26 inner roll loop (control/rmax_roll.py) instead of the DC inversion
+    roll_k: float = ROLL_COMPENSATOR["k"]  # eq. 4.26 K (high-frequency gain, per normalised roll plant)
+    roll_alpha: float = ROLL_COMPENSATOR["alpha"]  # lead ratio, 0 < α <= 1
+    roll_tau: float = ROLL_COMPENSATOR["tau"]  # lead zero time constant [s]
+    roll_ki: float = ROLL_COMPENSATOR["ki"]  # integral gain [1/s]
 
     def __post_init__(self) -> None:
+        _check(self.roll_k, self.roll_alpha, self.roll_tau, self.roll_ki)
         for name in ("k1p", "k2p", "k3p", "k4p", "k1r", "k2r", "k3r", "k1t", "k2t", "k3t", "k1y",
                      "integral_limit", "derivative_tau"):
             v = getattr(self, name)
@@ -97,6 +109,17 @@ class PathLoopGains:
         for name in ("max_roll", "max_pitch", "max_yaw_rate", "max_climb_rate", "input_limit", "heave_damping"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+
+    @classmethod
+    def with_roll_compensator(cls, **kw) -> PathLoopGains:
+        """The eq. 4.26 inner roll loop on, with the lateral gains designed on it (``design_path_loop``)."""
+        return cls(**{"roll_compensator": True, **COMPENSATED_LATERAL, **kw})
+
+    def roll_closed_loop(self, rate_hz: float = 50.0):
+        """φ/φ_c of the eq. 4.26 inner loop (python-control), or None when it is off."""
+        if not self.roll_compensator:
+            return None
+        return roll_loop(self.roll_k, self.roll_alpha, self.roll_tau, self.roll_ki, rate_hz)[1]
 
     def yacs_units(self) -> dict[str, float]:
         """The gains as eq. 4.25 multiplies them: YACS units per m, per m/s, per rad (yaw)."""
@@ -118,10 +141,12 @@ def design_path_loop(rate_hz: float = 50.0, delay_s: float = 0.0, target_pm_deg:
                      min_gm_db: float = 6.0, lateral_ki_ratio: float = 0.25, vertical_crossover: float = 2.0,
                      vertical_pm_deg: float = 60.0, vertical_profile_gain: float = 0.25,
                      yaw_crossover: float = 1.0, base: PathLoopGains | None = None) -> PathLoopDesign:
-    """Eq. 4.25 gains from python-control loop shaping (the mapping in the module docstring)."""
+    """Eq. 4.25 gains from python-control loop shaping (the mapping in the module docstring).
+    With ``base.roll_compensator`` the lateral loop is designed on the eq. 4.26 inner roll loop."""
+    inner = base.roll_closed_loop(rate_hz) if base is not None else None
     lat = design_position_loop(rate_hz, delay_s, target_pm_deg, min_gm_db, ki_ratio=lateral_ki_ratio,
                                vertical_crossover=vertical_crossover, vertical_pm_deg=vertical_pm_deg,
-                               vertical_ki_ratio=0.0, yaw_crossover=yaw_crossover)
+                               vertical_ki_ratio=0.0, yaw_crossover=yaw_crossover, roll_loop=inner)
     lon = design_position_loop(rate_hz, delay_s, target_pm_deg, min_gm_db, ki_ratio=0.0,
                                vertical_crossover=vertical_crossover, vertical_pm_deg=vertical_pm_deg,
                                vertical_ki_ratio=0.0, yaw_crossover=yaw_crossover)
@@ -163,6 +188,9 @@ class PathFollowingController:
         self.channel_saturation_s = dict.fromkeys(("ail", "ele", "rud", "thr"), 0.0)
         self.last_reference: PathReference | None = None
         self.attitude_command = np.zeros(2)  # φ_c, θ_c [rad]
+        k = self.gains
+        self._roll = RollCompensator(k.roll_k, k.roll_alpha, k.roll_tau, k.roll_ki, self.rate_hz,
+                                     k.input_limit) if k.roll_compensator else None
 
     def command(self, t: float, nav: NavEstimate, ref) -> YacsCommand:
         r = ref.step(t, nav) if hasattr(ref, "step") else ref
@@ -208,7 +236,16 @@ class PathFollowingController:
         r_raw = r.r_ff + k.k1y * r.heading_error
         r_c = _clip(r_raw, -k.max_yaw_rate, k.max_yaw_rate)
         lim = k.input_limit
-        raw = (math.degrees(phi_c) / ROLL_DC, math.degrees(theta_c) / PITCH_DC, math.degrees(r_c) / YAW_RATE_DC,
+        roll_cmd = math.degrees(phi_c)  # open-loop DC inversion (eq. 4.25) ...
+        if self._roll is not None:  # ... or the eq. 4.26 inner loop on the INS roll
+            e = math.degrees(phi_c - float(nav.attitude[0]))
+            if not self._roll.started:  # bumpless start: first output = the DC inversion
+                self._roll.reset(e, roll_cmd)
+            elif dt > 0:
+                roll_cmd = self._roll.step(e)
+            else:
+                roll_cmd = self._roll.last
+        raw = (roll_cmd / ROLL_DC, math.degrees(theta_c) / PITCH_DC, math.degrees(r_c) / YAW_RATE_DC,
                w_c / CLIMB_GAIN)
         # a channel is saturated when its YACS input is at ±input_limit or its command limit acts
         sat = (abs(raw[0]) >= lim or phi_raw != phi_c, abs(raw[1]) >= lim or theta_raw != theta_c,
