@@ -23,8 +23,8 @@ K = 3, α = 0.5, τ = 0.5 s, K_I = 8 /s: crossover 4.78 rad/s, PM 68.2°, GM 17.
 phase lead from its zeros at 7.3 rad/s; the lead of eq. 4.26 is kept as the thesis built it.)
 
 ``RollCompensator`` is the Tustin discretisation at the controller rate with conditional
-integration (the integrator holds while the YACS input is at ``input_limit`` and the error pushes
-further) and a bumpless start (its first output is the DC inversion of the first command).
+integration (the integrator stops where the YACS input reaches ``input_limit`` while the error
+pushes further; the controller's own roll limit ``max_roll`` acts on φ_c before it) and a bumpless start (its first output is the DC inversion of the first command).
 """
 
 from __future__ import annotations
@@ -107,8 +107,8 @@ class RollCompensator:
         y = self.b0 * e + self.b1 * self._e - self.a1 * self._y
         i = self._i + 0.5 * self.ki * self.ts * (e + self._e)
         v = y + i
-        if abs(v) >= self.limit and (i - self._i) * v > 0:  # conditional integration (anti-windup)
-            i = self._i
+        if abs(v) > self.limit and (i - self._i) * v > 0:  # anti-windup: integrate only up to the limit
+            i = min(i, max(self._i, self.limit - y)) if v > 0 else max(i, min(self._i, -self.limit - y))
             v = y + i
         self._e, self._y, self._i, self.last = e, y, i, v
         return v
