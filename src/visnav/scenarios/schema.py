@@ -226,7 +226,7 @@ class PfcmMissionConfig(_M):
     anticipate_limits: bool = True
     iterations: int = Field(1, ge=1, le=20, description="control-point feedback iterations per cycle (eq. 4.10)")
     roll_integral: bool = Field(True, description="lateral integral K3r ∫δp_y (wind)")
-    roll_compensator: bool = Field(False, description="eq. 4.26 inner roll loop (lead + integral) on the "
+    roll_compensator: bool = Field(True, description="eq. 4.26 inner roll loop (lead + integral) on the "
                                    "YACS roll input, lateral gains designed on it")
     roll_margin_deg: float = Field(1.5, ge=0, le=15, description="roll command limit = phi_max + this")
     settle_s: float = Field(2.0, ge=0, le=60)
