@@ -63,7 +63,7 @@ from typing import Callable
 import numpy as np
 
 from visnav.control.rmax import CLIMB_GAIN, PITCH_DC, ROLL_DC, YAW_RATE_DC, design_position_loop
-from visnav.control.rmax_roll import ROLL_COMPENSATOR, RollCompensator, _check, roll_loop
+from visnav.control.rmax_roll import ROLL_COMPENSATOR, RollCompensator, check_gains, roll_loop
 from visnav.guidance.pfcm import PathReference, heading_rotation
 from visnav.measurements import NavEstimate, YacsCommand
 
@@ -114,7 +114,7 @@ class PathLoopGains:
     roll_ki: float = ROLL_COMPENSATOR["ki"]  # integral gain [1/s]
 
     def __post_init__(self) -> None:
-        _check(self.roll_k, self.roll_alpha, self.roll_tau, self.roll_ki)
+        check_gains(self.roll_k, self.roll_alpha, self.roll_tau, self.roll_ki)
         for name in ("k1p", "k2p", "k3p", "k4p", "k1r", "k2r", "k3r", "k1t", "k2t", "k3t", "k1y",
                      "integral_limit", "derivative_tau"):
             v = getattr(self, name)

@@ -40,7 +40,7 @@ from visnav.control.rmax import PLANT_TFS, ROLL_DC
 ROLL_COMPENSATOR = {"k": 3.0, "alpha": 0.5, "tau": 0.5, "ki": 8.0}
 
 
-def _check(k: float, alpha: float, tau: float, ki: float) -> None:
+def check_gains(k: float, alpha: float, tau: float, ki: float) -> None:
     if not (math.isfinite(k) and k > 0):
         raise ValueError(f"roll compensator K must be finite and > 0, got {k}")
     if not (math.isfinite(alpha) and 0 < alpha <= 1):
@@ -53,7 +53,7 @@ def _check(k: float, alpha: float, tau: float, ki: float) -> None:
 
 def compensator_tf(k: float, alpha: float, tau: float, ki: float) -> ct.TransferFunction:
     """Eq. 4.26: C(s) = K α (1 + τ s)/(1 + α τ s) + K_I/s (deg of command per deg of roll error)."""
-    _check(k, alpha, tau, ki)
+    check_gains(k, alpha, tau, ki)
     s = ct.tf("s")
     lead = k * alpha * (1 + tau * s) / (1 + alpha * tau * s)
     return lead + ki / s if ki > 0 else lead
@@ -81,7 +81,7 @@ class RollCompensator:
 
     def __init__(self, k: float, alpha: float, tau: float, ki: float, rate_hz: float = 50.0,
                  input_limit: float = 500.0) -> None:
-        _check(k, alpha, tau, ki)
+        check_gains(k, alpha, tau, ki)
         if not (np.isfinite(rate_hz) and rate_hz > 0):
             raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
         self.ts = 1.0 / rate_hz
