@@ -109,3 +109,34 @@ def test_a_path_with_a_gap_names_the_segment():
         load_scenario("pfcm-segment", ["mission.path=segments", "mission.segments=[[1,2,3]]"])
     with pytest.raises(ScenarioError, match="exit_drop_m must be smaller"):
         load_scenario("pfcm-spiral", ["mission.spiral.exit_drop_m=40"])
+
+
+# eq. 4.26 inner roll loop (seed 002 §4.5, Fig. 4.12: lower tracking error where the curvature changes fast)
+SHORT_SPIRAL = ["mission.spiral.turns=0.75", "mission.spiral.end_height_m=25", "mission.spiral.lead_in_m=60",
+                "mission.hold_s=1", "mission.settle_s=1", "run.duration_s=60"]
+
+
+def _pair(name, overrides, seed):
+    return [Simulation(load_scenario(name, overrides + [f"mission.roll_compensator={on}"], seed=seed)).run().metrics
+            for on in ("false", "true")]
+
+
+def test_roll_compensator_is_the_default_and_lowers_the_spiral_error():
+    assert load_scenario("pfcm-spiral").mission.roll_compensator is True
+    off, on = _pair("pfcm-spiral", SHORT_SPIRAL, 1)  # 10 m/s into a 30 m radius helix, ~33 s
+    assert off["path_completed"] and on["path_completed"]
+    assert on["cross_track_rms_m"] < 0.8 * off["cross_track_rms_m"]  # 0.17 m against 0.26 m
+    assert on["cross_track_max_m"] < off["cross_track_max_m"]
+    assert on["speed_error_rms_mps"] < off["speed_error_rms_mps"] + 0.02
+    assert on["max_roll_deg"] < 16.5 + 0.6  # within the roll command limit (+ a small overshoot)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_roll_compensator_full_scenarios(seed):
+    off, on = _pair("pfcm-spiral", [], seed)
+    assert on["cross_track_rms_m"] < 0.8 * off["cross_track_rms_m"]
+    assert on["cross_track_max_m"] < off["cross_track_max_m"] + 0.01
+    off, on = _pair("pfcm-segment", [], seed)
+    assert on["cross_track_rms_m"] <= off["cross_track_rms_m"]
+    assert on["cross_track_max_m"] <= off["cross_track_max_m"] + 0.005

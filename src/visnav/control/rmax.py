@@ -46,7 +46,8 @@ HEAVE_H0 = _dc("heave", 1)
 CLIMB_GAIN = G * HEAVE_H0  # [m/s per unit]; with Zw the steady climb rate of a held thr is 0
 
 
-def normalized_plant(axis: str, delay: float = 0.05, pade_order: int = 3) -> ct.TransferFunction:
+def normalized_plant(axis: str, delay: float = 0.05, pade_order: int = 3,
+                     roll_loop: ct.TransferFunction | None = None) -> ct.TransferFunction:
     """Plant seen by the PID at the cyclic (or pedal, collective) actuator, per unit of PID output.
 
     lateral:  a_y -> ail = deg(a_y/g)/φ_dc -> φ (eq. 3.4) -> v̇ = Yv v + gφ -> y: Gφ/Gφ(0)/(s(s−Yv))
@@ -54,10 +55,15 @@ def normalized_plant(axis: str, delay: float = 0.05, pade_order: int = 3) -> ct.
     vertical: a -> thr = a/(g H(0)) -> aZ = s H(s) thr -> ḧ = Zw ḣ + g aZ -> h:  H/H(0)/(s−Zw)
     yaw:      ψ̇_c -> rud -> r (eq. 3.4) -> ψ:                                 Gr/Gr(0)/s
     times a Padé approximation of ``delay`` (half a controller sample + any sensor delay).
+    ``roll_loop``: φ/φ_c of an inner roll loop (unit DC gain, e.g. the eq. 4.26 compensator of
+    ``control/rmax_path.py``) that replaces the open-loop DC inversion Gφ/Gφ(0) of the lateral axis.
     """
     s = ct.tf("s")
+    if roll_loop is not None and axis != "lateral":
+        raise ValueError(f"roll_loop applies to the lateral axis only, got axis {axis!r}")
     if axis == "lateral":
-        p = ct.tf(*PLANT_TFS["roll"]) / ROLL_DC / (s * (s - DRAG["y"]))
+        roll = ct.tf(*PLANT_TFS["roll"]) / ROLL_DC if roll_loop is None else roll_loop
+        p = roll / (s * (s - DRAG["y"]))
     elif axis == "longitudinal":
         p = ct.tf(*PLANT_TFS["pitch"]) / PITCH_DC / (s * (s - DRAG["x"]))
     elif axis == "vertical":
@@ -269,7 +275,8 @@ def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_
                          min_gm_db: float = 6.0, ki_ratio: float = 0.25, vertical_crossover: float = 2.0,
                          vertical_pm_deg: float = 60.0, vertical_ki_ratio: float = 0.25,
                          yaw_crossover: float = 1.0, pade_order: int = 3,
-                         base: RmaxPositionGains | None = None) -> DesignResult:
+                         base: RmaxPositionGains | None = None,
+                         roll_loop: ct.TransferFunction | None = None) -> DesignResult:
     """Design the PALACE position loop on the eq. 3.4 / 3.9 RMAX model.
 
     Each loop is broken at its actuator (seed 000 §5.2): L(s) = C(s)·P(s) with P from
@@ -286,6 +293,7 @@ def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_
     returned as ``crossover_limit``; the thesis' loop (seed 000 Table 5.2, 45.8° at 2.92 rad/s
     lateral) wraps the ARP attitude loop, which eq. 3.4 already contains.
     Vertical (PID, thr) and yaw (P, rud): crossover placed at the given frequency.
+    ``roll_loop``: an inner roll closed loop φ/φ_c under the lateral axis (``normalized_plant``).
     """
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
@@ -298,7 +306,7 @@ def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_
     delay = 0.5 / rate_hz + delay_s
     w = np.geomspace(0.01, min(100.0, 20 * math.pi * rate_hz), 4000)
     axes = ("lateral", "longitudinal", "vertical", "yaw")
-    plants = {a: normalized_plant(a, delay, pade_order) for a in axes}
+    plants = {a: normalized_plant(a, delay, pade_order, roll_loop if a == "lateral" else None) for a in axes}
     lat = _design_pid(plants["lateral"], target_pm_deg, min_gm_db, ki_ratio, w)
     lon = _design_pid(plants["longitudinal"], target_pm_deg, min_gm_db, ki_ratio, w)
     vert = _gains_at(plants["vertical"], vertical_crossover, vertical_pm_deg, vertical_ki_ratio)
@@ -306,7 +314,8 @@ def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_
     gains = replace(base or RmaxPositionGains(), kp_lon=lon.kp, kd_lon=lon.kd, ki_lon=lon.ki,
                     kp_lat=lat.kp, kd_lat=lat.kd, ki_lat=lat.ki, kp_vert=vert.kp, kd_vert=vert.kd,
                     ki_vert=vert.ki, k_yaw=k_yaw)
-    loops = {a: position_loop(a, gains, rate_hz, delay_s, pade_order) for a in plants}
+    loops = {a: position_loop(a, gains, rate_hz, delay_s, pade_order, roll_loop if a == "lateral" else None)
+             for a in plants}
     _check_stable(loops["yaw"])
     limit = {a: _crossover_limit(plants[a], target_pm_deg, w) for a in ("lateral", "longitudinal")}
     return DesignResult(gains, lat.margins, lon.margins, vert.margins, loop_margins(loops["yaw"]),
@@ -314,7 +323,8 @@ def design_position_loop(rate_hz: float = 10.0, delay_s: float = 0.0, target_pm_
 
 
 def position_loop(axis: str, gains: RmaxPositionGains | None = None, rate_hz: float = 10.0,
-                  delay_s: float = 0.0, pade_order: int = 3) -> ct.TransferFunction:
+                  delay_s: float = 0.0, pade_order: int = 3,
+                  roll_loop: ct.TransferFunction | None = None) -> ct.TransferFunction:
     """Loop transfer function of one axis broken at its actuator, for given gains and an extra
     measurement delay (e.g. the 43 ms attitude delay of seed 000 §5.2)."""
     k = gains or RmaxPositionGains()
@@ -324,7 +334,7 @@ def position_loop(axis: str, gains: RmaxPositionGains | None = None, rate_hz: fl
         raise ValueError(f"axis must be one of {sorted(pid)}, got {axis!r}")
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
-    return pid_tf(*pid[axis]) * normalized_plant(axis, 0.5 / rate_hz + delay_s, pade_order)
+    return pid_tf(*pid[axis]) * normalized_plant(axis, 0.5 / rate_hz + delay_s, pade_order, roll_loop)
 
 
 def _wrap(a: float) -> float:

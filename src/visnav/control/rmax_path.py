@@ -2,7 +2,7 @@
 
     YAW   = r_ff + K1y δψ
     PITCH = K1p δp_x + K2p δv_x + K3p d(δv_x)/dt + K4p ∫δv_x dt
-    ROLL  = φ_ff + K1r δp_y + K2r δv_y                       (+ K3r ∫δp_y dt, see below)
+    ROLL  = φ_ff + K1r δp_y + K2r δv_y                       (+ K3r ∫δp_y dt; eq. 4.26 inner loop, below)
     THR   = K1t δp_z + K2t δv_z + K3t ∫δv_z dt                (+ the target climb rate, see below)
 
 δp, δv: control point minus helicopter and target velocity minus helicopter velocity, in the
@@ -15,8 +15,8 @@ same gains in YACS units (what eq. 4.25 multiplies).
 
 Departures from eq. 4.25, each switchable: (0) the pitch feed-forward θ_ff = (X_u u − u̇)/g of
 eq. 4.14 with the target speed and its rate (the thesis left it out and saw the speed lag the
-profile); (1) roll integral action K3r ∫δp_y, the integral part of
-the lead-integral compensator the thesis added to the roll channel (eq. 4.26); (2) the pitch and
+profile); (1) lateral integral action K3r ∫δp_y against the wind
+(``roll_integral``; not part of eq. 4.26, which is the inner roll loop of (5)); (2) the pitch and
 roll integrators are kept in the world frame and projected on the current body axes
 (``world_integrators``): the wind drag they cancel is world-fixed, so a turn does not unwind
 them; (3) the target climb rate is fed forward to the throttle, and (4) so is T_ff of eq. 4.14
@@ -26,6 +26,22 @@ the heave damping −Z_w (eq. 3.9), otherwise the helicopter sinks ~0.15 m in a 
 The roll command is limited to φ_max + 1.5° (``max_roll``; the trajectory generator plans turns at
 φ_max), and a live generator is told the roll the lateral integrator spends against the wind
 (``set_lateral_bias``), which it takes off φ_max for v_targ2.
+
+(5) The inner roll compensator of §4.5 (eq. 4.26, Fig. 4.11 b; ``roll_compensator``, on by default
+in the scenarios): instead of the open-loop DC inversion ail = φ_c/Gφ(0), a lead + integral
+C(s) = K α (1 + τ s)/(1 + α τ s) + K_I/s on the roll error φ_c − φ (INS roll) drives the YACS roll
+input (``control/rmax_roll.py``, Tustin at 50 Hz, anti-windup at the YACS limit). K = 3, α = 0.5,
+τ = 0.5 s, K_I = 8 /s: inner crossover 4.78 rad/s, PM 68.2°, GM 17.2 dB, φ/φ_c bandwidth 5.59 rad/s
+against 3.05 rad/s of the YACS roll response alone; roll-step rise time 0.40 s against 0.68 s on
+the R-MAX model, 12.6 % overshoot. With it on, the lateral PID is designed on the inner closed loop
+by the same rule (``design_path_loop(base=PathLoopGains(roll_compensator=True))``,
+``COMPENSATED_LATERAL``): K1r 0.654 -> 2.421, K2r 1.523 -> 2.619, K3r 0.070 -> 0.559, lateral
+crossover 1.46 -> 2.82 rad/s at 45° PM. Measured (seeds 1-4, mean): pfcm-spiral cross-track rms
+0.276 -> 0.183 m, max 0.576 -> 0.417 m; pfcm-segment rms 0.072 -> 0.055 m, max unchanged (0.156 m);
+speed error unchanged, max roll +0.5° (spiral) and +0.8° (segment). The gain comes from the stiffer lateral loop the inner
+loop makes admissible: the inner loop under the old lateral gains changes nothing (spiral rms
+0.280 m), and the new lateral gains without it track as well in these simulations but have only
+19° PM on the identified model (docs/architecture.md, PFCM).
 
 Tuning (``design_path_loop``): python-control on the eq. 3.4/3.9 plant of ``control/rmax.py``
 (``design_position_loop``, loops broken at the actuator, 50 Hz sample-and-hold as a Padé delay).
@@ -47,6 +63,7 @@ from typing import Callable
 import numpy as np
 
 from visnav.control.rmax import CLIMB_GAIN, PITCH_DC, ROLL_DC, YAW_RATE_DC, design_position_loop
+from visnav.control.rmax_roll import ROLL_COMPENSATOR, RollCompensator, check_gains, roll_loop
 from visnav.guidance.pfcm import PathReference, heading_rotation
 from visnav.measurements import NavEstimate, YacsCommand
 
@@ -55,6 +72,11 @@ G = 9.81
 
 def _clip(x: float, lo: float, hi: float) -> float:
     return min(max(float(x), lo), hi)
+
+
+#: lateral gains K1r, K2r, K3r designed on the eq. 4.26 inner roll loop (``design_path_loop`` with
+#: ``base=PathLoopGains(roll_compensator=True)``; tests/control/test_rmax_roll.py checks them)
+COMPENSATED_LATERAL = {"k1r": 2.421091, "k2r": 2.619277, "k3r": 0.559475}
 
 
 @dataclass(frozen=True)
@@ -67,7 +89,7 @@ class PathLoopGains:
     k4p: float = 0.320636  # m/s² per m (∫δv_x)
     k1r: float = 0.654175  # m/s² per m (δp_y)
     k2r: float = 1.522924  # m/s² per m/s (δv_y)
-    k3r: float = 0.070251  # m/s² per m s (∫δp_y), eq. 4.26 integral action; 0 = eq. 4.25
+    k3r: float = 0.070251  # m/s² per m s (∫δp_y), lateral wind integral; 0 = eq. 4.25
     k1t: float = 3.875260  # climb m/s per m (δh)
     k2t: float = 0.417461  # climb m/s per m/s (δḣ)
     k3t: float = 0.968815  # climb m/s per m (∫δḣ)
@@ -85,8 +107,14 @@ class PathLoopGains:
     integral_limit: float = 1.5  # |K ∫| per channel [m/s²]
     derivative_tau: float = 0.1  # low-pass on d δv_x/dt [s]
     input_limit: float = 500.0
+    roll_compensator: bool = False  # eq. 4.26 inner roll loop (control/rmax_roll.py) instead of the DC inversion
+    roll_k: float = ROLL_COMPENSATOR["k"]  # eq. 4.26 K (high-frequency gain, per normalised roll plant)
+    roll_alpha: float = ROLL_COMPENSATOR["alpha"]  # lead ratio, 0 < α <= 1
+    roll_tau: float = ROLL_COMPENSATOR["tau"]  # lead zero time constant [s]
+    roll_ki: float = ROLL_COMPENSATOR["ki"]  # integral gain [1/s]
 
     def __post_init__(self) -> None:
+        check_gains(self.roll_k, self.roll_alpha, self.roll_tau, self.roll_ki)
         for name in ("k1p", "k2p", "k3p", "k4p", "k1r", "k2r", "k3r", "k1t", "k2t", "k3t", "k1y",
                      "integral_limit", "derivative_tau"):
             v = getattr(self, name)
@@ -97,6 +125,17 @@ class PathLoopGains:
         for name in ("max_roll", "max_pitch", "max_yaw_rate", "max_climb_rate", "input_limit", "heave_damping"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+
+    @classmethod
+    def with_roll_compensator(cls, **kw) -> PathLoopGains:
+        """The eq. 4.26 inner roll loop on, with the lateral gains designed on it (``design_path_loop``)."""
+        return cls(**{"roll_compensator": True, **COMPENSATED_LATERAL, **kw})
+
+    def roll_closed_loop(self, rate_hz: float = 50.0):
+        """φ/φ_c of the eq. 4.26 inner loop (python-control), or None when it is off."""
+        if not self.roll_compensator:
+            return None
+        return roll_loop(self.roll_k, self.roll_alpha, self.roll_tau, self.roll_ki, rate_hz)[1]
 
     def yacs_units(self) -> dict[str, float]:
         """The gains as eq. 4.25 multiplies them: YACS units per m, per m/s, per rad (yaw)."""
@@ -118,10 +157,12 @@ def design_path_loop(rate_hz: float = 50.0, delay_s: float = 0.0, target_pm_deg:
                      min_gm_db: float = 6.0, lateral_ki_ratio: float = 0.25, vertical_crossover: float = 2.0,
                      vertical_pm_deg: float = 60.0, vertical_profile_gain: float = 0.25,
                      yaw_crossover: float = 1.0, base: PathLoopGains | None = None) -> PathLoopDesign:
-    """Eq. 4.25 gains from python-control loop shaping (the mapping in the module docstring)."""
+    """Eq. 4.25 gains from python-control loop shaping (the mapping in the module docstring).
+    With ``base.roll_compensator`` the lateral loop is designed on the eq. 4.26 inner roll loop."""
+    inner = base.roll_closed_loop(rate_hz) if base is not None else None
     lat = design_position_loop(rate_hz, delay_s, target_pm_deg, min_gm_db, ki_ratio=lateral_ki_ratio,
                                vertical_crossover=vertical_crossover, vertical_pm_deg=vertical_pm_deg,
-                               vertical_ki_ratio=0.0, yaw_crossover=yaw_crossover)
+                               vertical_ki_ratio=0.0, yaw_crossover=yaw_crossover, roll_loop=inner)
     lon = design_position_loop(rate_hz, delay_s, target_pm_deg, min_gm_db, ki_ratio=0.0,
                                vertical_crossover=vertical_crossover, vertical_pm_deg=vertical_pm_deg,
                                vertical_ki_ratio=0.0, yaw_crossover=yaw_crossover)
@@ -163,6 +204,9 @@ class PathFollowingController:
         self.channel_saturation_s = dict.fromkeys(("ail", "ele", "rud", "thr"), 0.0)
         self.last_reference: PathReference | None = None
         self.attitude_command = np.zeros(2)  # φ_c, θ_c [rad]
+        k = self.gains
+        self._roll = RollCompensator(k.roll_k, k.roll_alpha, k.roll_tau, k.roll_ki, self.rate_hz,
+                                     k.input_limit) if k.roll_compensator else None
 
     def command(self, t: float, nav: NavEstimate, ref) -> YacsCommand:
         r = ref.step(t, nav) if hasattr(ref, "step") else ref
@@ -189,7 +233,7 @@ class PathFollowingController:
             a = dt / (k.derivative_tau + dt)
             self._dvx_rate += a * ((dv[0] - self._dvx_prev) / dt - self._dvx_rate)
         self._dvx_prev = float(dv[0])
-        # pitch and roll (accelerations), eq. 4.25 (+ eq. 4.26 integral on roll)
+        # pitch and roll (accelerations), eq. 4.25 (+ the lateral integral)
         i_x, i_y = float(xb @ self._i_lon), float(yb @ self._i_lat)
         a_x = k.k1p * dp[0] + k.k2p * dv[0] + k.k3p * self._dvx_rate + k.k4p * i_x
         a_y = k.k1r * dp[1] + k.k2r * dv[1] + k.k3r * i_y
@@ -208,7 +252,16 @@ class PathFollowingController:
         r_raw = r.r_ff + k.k1y * r.heading_error
         r_c = _clip(r_raw, -k.max_yaw_rate, k.max_yaw_rate)
         lim = k.input_limit
-        raw = (math.degrees(phi_c) / ROLL_DC, math.degrees(theta_c) / PITCH_DC, math.degrees(r_c) / YAW_RATE_DC,
+        roll_cmd = math.degrees(phi_c)  # open-loop DC inversion (eq. 4.25) ...
+        if self._roll is not None:  # ... or the eq. 4.26 inner loop on the INS roll
+            e = math.degrees(phi_c - float(nav.attitude[0]))
+            if not self._roll.started:  # bumpless start: first output = the DC inversion
+                self._roll.reset(e, roll_cmd)
+            elif dt > 0:
+                roll_cmd = self._roll.step(e)
+            else:
+                roll_cmd = self._roll.last
+        raw = (roll_cmd / ROLL_DC, math.degrees(theta_c) / PITCH_DC, math.degrees(r_c) / YAW_RATE_DC,
                w_c / CLIMB_GAIN)
         # a channel is saturated when its YACS input is at ±input_limit or its command limit acts
         sat = (abs(raw[0]) >= lim or phi_raw != phi_c, abs(raw[1]) >= lim or theta_raw != theta_c,

@@ -225,7 +225,9 @@ class PfcmMissionConfig(_M):
     vrs_shallow_descent_mps: float = Field(3.0, gt=0, le=10)
     anticipate_limits: bool = True
     iterations: int = Field(1, ge=1, le=20, description="control-point feedback iterations per cycle (eq. 4.10)")
-    roll_integral: bool = Field(True, description="eq. 4.26 integral action on the roll channel")
+    roll_integral: bool = Field(True, description="lateral integral K3r ∫δp_y (wind)")
+    roll_compensator: bool = Field(True, description="eq. 4.26 inner roll loop (lead + integral) on the "
+                                   "YACS roll input, lateral gains designed on it")
     roll_margin_deg: float = Field(1.5, ge=0, le=15, description="roll command limit = phi_max + this")
     settle_s: float = Field(2.0, ge=0, le=60)
     end_tolerance_m: float = Field(0.5, gt=0, le=20)

@@ -105,9 +105,10 @@ def _pfcm(sim) -> MissionParts:
 
     cfg = sim.sc.mission
     mission = PfcmMission(cfg, recorder=sim.log.record)
-    gains = PathLoopGains(max_roll=math.radians(cfg.phi_max_deg + cfg.roll_margin_deg),
-                          max_pitch=math.radians(cfg.theta_max_deg), max_yaw_rate=math.radians(cfg.r_max_deg_s),
-                          **({} if cfg.roll_integral else {"k3r": 0.0}))
+    make = PathLoopGains.with_roll_compensator if cfg.roll_compensator else PathLoopGains
+    gains = make(max_roll=math.radians(cfg.phi_max_deg + cfg.roll_margin_deg),
+                 max_pitch=math.radians(cfg.theta_max_deg), max_yaw_rate=math.radians(cfg.r_max_deg_s),
+                 **({} if cfg.roll_integral else {"k3r": 0.0}))
     controller = PathFollowingController(gains, recorder=sim.log.record)
     return MissionParts(mission=mission, controller=controller, metrics=pfcm_metrics,
                         start_position=mission.start_position(), start_yaw=mission.start_yaw, uses_camera=False)
