@@ -58,8 +58,7 @@ def test_thesis_model_exact_when_range_is_the_depth():
 
 def test_thesis_model_differs_from_plane_off_axis():
     """eq. 2.5 takes the axis range as the point's depth: wrong for an off-centre point on flat ground."""
-    mount = FixedMount.depressed(60.0)
-    pos = np.array([0.0, 0.0, -20.0])
+    mount = FixedMount.depressed(60.0)  # camera 20 m over flat ground
     C_bn = np.eye(3)
     uv = np.array([CAM.cx, CAM.cy + 200.0])
     laser = 20.0 / np.sin(np.deg2rad(60))

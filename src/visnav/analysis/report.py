@@ -76,7 +76,7 @@ def plots(log, point=None) -> list[tuple[str, str]]:
         _mode_spans(a, log)
     out.append(("Errors and modes", _fig_to_img(fig)))
 
-    trk, st = log.get("tracker"), log.get("status")
+    trk = log.get("tracker")
     if trk:
         fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
         ax[0].plot(trk["t"], trk["coherence"], ".", ms=2)

@@ -216,7 +216,7 @@ class RmaxModel:
         d2r = math.pi / 180.0
         phi, theta, r, az = y[0] * d2r, y[1] * d2r, y[2] * d2r, y[3]
         phid, thetad = yd[0] * d2r, yd[1] * d2r  # relative degree 2: CB = 0 (roll, pitch)
-        cf, sf, ct = math.cos(phi), math.sin(phi), math.cos(theta)
+        cf, sf = math.cos(phi), math.sin(phi)
         q = (thetad + r * sf) / cf
         p = phid - (q * sf + r * cf) * math.tan(theta)
         return phi, theta, p, q, r, az
