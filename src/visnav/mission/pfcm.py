@@ -64,6 +64,17 @@ def limits_from_config(cfg) -> PfcmLimits:
                       anticipate=cfg.anticipate_limits)
 
 
+def path_loop_gains(cfg):
+    """The eq. 4.25 outer-loop gains for a ``PfcmMissionConfig``: its command limits, the eq. 4.26 inner roll
+    loop with the lateral gains designed on it (``roll_compensator``), the lateral integral (``roll_integral``)."""
+    from visnav.control.rmax_path import PathLoopGains
+
+    make = PathLoopGains.with_roll_compensator if cfg.roll_compensator else PathLoopGains
+    return make(max_roll=math.radians(cfg.phi_max_deg + cfg.roll_margin_deg),
+                max_pitch=math.radians(cfg.theta_max_deg), max_yaw_rate=math.radians(cfg.r_max_deg_s),
+                **({} if cfg.roll_integral else {"k3r": 0.0}))
+
+
 def _heading(t: np.ndarray, fallback: float = 0.0) -> float:
     return math.atan2(t[1], t[0]) if math.hypot(t[0], t[1]) > 1e-6 * np.linalg.norm(t) else fallback
 

@@ -97,19 +97,13 @@ def _hover(sim) -> MissionParts:
 
 @register("pfcm")
 def _pfcm(sim) -> MissionParts:
-    import math
-
     from visnav.analysis.path_metrics import pfcm_metrics
-    from visnav.control.rmax_path import PathFollowingController, PathLoopGains
-    from visnav.mission.pfcm import PfcmMission
+    from visnav.control.rmax_path import PathFollowingController
+    from visnav.mission.pfcm import PfcmMission, path_loop_gains
 
     cfg = sim.sc.mission
     mission = PfcmMission(cfg, recorder=sim.log.record)
-    make = PathLoopGains.with_roll_compensator if cfg.roll_compensator else PathLoopGains
-    gains = make(max_roll=math.radians(cfg.phi_max_deg + cfg.roll_margin_deg),
-                 max_pitch=math.radians(cfg.theta_max_deg), max_yaw_rate=math.radians(cfg.r_max_deg_s),
-                 **({} if cfg.roll_integral else {"k3r": 0.0}))
-    controller = PathFollowingController(gains, recorder=sim.log.record)
+    controller = PathFollowingController(path_loop_gains(cfg), recorder=sim.log.record)
     return MissionParts(mission=mission, controller=controller, metrics=pfcm_metrics,
                         start_position=mission.start_position(), start_yaw=mission.start_yaw, uses_camera=False)
 
