@@ -433,3 +433,13 @@ def to_toml(sc: Scenario) -> str:
         return x
 
     return tomli_w.dumps(clean(sc.model_dump()))
+
+
+def scenario_hash(sc: Scenario, *, ignore_seed: bool = False) -> str:
+    """SHA-256 (hex) of the fully resolved scenario's canonical TOML: the identity of a configuration
+    (provenance of a run; the resume key of a campaign, there with ``ignore_seed=True``)."""
+    import hashlib
+
+    if ignore_seed:
+        sc = sc.model_copy(update={"run": sc.run.model_copy(update={"seed": 0})})
+    return hashlib.sha256(to_toml(sc).encode()).hexdigest()
