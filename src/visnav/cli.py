@@ -8,6 +8,7 @@ from typing import List, Optional
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.markup import escape
 from rich.table import Table
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="visnav: UAV navigation without GPS")
@@ -238,6 +239,75 @@ def ahrs(
         table.add_row(k, _fmt(m[k]))
     console.print(table)
     console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
+
+
+@app.command("eval")
+def eval_(
+    reference: str = typer.Argument(..., help="reference trajectory: TUM, CSV (t_s,x_m,y_m,z_m[,qx,qy,qz,qw]) or a "
+                                    "run directory (its truth.tum)"),
+    estimate: Optional[str] = typer.Argument(None, help="estimate: TUM, CSV or run directory (its estimate.tum); "
+                                             "default: the reference run directory's estimate.tum"),
+    align: str = typer.Option("none", help="alignment before the errors: none, se3 or sim3 (Umeyama)"),
+    max_diff: float = typer.Option(0.01, help="largest time difference of associated poses \\[s]"),
+    offset: float = typer.Option(0.0, help="added to the estimate's time stamps before association \\[s]"),
+    rpe_delta: float = typer.Option(1.0, help="RPE pair distance, in --rpe-unit"),
+    rpe_unit: str = typer.Option("frames", help="RPE pair distance unit: frames or m (of reference path)"),
+    drift: List[float] = typer.Option([], help="segment length for drift in % of distance \\[m] (repeatable)"),
+    origin: Optional[str] = typer.Option(None, help="geodetic origin of the NED frame 'lat_deg,lon_deg[,h_m]': "
+                                         "adds GeoJSON and KML exports"),
+    out: Optional[str] = typer.Option(None, help="write eval.json, the aligned estimate (TUM, CSV), eval.png and "
+                                      "exports here"),
+    json_: bool = typer.Option(False, "--json", help="print the summary as JSON on stdout"),
+) -> None:
+    """Absolute trajectory error and relative pose error of an estimate against a reference (evo's definitions)."""
+    import json
+    from pathlib import Path
+
+    from visnav.analysis.trajectory_eval import TrajectoryError, evaluate, read_trajectory
+
+    err = Console(stderr=True)
+    try:
+        ref_path = Path(reference)
+        if estimate is None and not ref_path.is_dir():
+            raise TrajectoryError(f"{reference}: give an ESTIMATE, or a run directory as REFERENCE")
+        ref = read_trajectory(ref_path, which="truth")
+        est = read_trajectory(Path(estimate) if estimate else ref_path, which="estimate")
+        lt = None
+        if origin:
+            from visnav.geometry.frames import LocalTangentPlane
+
+            try:
+                vals = [float(v) for v in origin.split(",")]
+                lt = LocalTangentPlane(*vals[:3])
+            except (ValueError, TypeError) as exc:
+                raise TrajectoryError(f"--origin must be 'lat_deg,lon_deg[,h_m]': {exc}") from None
+        ev = evaluate(ref, est, alignment=align, max_diff=max_diff, offset_s=offset, rpe_delta=rpe_delta,
+                      rpe_unit=rpe_unit, drift_lengths_m=drift)
+        files = []
+        if out:
+            from visnav.io.trajectory_export import write_evaluation
+
+            try:
+                files = write_evaluation(ev, out, lt)
+            except OSError as exc:
+                raise TrajectoryError(f"cannot write to {out}: {exc.strerror or exc}") from None
+    except TrajectoryError as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(2)
+    s = ev.summary()
+    if json_:
+        print(json.dumps(s, indent=2))
+        return
+    table = Table(title=f"{est.name} vs {ref.name} (alignment {align}, {ev.matched} poses matched)")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for k, v in s.items():
+        table.add_row(k, _fmt(v))
+    console.print(table)
+    if ref.frame:
+        console.print(f"frame: {escape(ref.frame)}")
+    for f in files:
+        console.print(f"written: {f}")
 
 
 def main() -> None:  # pragma: no cover
