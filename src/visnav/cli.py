@@ -305,8 +305,11 @@ def keys(
         _print_json(rows)
         return
     table = Table(title=f"settable keys of {scenario} (--set key=value)")
-    for col in ("key", "value", "unit", "allowed", "description"):
-        table.add_column(col, overflow="fold")
+    table.add_column("key", no_wrap=True)
+    table.add_column("value", overflow="fold", ratio=1)
+    table.add_column("unit", no_wrap=True)
+    table.add_column("allowed", ratio=1)
+    table.add_column("description", ratio=2)
     for r in rows:
         table.add_row(r["key"], escape(json.dumps(r["value"])), r["unit"], escape(r["allowed"]), escape(r["description"]))
     console.print(table)
