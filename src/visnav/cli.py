@@ -337,9 +337,13 @@ def ahrs(
     table = Table(title=f"AHRS vs PX4 vehicle_attitude ({Path(log).name})")
     table.add_column("metric")
     table.add_column("value", justify="right")
+    if m.get("log_truncated"):
+        table.add_row("log file", f"TRUNCATED: {m['duration_s']:.1f} s read")
+    table.add_row("magnetometer", m.get("magnetometer_source") or "NOT FOUND (yaw gyro-only)")
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
-        table.add_row(k, _fmt(m[k]))
+        gyro_only = k == "yaw_rms_diff_deg" and not m["magnetometer"]
+        table.add_row(k, _fmt(m[k]) + (" (gyro-only: no magnetometer)" if gyro_only else ""))
     console.print(table)
     console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
 
