@@ -220,9 +220,14 @@ def margins(
     from visnav.analysis.margins_campaign import check_margins_scenario, margins_campaign
     from visnav.io.runs import prepare_out_dir
 
+    def numbers(text: str, option: str) -> list[float]:
+        try:
+            return [float(a) for a in text.split(",") if a.strip()]
+        except ValueError:
+            raise ValueError(f"{option} takes comma-separated numbers, got '{text}'") from None
+
     try:
-        alts = [float(a) for a in altitudes.split(",") if a.strip()]
-        dels = [float(d) for d in delays.split(",") if d.strip()]
+        alts, dels = numbers(altitudes, "--altitudes"), numbers(delays, "--delays")
         if not alts or not dels:
             raise ValueError("--altitudes and --delays need at least one value each")
         check_margins_scenario(scenario, list(set_))
@@ -323,12 +328,13 @@ def ahrs(
         None, "--declination-deg", help="magnetic declination \\[deg]; default: the log's EKF2_MAG_DECL, else 0"),
 ) -> None:
     """Our INS attitude filter (AHRS mode) on a PX4 log's raw IMU vs PX4's vehicle_attitude."""
-    from pathlib import Path
-
     from visnav.analysis.ahrs_check import ahrs_check
+
+    from visnav.io.runs import prepare_out_dir
 
     out_dir = Path(out) if out else Path("runs") / f"ahrs-{Path(log).stem}"
     try:
+        prepare_out_dir(out_dir, force=True, clear=())  # writable? (ahrs overwrites its own two files)
         m = ahrs_check(log, out_dir, declination_deg)
     except (OSError, ValueError) as exc:
         _fail(exc)
