@@ -27,7 +27,8 @@ def _invoke(*args):
 
 def _one_line_error(r, text):
     assert r.exit_code == 2, r.output
-    assert "Traceback" not in r.output and r.exception is None or isinstance(r.exception, SystemExit)
+    assert "Traceback" not in r.output
+    assert r.exception is None or isinstance(r.exception, SystemExit)  # no uncaught exception
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error:") and text in lines[0], r.stderr
     assert r.stdout == ""
