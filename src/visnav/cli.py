@@ -91,6 +91,9 @@ def run(
         out_dir = new_run_dir(sc.run.name, out, force)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _fail(exc)
+    except KeyboardInterrupt:
+        err_console.print("interrupted before the run started: nothing written")
+        raise typer.Exit(130)
     for note in getattr(sim, "notes", []):
         err_console.print(f"[yellow]note:[/yellow] {escape(note)}", soft_wrap=True)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
