@@ -8,8 +8,6 @@ import math
 
 import numpy as np
 
-from visnav.analysis.condor_metrics import PUBLISHED, PUBLISHED_SOURCE  # noqa: F401  (report interface)
-
 
 def _error_map_figure(scenario):
     import matplotlib.pyplot as plt

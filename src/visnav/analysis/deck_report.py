@@ -8,17 +8,6 @@ import numpy as np
 from visnav.analysis.deck_metrics import attitude_error_deg
 from visnav.geometry.rotations import euler_to_dcm
 
-PUBLISHED_SOURCE = "seed 003 (Holmes 2017)"
-PUBLISHED = {
-    "landed": "64 static-deck and 20 moving-deck landings (§5.3.3, §5.3.5)",
-    "touchdown_rel_speed_mps": "not reported (issue target <= 0.5 m/s)",
-    "touchdown_attitude_mismatch_deg": "not reported (issue target <= 5 deg)",
-    "touchdown_position_error_m": "touchdown errors 'on the order of a centimeter' (§6.1, estimate)",
-    "pos_error_final_approach_median_m": "generally below 10 cm (Fig. 5.20; issue target <= 5 cm)",
-    "att_error_final_approach_median_deg": "0.08-0.12 rad = 4.6-6.9 deg (Fig. 5.20; issue target <= 3 deg)",
-    "vel_error_final_approach_median_mps": "about 0.2 m/s (Fig. 5.21; issue target <= 0.1 m/s)",
-    "nees_mean": "errors inside +-2 sigma (Figs. 5.12-5.15); 95% chi2(12) band 4.40-23.34",
-}
 STATE_GROUPS = (("position", "relative position [m]", ("x", "y", "z"), 1.0),
                 ("euler", "relative attitude [deg]", ("roll", "pitch", "yaw"), np.degrees(1.0)),
                 ("velocity", "relative velocity [m/s]", ("u", "v", "w"), 1.0),

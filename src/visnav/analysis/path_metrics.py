@@ -12,15 +12,6 @@ import numpy as np
 from visnav.analysis.metrics import finish_metrics
 from visnav.guidance.speed_limits import descent_angle, max_descent_rate
 
-#: seed 002 figures beside ours in the report
-PUBLISHED = {
-    "cross_track_rms_m": "Table 4.1: std 0.5-1.3 m at 10 m/s in 2-4 m/s wind",
-    "cross_track_max_m": "Table 4.1: max 1.8-4.1 m (descending turns 2.8/3.5 m in 4 m/s wind)",
-    "max_roll_deg": "phi_max = 15 deg (§4.3.3)",
-    "max_descent_mps": "1.5 m/s above 30 deg descent, 3 m/s below (eq. 4.23)",
-    "real_time_factor": "target >= 30x on 2 cores",
-}
-PUBLISHED_SOURCE = "seed 002 (Conte 2009)"
 
 
 def _follow_mask(log, t: np.ndarray) -> np.ndarray:

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from visnav.analysis.metrics import PALACE_PUBLISHED, interp_rows
+from visnav.analysis.metrics import interp_rows
+from visnav.analysis.published import notes, published, summary_rows
 
 
 def _fig_to_img(fig) -> str:
@@ -100,8 +101,9 @@ def plots(log, point=None) -> list[tuple[str, str]]:
     return out
 
 
-#: mission type -> module with its own report: ``plots(log, scenario) -> [(title, img)]``,
-#: ``PUBLISHED`` (metric -> seed figure) and ``PUBLISHED_SOURCE``; other missions get the PALACE plots
+#: mission type -> module with its own report: ``plots(log, scenario) -> [(title, img)]`` and optionally
+#: ``notes(log, scenario, metrics) -> [str]``; other missions get the PALACE plots. The theses' figures
+#: beside the metrics are in ``analysis/published.py``.
 MISSION_REPORTS = {"pfcm": "visnav.analysis.path_metrics", "witas-homing": "visnav.analysis.witas_metrics",
                    "condor": "visnav.analysis.condor_report",
                    "deck": "visnav.analysis.deck_report"}
@@ -113,22 +115,30 @@ def _report_module(sc):
 
 
 def published_figures(sc) -> tuple[dict, str]:
-    """(metric -> the seed's published figure, which seed) for a scenario's mission."""
-    mod = _report_module(sc)
-    if mod is None:
-        return PALACE_PUBLISHED, "seed 000 (Hubbard 2007)"
-    return mod.PUBLISHED, mod.PUBLISHED_SOURCE
+    """(metric -> the thesis' figure with its conditions, which thesis) for a scenario's mission."""
+    figs, source = published(sc)
+    return {p.metric: p.figure for p in figs}, source
+
+
+def run_notes(result) -> list[str]:
+    """Lines below the metrics table: what a run cannot measure, and what its log shows beyond the metrics."""
+    mod = _report_module(result.scenario)
+    extra = getattr(mod, "notes", None)
+    return notes(result.scenario) + (extra(result.log, result.scenario, result.metrics) if extra else [])
+
+
+def metrics_table_html(sc, metrics: dict) -> str:
+    rows, omitted, source = summary_rows(sc, metrics)
+    body = "".join(f"<tr><td>{html.escape(r.metric)}</td><td>{html.escape(r.ours)}</td>"
+                   f"<td>{html.escape(r.thesis)}</td><td>{html.escape(r.verdict)}</td></tr>" for r in rows)
+    head = f"<tr><th>metric</th><th>this run</th><th>thesis: {html.escape(source)}</th><th>verdict</th></tr>"
+    skipped = (f"<p>Not applicable to this run: {html.escape(', '.join(omitted))}.</p>" if omitted else "")
+    return f"<table>{head}{body}</table>{skipped}"
 
 
 def write_report(result, path: Path) -> None:
     sc, log, m = result.scenario, result.log, result.metrics
     mod = _report_module(sc)
-    published, source = published_figures(sc)
-    rows = []
-    for k, v in m.items():
-        pub = published.get(k, "")
-        vs = f"{v:.3f}" if isinstance(v, float) else html.escape(str(v))
-        rows.append(f"<tr><td>{html.escape(k)}</td><td>{vs}</td><td>{html.escape(pub)}</td></tr>")
     if mod is not None:
         fig_list = mod.plots(log, sc)
     else:
@@ -143,10 +153,11 @@ def write_report(result, path: Path) -> None:
             for t, a, r in zip(modes["t"], modes["mode"], modes["reason"])
         ) + "</table>"
     err = f"<p style='color:#b00'><b>Run error:</b> {html.escape(result.error)}</p>" if result.error else ""
+    note = "".join(f"<p>{html.escape(n)}</p>" for n in run_notes(result))
     doc = f"""<!doctype html><html><head><meta charset="utf-8"><title>visnav run: {html.escape(sc.run.name)}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td,th{{padding:2px 10px;border-bottom:1px solid #ddd}}
 img{{max-width:100%}}</style></head><body>
 <h1>{html.escape(sc.run.name)} (seed {sc.run.seed})</h1><p>{html.escape(sc.run.description)}</p>{err}
-<h2>Metrics</h2><table><tr><th>metric</th><th>this run</th><th>{html.escape(source)}</th></tr>{''.join(rows)}</table>
+<h2>Metrics</h2>{metrics_table_html(sc, m)}{note}
 {timeline}{figs}</body></html>"""
     Path(path).write_text(doc)

@@ -12,18 +12,6 @@ import numpy as np
 
 from visnav.analysis.metrics import finish_metrics, interp_rows
 
-PUBLISHED = {
-    "pmf_error_max_m": "Fig. 5.18: PMF error below 8 m throughout the 1 km loop at 60 m",
-    "pmf_error_rms_m": "Fig. 5.18 (no RMS given; the curve stays mostly below 5 m)",
-    "odometry_drift_pct": "Fig. 5.18: odometry 25 m in ~1 km (2.5 %)",
-    "ins_only_error_final_m": "Fig. 5.18: stand-alone INS drifts far off (hundreds of m)",
-    "velocity_error_rms_mps": "Fig. 5.18: horizontal velocity error mostly below 1 m/s",
-    "heading_error_final_deg": "Fig. 5.19: heading drifts without a compass (weakly observable)",
-    "path_length_m": "closed loop of about 1 km at 60 m AGL",
-    "returned_home": "the helicopter closes the loop at home (point 5)",
-    "real_time_factor": "target >= 10x",
-}
-PUBLISHED_SOURCE = "seed 002 (Conte 2009)"
 
 
 def _wrap(a):
