@@ -136,8 +136,12 @@ def metrics_table_html(sc, metrics: dict) -> str:
     return f"<table>{head}{body}</table>{skipped}"
 
 
-def write_report(result, path: Path) -> None:
+def write_report(result, path: Path, provenance: dict | None = None) -> None:
+    """report.html of a run; ``provenance`` as written to metrics.json (made here when not given)."""
+    from visnav.io.provenance import provenance as make_provenance, provenance_html
+
     sc, log, m = result.scenario, result.log, result.metrics
+    prov = provenance_html(provenance if provenance is not None else make_provenance(sc))
     mod = _report_module(sc)
     if mod is not None:
         fig_list = mod.plots(log, sc)
@@ -159,5 +163,5 @@ def write_report(result, path: Path) -> None:
 img{{max-width:100%}}</style></head><body>
 <h1>{html.escape(sc.run.name)} (seed {sc.run.seed})</h1><p>{html.escape(sc.run.description)}</p>{err}
 <h2>Metrics</h2>{metrics_table_html(sc, m)}{note}
-{timeline}{figs}</body></html>"""
+{timeline}{figs}{prov}</body></html>"""
     Path(path).write_text(doc)

@@ -44,10 +44,15 @@ def _jsonable(x):
 
 def write_run(result, out_dir: Path, report: bool = True) -> Path:
     """Write everything a run produced; each piece is written even if a later one fails."""
+    from visnav.io.provenance import provenance
+
     sc, log = result.scenario, result.log
+    prov = provenance(sc)
     (out_dir / "scenario.toml").write_text(to_toml(sc))
-    (out_dir / "metrics.json").write_text(json.dumps(_jsonable(result.metrics), indent=2) + "\n")
-    log.to_hdf5(out_dir / "log.h5", attrs={"scenario": sc.run.name, "seed": sc.run.seed})
+    (out_dir / "metrics.json").write_text(json.dumps(_jsonable({**result.metrics, "provenance": prov}), indent=2)
+                                          + "\n")
+    log.to_hdf5(out_dir / "log.h5", attrs={"seed": sc.run.seed,
+                                           **{k: "" if v is None else v for k, v in prov.items()}})
     tr, es = log.get("truth"), log.get("estimate")
     if tr:
         write_tum(out_dir / "truth.tum", tr["t"], tr["position"], tr["euler"])
@@ -56,5 +61,5 @@ def write_run(result, out_dir: Path, report: bool = True) -> Path:
     if report:
         from visnav.analysis.report import write_report
 
-        write_report(result, out_dir / "report.html")
+        write_report(result, out_dir / "report.html", provenance=prov)
     return out_dir
