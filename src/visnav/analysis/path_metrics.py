@@ -95,7 +95,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     path = build_path(scenario.mission)
     smp = path.sample(100)
     out = []
-    fig, ax = plt.subplots(1, 2, figsize=(12, 5))
+    fig, ax = plt.subplots(1, 2, figsize=(12, 5), layout="constrained")
     ax[0].plot(smp["position"][:, 1], smp["position"][:, 0], "k--", lw=1, label="path")
     ax[0].plot(tr["position"][:, 1], tr["position"][:, 0], lw=1.2, label="flown (truth)")
     ax[0].plot(*path.start[[1, 0]], "go", label="A (start)"), ax[0].plot(*path.end[[1, 0]], "rs", label="B (end)")
@@ -110,7 +110,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
 
     if ref:
         t = ref["t"]
-        fig, ax = plt.subplots(figsize=(12, 4.5))
+        fig, ax = plt.subplots(figsize=(12, 4.5), layout="constrained")
         cap = 1.5 * float(np.nanmax(ref["v_targ1"])) + 1.0
         ax.plot(t, np.minimum(ref["v_targ1"], cap), ":", label="v_targ1 (accelerate/cruise/brake)")
         ax.plot(t, np.minimum(ref["v_targ2"], cap), ":", label="v_targ2 (turn limits, eq. 4.15)")
@@ -121,7 +121,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         ax.set_title("Speed profile")
         out.append(("Speed profile", _fig_to_img(fig)))
 
-    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
+    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True, layout="constrained")
     sel = _follow_mask(log, tr["t"])
     ax[0].plot(tr["t"][sel], e["cross_track"][sel], label="distance to the path (truth)")
     if ref:
@@ -132,7 +132,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     ax[1].set_ylabel("m/s"), ax[1].set_xlabel("t [s]"), ax[1].legend()
     out.append(("Cross-track error and descent rate", _fig_to_img(fig)))
 
-    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True)
+    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True, layout="constrained")
     ax[0].plot(tr["t"], np.degrees(tr["euler"][:, 0]), label="roll")
     ax[0].plot(tr["t"], np.degrees(tr["euler"][:, 1]), label="pitch")
     phi = scenario.mission.phi_max_deg

@@ -23,16 +23,32 @@ def _fig_to_img(fig) -> str:
     return '<img src="data:image/png;base64,' + base64.b64encode(buf.getvalue()).decode() + '"/>'
 
 
-def _mode_spans(ax, log):
+#: background colour of each mission mode in the PALACE plots (modes not listed are left white)
+MODE_COLORS = {"acquire": "#eeeeee", "descend_gps": "#dde8ff", "verify": "#ffe9c6", "hold": "#e2ffd8",
+               "descend_mpe": "#d8ffe9", "final": "#f3d8ff", "abort": "#ffd0d0", "lost": "#ffd0d0"}
+
+
+def _mode_spans(ax, log) -> list[str]:
+    """Shade each mode's time span; returns the modes shaded, in order of first appearance."""
     modes = log.get("mode")
     if not modes:
-        return
-    colors = {"descend_gps": "#dde8ff", "verify": "#ffe9c6", "hold": "#e2ffd8", "descend_mpe": "#d8ffe9",
-              "final": "#f3d8ff", "abort": "#ffd0d0"}
+        return []
     t = list(modes["t"]) + [np.inf]
+    shown: list[str] = []
     for i, m in enumerate(modes["mode"]):
-        if m in colors:
-            ax.axvspan(t[i], min(t[i + 1], ax.get_xlim()[1]), color=colors[m], alpha=0.6, lw=0)
+        if m in MODE_COLORS:
+            ax.axvspan(t[i], min(t[i + 1], ax.get_xlim()[1]), color=MODE_COLORS[m], alpha=0.6, lw=0)
+            shown += [] if m in shown else [m]
+    return shown
+
+
+def _mode_legend(fig, modes: list[str]) -> None:
+    """A legend of the mode bands, above the axes (outside the data)."""
+    from matplotlib.patches import Patch
+
+    if modes:
+        fig.legend([Patch(color=MODE_COLORS[m], alpha=0.6) for m in modes], [f"mode: {m}" for m in modes],
+                   loc="outside upper center", ncol=min(len(modes), 6), fontsize=8, frameon=False)
 
 
 def plots(log, point=None) -> list[tuple[str, str]]:
@@ -47,7 +63,7 @@ def plots(log, point=None) -> list[tuple[str, str]]:
         return out
     t = tr["t"]
     # side view along the approach and top view
-    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
     ax[0].plot(tr["position"][:, 0], -tr["position"][:, 2], label="truth")
     v = es["valid"].astype(bool)
     ax[0].plot(es["position"][v, 0], -es["position"][v, 2], "--", label="estimate")
@@ -63,23 +79,23 @@ def plots(log, point=None) -> list[tuple[str, str]]:
     out.append(("Trajectory", _fig_to_img(fig)))
 
     mpe = log.get("mpe")
-    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True)
+    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True, layout="constrained")
     err = es["position"] - tr["position"]
     valid = es["valid"].astype(bool)
     ax[0].plot(t[valid], np.linalg.norm(err[valid, :2], axis=1), label="navigation estimate - truth (horizontal)")
     if mpe:
         me = mpe["position"] - interp_rows(mpe["t"], t, tr["position"])
         ax[0].plot(mpe["t"], np.linalg.norm(me[:, :2], axis=1), ".", ms=2, label="MPE fix - truth")
-    ax[0].set_ylabel("error [m]"), ax[0].legend(), ax[0].set_title("Position error")
+    ax[0].set_ylabel("error [m]"), ax[0].legend(loc="best"), ax[0].set_title("Position error")
     ax[1].plot(t, -tr["position"][:, 2], label="height AGL (truth)")
-    ax[1].set_ylabel("m"), ax[1].set_xlabel("t [s]"), ax[1].legend()
-    for a in ax:
-        _mode_spans(a, log)
+    ax[1].set_ylabel("m"), ax[1].set_xlabel("t [s]"), ax[1].legend(loc="best")
+    shown = [_mode_spans(a, log) for a in ax][0]
+    _mode_legend(fig, shown)
     out.append(("Errors and modes", _fig_to_img(fig)))
 
     trk = log.get("tracker")
     if trk:
-        fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
+        fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True, layout="constrained")
         ax[0].plot(trk["t"], trk["coherence"], ".", ms=2)
         ax[0].set_ylabel("coherence (eq. 2.3)"), ax[0].set_ylim(-0.1, 1.05)
         ax[1].plot(trk["t"], trk["x"], label="x"), ax[1].plot(trk["t"], trk["y"], label="y")
@@ -87,16 +103,16 @@ def plots(log, point=None) -> list[tuple[str, str]]:
         out.append(("Tracker", _fig_to_img(fig)))
 
     cmd = log.get("command")
-    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
+    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True, layout="constrained")
     ax[0].plot(t, np.rad2deg(tr["euler"][:, 0]), label="roll")
     ax[0].plot(t, np.rad2deg(tr["euler"][:, 1]), label="pitch")
-    ax[0].set_ylabel("deg"), ax[0].legend(), ax[0].set_title("Attitude (truth)")
+    ax[0].set_ylabel("deg"), ax[0].legend(loc="best"), ax[0].set_title("Attitude (truth)")
     for k in ("ail", "ele", "rud", "thr"):
         ax[1].plot(cmd["t"], cmd[k], label=k)
     ax[1].axhline(500, color="k", lw=0.5), ax[1].axhline(-500, color="k", lw=0.5)
-    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend()
-    for a in ax:
-        _mode_spans(a, log)
+    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend(loc="best", ncol=4)
+    shown = [_mode_spans(a, log) for a in ax][0]
+    _mode_legend(fig, shown)
     out.append(("Attitude and YACS commands", _fig_to_img(fig)))
     return out
 
