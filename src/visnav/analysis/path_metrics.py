@@ -146,7 +146,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
             if sat.any():
                 ax[1].plot(cmd["t"][sat], cmd[k][sat], "x", color=line.get_color(), ms=5)
         ax[1].axhline(500, color="k", lw=0.5), ax[1].axhline(-500, color="k", lw=0.5)
-    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend()
+    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend(ncol=4, loc="best")
     ax[1].set_title("YACS inputs (x: saturated, at ±500 or at the command limit)")
     out.append(("Attitude and YACS inputs", _fig_to_img(fig)))
     return out
