@@ -75,6 +75,9 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
             ax[i, 1].plot(t, err, lw=0.8, color="C2", label="estimate - truth")
             ax[i, 1].fill_between(t, -2 * sig, 2 * sig, color="0.85", lw=0, label="+-2 sigma (filter)")
             ax[i, 1].set_ylabel(f"{names[i]} error [{unit}]")
+            # scale to the error and the typical band, not to the start-up sigma (which would flatten the error)
+            lim = 1.2 * max(np.nanpercentile(np.abs(err), 99), np.nanpercentile(2 * sig, 50), 1e-9)
+            ax[i, 1].set_ylim(-lim, lim)
         ax[0, 0].set_title(f"Estimated {title} of the deck in the vehicle frame")
         ax[0, 1].set_title("Estimate error")
         handles = [h for a in (ax[0, 0], ax[0, 1]) for h in a.get_legend_handles_labels()[0]]

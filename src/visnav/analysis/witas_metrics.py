@@ -117,7 +117,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         ax.plot(ins["position"][:, 1], ins["position"][:, 0], ":", color=INS_COLOR, lw=1.2, label="INS only")
     ax.plot(tp[0, 1], tp[0, 0], "go", label="home")
     ax.set_xlim(*lim_e), ax.set_ylim(*lim_n), ax.set_xlabel("east [m]"), ax.set_ylabel("north [m]")
-    ax.legend(loc="lower left", fontsize=8), ax.set_title("Tracks (Fig. 5.17 top)")
+    ax.legend(loc="best", fontsize=8), ax.set_title("Tracks (Fig. 5.17 top)")
     ax = axs[1]
     ax.plot(tp[:, 1], tp[:, 0], "b", lw=0.8)
     if pmf:
