@@ -50,7 +50,7 @@ def _contrast(c1, c2) -> float:
 
 
 def _points_under_legends(fig) -> int:
-    fig.canvas.draw()
+    """(Draw the figure first.) Line vertices that a legend covers."""
     n = 0
     for ax in fig.axes:
         for leg in [ax.get_legend()] + list(fig.legends):
@@ -64,8 +64,8 @@ def _points_under_legends(fig) -> int:
 
 
 def _labels_inside_other_axes(fig) -> list[str]:
-    """Tick and axis labels of one axes (colour bars included) that reach into another axes' panel."""
-    fig.canvas.draw()
+    """(Draw the figure first.) Tick and axis labels of one axes (colour bars included) that reach into another
+    axes' panel."""
     r = fig.canvas.get_renderer()
     bad = []
     for ax in fig.axes:
@@ -113,6 +113,7 @@ def test_deck_plots_put_the_error_on_its_own_axis_in_degrees_with_legends_off_th
     titles = [t for t, _ in deck_report.plots(res.log, res.scenario)]
     for k, title in enumerate(titles):
         fig = figures[k]
+        fig.canvas.draw()
         assert _points_under_legends(fig) == 0, title
         assert _labels_inside_other_axes(fig) == [], title
         if title.startswith("Estimate vs truth"):
@@ -138,6 +139,7 @@ def test_condor_colour_bar_labels_do_not_reach_into_the_next_panel():
 
     fig = _error_map_figure(load_scenario("condor-orbit"))
     try:
+        fig.canvas.draw()
         assert _labels_inside_other_axes(fig) == []
     finally:
         plt.close(fig)
