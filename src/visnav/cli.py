@@ -77,7 +77,9 @@ def run(
                                "run there are removed first)"),
     json_: bool = typer.Option(False, "--json", help="print a machine-readable summary (JSON) on stdout"),
 ) -> None:
-    from visnav.analysis.report import published_figures
+    """Run one closed-loop simulation and write its run directory."""
+    from visnav.analysis.published import summary_rows
+    from visnav.analysis.report import run_notes
     from visnav.io.runs import new_run_dir, write_run
     from visnav.scenarios.schema import ScenarioError, load_scenario
     from visnav.sim.missions import make_simulation
@@ -119,14 +121,19 @@ def run(
         _print_json({"run_dir": str(out_dir), "scenario": sc.run.name, "seed": sc.run.seed,
                      "metrics": result.metrics, "error": result.error})
         raise typer.Exit(1 if result.error else 0)
+    rows, omitted, source = summary_rows(sc, result.metrics)
     table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
     table.add_column("metric")
     table.add_column("this run", justify="right")
-    published, source = published_figures(sc)
-    table.add_column(source)
-    for k, v in result.metrics.items():
-        table.add_row(k, _fmt(v), published.get(k, ""))
+    table.add_column(f"thesis: {source}")
+    table.add_column("verdict")
+    for r in rows:
+        table.add_row(r.metric, escape(r.ours), escape(r.thesis), r.verdict)
     console.print(table)
+    if omitted:
+        console.print(f"not applicable to this run: {', '.join(omitted)}")
+    for line in run_notes(result):
+        console.print(escape(line))
     console.print(f"run directory: {out_dir}")
     if result.error:
         err_console.print(f"[red]the run stopped early:[/red] {escape(result.error)} (what it had is saved)")
