@@ -225,7 +225,7 @@ class MavlinkLink:
             if first:
                 self.notify(f"autopilot {self.target_system}/{self.target_component} seen on {self.url}")
             else:
-                self.notify(f"autopilot link back after {(now - self._lost_at) / 1e9:.1f} s")
+                self.notify(f"autopilot link back after {(now - self._lost_at) / 1e9:.1f} s (HEARTBEAT gap)")
             self.request_intervals({})
             for cb in self.on_link_up:
                 cb()
