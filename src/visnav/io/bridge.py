@@ -16,8 +16,11 @@ Faults, each reported once through ``notify`` (one line) and counted:
   frames return;
 * frames out of order (a stamp not after the previous one): dropped, counted;
 * malformed MAVLink packets: counted and skipped (``MavlinkLink``);
-* an estimate jump (position moved more than ``jump_sigma`` standard deviations against the previous
-  estimate propagated with its velocity), a navigator reinitialisation, a source change (gps -> vision)
+* GPS: GPS_RAW_INT (the receiver) when the autopilot streams it; GLOBAL_POSITION_INT (the autopilot's
+  fused solution) only when it does not -- once the autopilot fuses our output, its fused position
+  would otherwise come back to the navigator as if it were GPS;
+* an estimate jump (position moved more than ``jump_sigma`` standard deviations, and ``jump_min_m``,
+  against the previous estimate propagated with its velocity), a navigator reinitialisation, a source change (gps -> vision)
   or an invalid -> valid transition: ``reset_counter`` + 1.
 """
 
@@ -60,6 +63,7 @@ class BridgeConfig:
     stall_output_hz: float = 5.0
     stall_quality: int = 10
     jump_sigma: float = 5.0
+    jump_min_m: float = 1.0  # and at least this far (navigators whose covariance is optimistic)
     rates_hz: dict = field(default_factory=lambda: dict(DEFAULT_RATES_HZ))
     status_period_s: float = 1.0
 
@@ -91,6 +95,7 @@ class Bridge:
         self._stall_next = 0.0
         self._origin_sent = False
         self._autopilot_origin = False
+        self._origin_req_next = 0.0
         self._t0 = time.monotonic()
         self._rate_mark = (self._t0, Counter(), 0)
         link.on_link_up.append(self._on_link_up)
@@ -148,6 +153,8 @@ class Bridge:
             if self.origin is None:
                 self.counts["gps_before_origin"] += 1
                 return None
+            if typ == "GLOBAL_POSITION_INT" and self.link.counts_in["GPS_RAW_INT"]:
+                return None  # the receiver's own fix is streamed: never feed back the autopilot's fused one
             m = mm.decode_gps(msg, stamp, self.origin, t_recv)
         else:
             return None
@@ -237,6 +244,10 @@ class Bridge:
     def _maybe_send_origin(self) -> None:
         """SET_GPS_GLOBAL_ORIGIN once per link-up when the autopilot reported none within 2 s of it."""
         L = self.link
+        now = time.monotonic()
+        if self.origin is None and L.link_ok and now >= self._origin_req_next:  # ask again: UDP may lose it
+            self._origin_req_next = now + 0.5
+            L.request_message(mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
         if (self._origin_sent or self._autopilot_origin or self.origin is None or not L.link_ok
                 or time.monotonic() - self._t0 < 2.0):
             return
@@ -274,7 +285,7 @@ class Bridge:
                 d2 = float(e @ np.linalg.solve(S + 1e-9 * np.eye(3), e))
             except np.linalg.LinAlgError:
                 return
-            if d2 > self.cfg.jump_sigma**2:
+            if d2 > self.cfg.jump_sigma**2 and float(np.linalg.norm(e)) > self.cfg.jump_min_m:
                 self._bump(f"estimate jumped {np.linalg.norm(e):.2f} m ({np.sqrt(d2):.1f} sigma)")
 
     def _send(self, est: NavEstimate, stalled: bool = False) -> bool:
