@@ -19,7 +19,7 @@ from visnav.io.mavlink_link import MavlinkLink, MavlinkLinkError
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
 
 
-def _img(i):
+def _img(i, t=None):
     return np.full((48, 64), i % 256, np.uint8)
 
 

@@ -63,6 +63,8 @@ def test_decode_baro_range_gps():
     b = mm.decode_baro(_roundtrip(TX.scaled_pressure_encode(10, 1001.0, 0, 2000)), stamp, p0_hpa=1013.25)
     assert b.altitude == pytest.approx(44330.77 * (1 - (1001.0 / 1013.25) ** 0.190263))
     assert 100 < b.altitude < 105  # ~8.3 m/hPa near sea level
+    p0 = mm.reference_pressure(1001.0, 60.0)
+    assert mm.pressure_altitude(1001.0, p0) == pytest.approx(60.0, abs=1e-9) and p0 > 1001.0
     r = mm.decode_range(_roundtrip(TX.distance_sensor_encode(10, 20, 4000, 1234, 0, 0, 25, 0)), stamp)
     assert r.range == pytest.approx(12.34) and r.sensor == "laser"
     r = mm.decode_range(_roundtrip(TX.distance_sensor_encode(10, 20, 4000, 4001, 1, 0, 25, 0)), stamp)

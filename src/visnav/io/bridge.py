@@ -57,7 +57,8 @@ class BridgeConfig:
     output: str = "odometry"
     frame_id: int = mavlink.MAV_FRAME_LOCAL_FRD
     origin: LocalTangentPlane | None = None  # else the autopilot's GPS_GLOBAL_ORIGIN or its first fix
-    p0_hpa: float | None = None  # baro reference; else the first SCALED_PRESSURE (take-off level)
+    p0_hpa: float | None = None  # pressure at the origin's height; else from the first SCALED_PRESSURE and the
+    # GPS height of that moment (the first pressure itself when no GPS is streamed: take-off on the ground)
     origin_wait_s: float = 2.0  # wait this long for the autopilot's GPS_GLOBAL_ORIGIN before taking a fix
     stall_s: float = 1.0
     stall_output_hz: float = 5.0
@@ -88,6 +89,7 @@ class Bridge:
         self.sent_stamps: deque[tuple[float, int]] = deque(maxlen=20000)  # (our t, time_usec sent)
         self._prev: NavEstimate | None = None
         self._prev_reinit = 0
+        self._last_gps = None
         self._ever_valid = False
         self._last_frame_t = -np.inf
         self._last_frame_arrival: float | None = None
@@ -141,7 +143,12 @@ class Bridge:
             m = mm.decode_attitude(msg, stamp)
         elif typ == "SCALED_PRESSURE":
             if self.p0_hpa is None:
-                self.p0_hpa = float(msg.press_abs)
+                gps_streaming = self.link.counts_in["GLOBAL_POSITION_INT"] or self.link.counts_in["GPS_RAW_INT"]
+                if gps_streaming and self._last_gps is None:
+                    self.counts["baro_before_reference"] += 1  # wait for a fix to tie the baro to the origin
+                    return None
+                h = 0.0 if self._last_gps is None else -float(self._last_gps.position[2])
+                self.p0_hpa = mm.reference_pressure(float(msg.press_abs), h)
             m = mm.decode_baro(msg, stamp, self.p0_hpa)
         elif typ == "DISTANCE_SENSOR":
             m = mm.decode_range(msg, stamp)
@@ -156,6 +163,7 @@ class Bridge:
             if typ == "GLOBAL_POSITION_INT" and self.link.counts_in["GPS_RAW_INT"]:
                 return None  # the receiver's own fix is streamed: never feed back the autopilot's fused one
             m = mm.decode_gps(msg, stamp, self.origin, t_recv)
+            self._last_gps = m if m is not None else self._last_gps
         else:
             return None
         if m is None:
@@ -226,8 +234,8 @@ class Bridge:
         self.nav.update(Frame(t=item.t, image=item.image, index=item.index))
         est = self.nav.estimate(item.t)
         self.proc_ms.append((time.perf_counter() - t0) * 1e3)
-        if self._send(est):
-            self.latency_ms.append((time.monotonic() - item.capture_t) * 1e3)
+        if self._send(est):  # capture (the instant the frame shows) -> ODOMETRY on the wire
+            self.latency_ms.append((time.monotonic() - item.t) * 1e3)
 
     def _watch_camera(self, now: float) -> None:
         if self.camera is None or self._last_frame_arrival is None:

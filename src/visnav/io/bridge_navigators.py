@@ -27,6 +27,7 @@ class BuiltNavigator:
     navigator: object
     camera_hz: float
     scenario: str
+    sim: object  # the simulation it came from (its world and camera renderer serve the SIL camera)
 
 
 def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None) -> BuiltNavigator:
@@ -43,4 +44,4 @@ def build_navigator(name: str, map_path: str | None = None, overrides: list[str]
     sim = make_simulation(sc)
     flt = getattr(sc.mission, "filter", None)
     camera_hz = float(getattr(flt, "odometry_hz", 0) or getattr(sim.camera, "rate_hz", 10.0))
-    return BuiltNavigator(sim.nav, camera_hz, sc.run.name)
+    return BuiltNavigator(sim.nav, camera_hz, sc.run.name, sim)

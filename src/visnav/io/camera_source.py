@@ -26,7 +26,7 @@ class CameraSourceError(RuntimeError):
 @dataclass(frozen=True)
 class Captured:
     image: np.ndarray  # uint8 HxW
-    t: float  # the instant the frame describes, our clock [s]
+    t: float  # the instant the frame describes (exposure), our clock [s]
     capture_t: float  # when it reached us [s]
     index: int
 
@@ -65,9 +65,9 @@ class FrameSource:
     def __init__(self, time_offset_s: float = 0.0, clock: Callable[[], float] = time.monotonic):
         self.time_offset_s, self.clock, self.index = float(time_offset_s), clock, 0
 
-    def _stamp(self, image: np.ndarray) -> Captured:
+    def _stamp(self, image: np.ndarray, exposed: float | None = None) -> Captured:
         now = self.clock()
-        c = Captured(_gray(image), now + self.time_offset_s, now, self.index)
+        c = Captured(_gray(image), (now if exposed is None else exposed) + self.time_offset_s, now, self.index)
         self.index += 1
         return c
 
@@ -126,7 +126,8 @@ class FolderSource(FrameSource):
 
 
 class CallableSource(FrameSource):
-    """Frames from ``make(index) -> image or None``, paced at ``fps`` (the SIL camera and tests)."""
+    """Frames from ``make(index, t) -> image or None`` showing our instant ``t`` (the exposure), paced at
+    ``fps`` (the SIL camera renders the scene at ``t``; the frame arrives when the rendering is done)."""
 
     def __init__(self, make: Callable[[int], np.ndarray | None], fps: float = 20.0, **kw):
         super().__init__(**kw)
@@ -138,8 +139,9 @@ class CallableSource(FrameSource):
         if self._next > now:
             time.sleep(self._next - now)
         self._next = max(self._next + self.period, self.clock() - self.period)
-        img = self.make(self.index)
-        return None if img is None else self._stamp(img)
+        exposed = self.clock()
+        img = self.make(self.index, exposed)
+        return None if img is None else self._stamp(img, exposed)
 
 
 def open_source(spec: str, fps: float = 10.0, time_offset_s: float = 0.0) -> FrameSource:

@@ -126,6 +126,11 @@ def pressure_altitude(p_hpa: float, p0_hpa: float) -> float:
     return 44330.77 * (1.0 - (p_hpa / p0_hpa) ** 0.190263)
 
 
+def reference_pressure(p_hpa: float, height_m: float) -> float:
+    """The pressure [hPa] at ``height_m`` below a point where ``p_hpa`` is read (inverse of pressure_altitude)."""
+    return p_hpa / (1.0 - height_m / 44330.77) ** (1.0 / 0.190263)
+
+
 def decode_baro(msg, stamp: Stamp, p0_hpa: float) -> BaroSample | None:
     """SCALED_PRESSURE (press_abs hPa) -> altitude above the reference pressure ``p0_hpa``."""
     p = float(msg.press_abs)
