@@ -143,3 +143,39 @@ def test_missing_serial_device_one_line():
     with pytest.raises(MavlinkLinkError) as e:
         MavlinkLink("/dev/ttyVISNAV_NONE:921600")
     assert str(e.value).startswith("serial device /dev/ttyVISNAV_NONE does not exist") and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("output,types", [("vision", ("VISION_POSITION_ESTIMATE", "VISION_SPEED_ESTIMATE")),
+                                          ("gps-input", ("GPS_INPUT",))])
+def test_other_outputs_land_at_their_instant(tmp_path, output, types):
+    link, sil, nav, bridge, notes = _setup(tmp_path, 3.0, output=output)
+    try:
+        metrics = bridge.run(duration_s=3.0)
+    finally:
+        sil.stop()
+        link.close()
+    for typ in types:
+        assert sil.stats.received.get(typ, 0) == metrics["estimates_out"] > 15
+    assert "ODOMETRY" not in sil.stats.received
+    # the stand-in converts GPS_INPUT's lat/lon/alt back to its NED: the same 1e-7 deg quantisation
+    assert np.median(sil.stats.ext_errors_m) < 0.05
+
+
+def test_palace_navigator_over_sil_short():
+    from visnav.io.sil_flight import fly
+
+    r = fly("palace", 4.0, gps_s=100.0)
+    assert r["estimates_out"] > 10 and r["stamp_error_ms_max"] < 2.0
+    assert r["ext_error_m_median"] < 0.3 and r["source_at_end"] == "gps"
+
+
+@pytest.mark.slow
+def test_witas_navigator_over_sil_vision_after_gps_loss():
+    """WITAS behind the bridge: GPS stops after 4 s, the navigator engages vision (reset_counter tells the
+    autopilot), and the estimate the stand-in receives stays near its truth."""
+    from visnav.io.sil_flight import fly
+
+    r = fly("witas", 14.0, gps_s=4.0)
+    assert r["source_at_end"] == "vision" and r["reset_counter"] >= 1
+    assert r["stamp_error_ms_max"] < 2.0
+    assert r["ext_error_m_median"] < 1.0, r
