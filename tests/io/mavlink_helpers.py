@@ -17,8 +17,10 @@ def free_udp_port() -> int:
 def receive(conn, types, n: int, timeout_s: float = 3.0) -> list:
     """Up to ``n`` messages of ``types`` from a pymavlink connection, within ``timeout_s`` (bounded)."""
     out, t_end = [], time.monotonic() + timeout_s
-    while len(out) < n and time.monotonic() < t_end:
-        m = conn.recv_match(type=types, blocking=True, timeout=0.05)
+    while len(out) < n:
+        m = conn.recv_match(type=types, blocking=timeout_s > 0, timeout=0.05)
         if m is not None:
             out.append(m)
+        elif time.monotonic() >= t_end:
+            break
     return out
