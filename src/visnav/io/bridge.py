@@ -81,6 +81,7 @@ class Bridge:
         self.origin = self.cfg.origin
         self.p0_hpa = self.cfg.p0_hpa
         self.q: queue.Queue = queue.Queue(maxsize=10000)
+        self.nav_lock = threading.RLock()  # held around every navigator call (a mission may call it too)
         self.stop = threading.Event()
         self.reset_counter = 0
         self.counts = Counter()  # measurements_in, unsynced, rejected, frames, frames_out_of_order, ...
@@ -215,7 +216,8 @@ class Bridge:
 
     def _consume(self, item) -> None:
         if not hasattr(item, "capture_t"):  # a MAVLink measurement
-            self.nav.update(item)
+            with self.nav_lock:
+                self.nav.update(item)
             return
         now = time.monotonic()
         if self._stalled:
@@ -231,8 +233,9 @@ class Bridge:
         self._last_frame_t = item.t
         self.counts["frames"] += 1
         t0 = time.perf_counter()
-        self.nav.update(Frame(t=item.t, image=item.image, index=item.index))
-        est = self.nav.estimate(item.t)
+        with self.nav_lock:
+            self.nav.update(Frame(t=item.t, image=item.image, index=item.index))
+            est = self.nav.estimate(item.t)
         self.proc_ms.append((time.perf_counter() - t0) * 1e3)
         if self._send(est):  # capture (the instant the frame shows) -> ODOMETRY on the wire
             self.latency_ms.append((time.monotonic() - item.t) * 1e3)
@@ -247,7 +250,9 @@ class Bridge:
                         f"estimate at {self.cfg.stall_output_hz:g} Hz with quality <= {self.cfg.stall_quality}")
         if self._stalled and now >= self._stall_next:
             self._stall_next = now + 1.0 / self.cfg.stall_output_hz
-            self._send(self.nav.estimate(now), stalled=True)
+            with self.nav_lock:
+                est = self.nav.estimate(now)
+            self._send(est, stalled=True)
 
     def _maybe_send_origin(self) -> None:
         """SET_GPS_GLOBAL_ORIGIN once per link-up when the autopilot reported none within 2 s of it."""
@@ -302,7 +307,8 @@ class Bridge:
         if usec is None or usec <= 0:
             self.counts["unsynced_outputs"] += 1
             return False
-        health = self.nav.health(est.t)
+        with self.nav_lock:
+            health = self.nav.health(est.t)
         self._check_reset(est, health)
         q = mm.quality_from(est, health)
         if stalled:
@@ -336,7 +342,8 @@ class Bridge:
         n_out = self.counts["estimates_out"]
         self._rate_mark = (now, cin, n_out)
         lat = np.array(self.latency_ms) if self.latency_ms else np.array([np.nan])
-        h = self.nav.health(now)
+        with self.nav_lock:
+            h = self.nav.health(now)
         return {"link_ok": self.link.link_ok, "rate_in_hz": rates, "rate_out_hz": round((n_out - n_prev) / dt, 1),
                 "latency_ms_median": float(np.median(lat)), "latency_ms_p95": float(np.percentile(lat, 95)),
                 "timesync_offset_ms": self.link.sync.offset_ms(), "timesync_rtt_ms": self.link.sync.rtt_ms(),

@@ -33,7 +33,6 @@ class BuiltNavigator:
 def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None) -> BuiltNavigator:
     """Raises ScenarioError / FileNotFoundError / ValueError with a one-line message on bad input."""
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
 
     scenario = ALIASES.get(name, name)
     sets = list(overrides or [])
@@ -41,6 +40,13 @@ def build_navigator(name: str, map_path: str | None = None, overrides: list[str]
     if map_path:
         key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
         sc = load_scenario(scenario, sets + [f"{key}={Path(map_path).resolve()}"])
+    return navigator_from_scenario(sc)
+
+
+def navigator_from_scenario(sc) -> BuiltNavigator:
+    """The navigator a validated Scenario's simulation wires (and the camera rate it consumes)."""
+    from visnav.sim.missions import make_simulation
+
     sim = make_simulation(sc)
     flt = getattr(sc.mission, "filter", None)
     camera_hz = float(getattr(flt, "odometry_hz", 0) or getattr(sim.camera, "rate_hz", 10.0))
