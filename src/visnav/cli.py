@@ -1,4 +1,4 @@
-"""Command line: ``visnav run SCENARIO``, ``visnav scenarios``."""
+"""Command line: ``visnav run SCENARIO``, ``visnav scenarios``, ``visnav bridge``, ..."""
 
 from __future__ import annotations
 
@@ -32,6 +32,8 @@ def run(
     report: bool = typer.Option(True, help="write report.html"),
     map_: Optional[str] = typer.Option(None, "--map", help="geo-referenced image (PNG/JPEG + world file) as the "
                                        "world (and, for witas-homing, the degraded reference map)"),
+    sil: bool = typer.Option(False, "--sil", help="software in the loop: the navigator runs behind `visnav bridge` "
+                             "over MAVLink on 127.0.0.1, the simulation plays the autopilot (real time)"),
 ) -> None:
     """Run one closed-loop simulation and write its run directory."""
     from visnav.analysis.report import published_figures
@@ -59,7 +61,12 @@ def run(
             if int(t * 10) % 10 == 0:
                 prog.update(task, completed=t, info=f"t={t:5.1f}s {sim.mission.mode}")
 
-        result = sim.run(progress=progress)
+        if sil:  # the same scenario, its navigator behind the bridge (sim/sil.py)
+            from visnav.sim.sil import run_sil
+
+            result = run_sil(sc, progress=progress, sim=sim)
+        else:
+            result = sim.run(progress=progress)
     write_run(result, out_dir, report=report)
     table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
     table.add_column("metric")

@@ -206,7 +206,7 @@ class SilLink:
         self.conn.close()
 
 
-def run_sil(sc, progress=None, notify=None):
+def run_sil(sc, progress=None, notify=None, sim=None):
     """Fly Scenario ``sc`` with its navigator behind the bridge (module docstring); the RunResult, with the
     bridge's keys added to its metrics (``sil_`` prefix for the stand-in's own figures)."""
     import socket
@@ -216,7 +216,7 @@ def run_sil(sc, progress=None, notify=None):
     from visnav.io.mavlink_link import MavlinkLink
     from visnav.sim.missions import make_simulation
 
-    sim = make_simulation(sc)
+    sim = sim if sim is not None else make_simulation(sc)
     built = navigator_from_scenario(sc)  # a second, independent navigator: the one behind the bridge
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.bind(("127.0.0.1", 0))
