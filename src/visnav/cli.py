@@ -350,6 +350,7 @@ def bridge(
     duration: Optional[float] = typer.Option(None, help="stop after this many seconds (default: Ctrl-C)"),
     out: Optional[str] = typer.Option(None, help="log folder (default runs/bridge-<time>): bridge.tlog, metrics.json"),
     set_: List[str] = typer.Option([], "--set", help="override a scenario key of the navigator's scenario"),
+    log_frames: bool = typer.Option(False, help="also keep every frame (lossless PNG + frames.csv) in the log folder"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
     import time
@@ -381,7 +382,7 @@ def bridge(
         fail(f"log folder {out_dir} is not writable ({exc.strerror})")
     link = src = None
     try:
-        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin),
+        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
                            frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
         link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=lambda m: console.print(m))

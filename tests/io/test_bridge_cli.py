@@ -54,7 +54,8 @@ def test_bridge_cli_live_run_writes_metrics(tmp_path):
     sil.start(12.0)
     try:
         r = CliRunner().invoke(app, ["bridge", "--mavlink", f"udpin:127.0.0.1:{port}", "--camera", str(frames),
-                                     "--navigator", "palace", "--duration", "4", "--out", str(tmp_path / "log")])
+                                     "--navigator", "palace", "--duration", "4", "--out", str(tmp_path / "log"),
+                                     "--log-frames"])
     finally:
         sil.stop()
     assert r.exit_code == 0, r.output
@@ -66,3 +67,19 @@ def test_bridge_cli_live_run_writes_metrics(tmp_path):
     assert set(m["latency_capture_to_send_ms"]) == {"median", "p95", "n"}
     assert (tmp_path / "log" / "bridge.tlog").stat().st_size > 1000
     assert sil.stats.received.get("ODOMETRY", 0) > 5
+    rows = (tmp_path / "log" / "frames" / "frames.csv").read_text().splitlines()
+    assert rows[0] == "index,t,capture_t,file"
+    assert len(rows) - 1 >= m["frames"] > 5  # every frame the navigator got (and any read as the loop stopped)
+    first = cv2.imread(str(tmp_path / "log" / "frames" / rows[1].split(",")[3]), 0)
+    np.testing.assert_array_equal(first, cv2.imread(str(frames / "0000.png"), 0))  # lossless
+
+
+def test_run_sil_cli_writes_bridge_keys(tmp_path):
+    r = CliRunner().invoke(app, ["run", "palace-landing", "--sil", "--set", "run.duration_s=3", "--out",
+                                 str(tmp_path / "run"), "--no-report"])
+    assert r.exit_code == 0, r.output
+    m = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    for key in ("link_ok", "rate_in_hz", "rate_out_hz", "latency_capture_to_send_ms", "timesync_offset_ms",
+                "timesync_rtt_ms", "reset_counter", "sil_stamp_error_ms_max"):
+        assert key in m
+    assert m["sil_stamp_error_ms_max"] < 2.0

@@ -67,6 +67,7 @@ class BridgeConfig:
     jump_min_m: float = 1.0  # and at least this far (navigators whose covariance is optimistic)
     rates_hz: dict = field(default_factory=lambda: dict(DEFAULT_RATES_HZ))
     status_period_s: float = 1.0
+    frame_log: Path | None = None  # a folder: every frame as lossless PNG + frames.csv (index, t, capture_t)
 
 
 class Bridge:
@@ -120,12 +121,28 @@ class Bridge:
                     self.q.put(m)
 
     def _camera_reader(self) -> None:
-        while not self.stop.is_set():
-            c = self.camera.read()
-            if c is None:
-                self.notify("camera: end of stream")
-                return
-            self.q.put(c)
+        log = None
+        if self.cfg.frame_log is not None:
+            import cv2
+
+            d = Path(self.cfg.frame_log)
+            d.mkdir(parents=True, exist_ok=True)
+            log = open(d / "frames.csv", "w")
+            log.write("index,t,capture_t,file\n")
+        try:
+            while not self.stop.is_set():
+                c = self.camera.read()
+                if c is None:
+                    self.notify("camera: end of stream")
+                    return
+                self.q.put(c)
+                if log is not None:  # after handing the frame over: the log costs no latency
+                    name = f"{c.index:06d}.png"
+                    cv2.imwrite(str(Path(self.cfg.frame_log) / name), c.image)
+                    log.write(f"{c.index},{c.t:.9f},{c.capture_t:.9f},{name}\n")
+        finally:
+            if log is not None:
+                log.close()
 
     def _decode(self, msg, t_recv: float):
         typ, stamp = msg.get_type(), self.link.stamp
