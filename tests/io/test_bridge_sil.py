@@ -4,8 +4,6 @@ Wall time is bounded (a few seconds each); every loop is bounded in count and ti
 asserted (latency figures go to BENCHMARKS.md): what is asserted are stamps against the truth instant.
 """
 
-import subprocess
-import sys
 import time
 
 import numpy as np

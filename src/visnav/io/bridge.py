@@ -6,6 +6,10 @@ clock), a camera reader (frames stamped at capture), and the navigator loop (thi
 at the frame's instant is encoded with ``time_usec`` = that instant in the autopilot's clock and sent;
 the capture-to-send latency is recorded.
 
+GPS for the navigator: GPS_RAW_INT (the receiver) when the autopilot streams it; GLOBAL_POSITION_INT (the
+autopilot's fused solution) only when it does not -- once the autopilot fuses our output, its fused
+position would otherwise come back to the navigator as if it were GPS.
+
 Faults, each reported once through ``notify`` (one line) and counted:
 
 * autopilot link lost / back (HEARTBEAT watch in ``MavlinkLink``): the bridge keeps running; on link
@@ -16,9 +20,6 @@ Faults, each reported once through ``notify`` (one line) and counted:
   frames return;
 * frames out of order (a stamp not after the previous one): dropped, counted;
 * malformed MAVLink packets: counted and skipped (``MavlinkLink``);
-* GPS: GPS_RAW_INT (the receiver) when the autopilot streams it; GLOBAL_POSITION_INT (the autopilot's
-  fused solution) only when it does not -- once the autopilot fuses our output, its fused position
-  would otherwise come back to the navigator as if it were GPS;
 * an estimate jump (position moved more than ``jump_sigma`` standard deviations, and ``jump_min_m``,
   against the previous estimate propagated with its velocity), a navigator reinitialisation, a source change (gps -> vision)
   or an invalid -> valid transition: ``reset_counter`` + 1.
