@@ -11,8 +11,9 @@ so that without gating the estimate equals the batch weighted least-squares solu
 (tested to 1e-9). Beyond the thesis:
 
 * chi-square gating: a sample whose innovation ``nu^T S^-1 nu`` exceeds the ``gate_prob`` quantile is
-  rejected once ``min_samples`` have been accepted; ``reinit_after`` rejections in a row (the estimate
-  itself was started on false matches) restart it from the component-wise median of those samples;
+  rejected once ``min_samples`` have been accepted; when more rejections in a row than accepted
+  samples (and at least ``reinit_after``) have come in, the estimate itself was started on false
+  matches: it restarts from those samples (the ones within 3 robust sigmas of their median);
 * ``P`` is the covariance of ``x`` for the stated ``R``; ``scale_covariance`` also multiplies it by the
   a-posteriori variance factor (weighted residual sum of squares / degrees of freedom), which makes it
   honest when ``R`` was a guess.
@@ -103,7 +104,7 @@ class RecursiveLeastSquares:
             if d2 > limit:
                 self.rejected += 1
                 self._recent_rejects.append((z, H, R))
-                if len(self._recent_rejects) >= self.reinit_after:
+                if len(self._recent_rejects) >= max(self.reinit_after, self.accepted + 1):
                     self._restart()
                 return False
         self._recent_rejects.clear()

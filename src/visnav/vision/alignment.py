@@ -8,7 +8,8 @@ nearest angle, but only after a consensus rotation has been chosen (the vote-wei
 pairwise angle differences within +-45 deg, a 1-D Hough over the rotation), so that a lone line of
 another road cannot pull the mean. Step 4 averages the paired differences (``theta_avg``); step 5
 applies it only when ``|theta_avg| < 45 deg`` and (beyond the thesis) only when at least
-``min_pairs`` lines agree; otherwise the telemetry heading is kept.
+``min_pairs`` lines agree and no other rotation has ``max_ambiguity`` of the consensus' support;
+otherwise the telemetry heading is kept.
 
 Angles: image axes x right, y down; a line's normal angle theta is in [0, pi). Rotating the image
 content by +a (counterclockwise as displayed, ``cv2.getRotationMatrix2D(c, deg(a), 1)``) turns every
@@ -50,7 +51,7 @@ def binary_edges(edge_mag: np.ndarray, mask: np.ndarray | None = None, keep: flo
     return out
 
 
-def hough_lines(binary: np.ndarray, max_lines: int = 12, min_votes_frac: float = 0.25,
+def hough_lines(binary: np.ndarray, max_lines: int = 12, min_votes_frac: float = 0.12,
                 theta_step: float = np.pi / 720) -> tuple[np.ndarray, np.ndarray]:
     """(theta [rad] in [0, pi), votes) of the strongest lines of a binary edge map (eq. 7.1).
 
@@ -86,7 +87,8 @@ def _wrapped(d: np.ndarray) -> np.ndarray:
 
 
 def hough_alignment(sensed_binary: np.ndarray, reference_binary: np.ndarray, max_angle: float = np.radians(45.0),
-                    min_pairs: int = 2, pair_tol: float = np.radians(3.0), **line_kw) -> Alignment:
+                    min_pairs: int = 2, pair_tol: float = np.radians(3.0), max_ambiguity: float = 0.8,
+                    **line_kw) -> Alignment:
     """Algorithm 1 steps 3-5 on two binary edge maps of about the same ground area."""
     ts, vs = hough_lines(sensed_binary, **line_kw)
     tr, vr = hough_lines(reference_binary, **line_kw)
@@ -101,7 +103,14 @@ def hough_alignment(sensed_binary: np.ndarray, reference_binary: np.ndarray, max
     # consensus: vote-weighted mode of the pair differences (kernel density on a 0.25 deg grid)
     grid = np.radians(np.arange(-45.0, 45.0 + 1e-9, 0.25))
     k = np.exp(-0.5 * (_wrapped(grid[:, None] - d[ok][None, :]) / pair_tol) ** 2)
-    mode = float(grid[int(np.argmax(k @ wgt[ok]))])
+    dens = k @ wgt[ok]
+    im = int(np.argmax(dens))
+    mode = float(grid[im])
+    # beyond the thesis: a second rotation nearly as well supported (periodic crop rows, a grid of
+    # roads) makes the alignment ambiguous: keep the telemetry heading then
+    far = np.abs(_wrapped(grid - mode)) > 3 * pair_tol
+    if far.any() and dens[far].max() > max_ambiguity * dens[im]:
+        return Alignment(0.0, False, 0, float("nan"), "ambiguous rotation (two line families agree)")
     # correspondence: each sensed line with the reference line nearest to theta_s - mode
     resid = np.abs(_wrapped(d - mode))
     j = np.argmin(resid, axis=1)

@@ -96,6 +96,7 @@ class GeoMatch:
     sharpness: float = float("nan")
     quality: float = float("nan")  # 1 - second / peak (0: ambiguous, 1: unique)
     A: np.ndarray | None = None  # 2x3 affine: processed undistorted pixel -> reference pixel
+    height_used: float = float("nan")  # m, the height that set the scale (baro, or the scale search)
 
 
 class GeoRegistration:
@@ -103,7 +104,8 @@ class GeoRegistration:
 
     def __init__(self, reference, camera: PinholeCamera, process_size=(360, 288), median_px: int = 5,
                  search_radius_m: float = 20.0, hough: bool = True, exclusion_m: float = 4.0,
-                 edge_keep: float = 0.08, check_rotation: bool = False) -> None:
+                 edge_keep: float = 0.08, check_rotation: bool = False, scale_search: float = 0.0,
+                 scale_steps: int = 2, rot_step_deg: float = 0.0) -> None:
         self.ref = reference
         self.cam_full = camera
         w, h = (int(v) for v in process_size)
@@ -114,6 +116,8 @@ class GeoRegistration:
         self.size = (w, h)
         self.median_px, self.search_radius_m, self.hough = int(median_px), float(search_radius_m), bool(hough)
         self.exclusion_m, self.edge_keep, self.check_rotation = float(exclusion_m), float(edge_keep), check_rotation
+        self.scale_search, self.scale_steps = float(scale_search), int(scale_steps)
+        self.rot_step = math.radians(rot_step_deg)
         K = self.cam.K
         dist = np.array(self.cam.dist)
         self._maps = cv2.initUndistortRectifyMap(K, dist, None, K, (w, h), cv2.CV_32FC1) \
@@ -205,12 +209,46 @@ class GeoRegistration:
             alt = self._match(edges, height, float(heading), gc, gr)
             if alt.ok and (not best.ok or alt.quality > best.quality + 0.05):
                 best = alt
+        if best.ok and (self.scale_search > 0 or self.rot_step > 0):
+            best = self._refine(edges, height, best.heading_used, best)
         best.alignment = align
         if best.ok and target_uv is not None:
             p = self.to_processed_px(target_uv)[0]
             cr = best.A @ np.array([p[0], p[1], 1.0])
             best.target_ne = ref.pixel_to_ned(cr.reshape(1, 2))[0]
         return best
+
+    @staticmethod
+    def _parabola_best(x: np.ndarray, runs: list) -> float:
+        """The argument of the best peak over ``x``, refined by a parabola through its neighbours."""
+        pk = np.array([r.peak if r.ok else -1.0 for r in runs])
+        i = int(np.argmax(pk))
+        if not 0 < i < len(x) - 1:
+            return float(x[i])
+        den = pk[i - 1] - 2 * pk[i] + pk[i + 1]
+        d = 0.0 if den >= -1e-9 else float(np.clip(0.5 * (pk[i - 1] - pk[i + 1]) / den, -0.5, 0.5))
+        return float(x[i] + d * (x[1] - x[0]))
+
+    def _refine(self, edges: np.ndarray, height: float, heading: float, best: GeoMatch) -> GeoMatch:
+        """Beyond the thesis: around the match found, the scale (the thesis names a search in scale as
+        the way to get the ground altitude, §7.2; the baro height is biased) over heights
+        h (1 + k e / steps), k = -steps..steps, and then the rotation (+-``rot_step``, what is left of
+        the Hough angle), each refined by a parabola over the correlation peaks; searched within a few
+        pixels of the match. The quality figures stay those of the full search."""
+        cc, cr = best.A @ np.array([self.cam.cx, self.cam.cy, 1.0])
+        h = height
+        if self.scale_search > 0:
+            f = 1.0 + np.arange(-self.scale_steps, self.scale_steps + 1) * self.scale_search / max(self.scale_steps, 1)
+            h = height * self._parabola_best(f, [self._match(edges, height * fi, heading, cc, cr, 4) for fi in f])
+        psi = heading
+        if self.rot_step > 0:
+            d = np.array([-self.rot_step, 0.0, self.rot_step])
+            psi = heading + self._parabola_best(d, [self._match(edges, h, heading + di, cc, cr, 4) for di in d])
+        out = self._match(edges, h, psi, cc, cr, 4)
+        if not out.ok or out.peak < best.peak:
+            return best
+        out.second_peak, out.quality, out.sharpness = best.second_peak, best.quality, best.sharpness
+        return out
 
     def _ref_window(self, cc: float, rc: float, half: int):
         H, W = self.ref.shape
@@ -223,7 +261,8 @@ class GeoRegistration:
         win[r0c - r0 : r1c - r0, c0c - c0 : c1c - c0] = self.ref_edges[r0c:r1c, c0c:c1c]
         return win, c0, r0
 
-    def _match(self, edges: np.ndarray, height: float, heading: float, gc: float, gr: float) -> GeoMatch:
+    def _match(self, edges: np.ndarray, height: float, heading: float, gc: float, gr: float,
+               radius_px: int | None = None) -> GeoMatch:
         warped, mask, A = self._warp(edges, height, heading)
         side = warped.shape[0]
         q = self._inscribed(side, heading)
@@ -231,7 +270,7 @@ class GeoRegistration:
         tpl = np.ascontiguousarray(warped[a : a + q, a : a + q])
         if float(tpl.std()) < 1e-3:
             return GeoMatch(False, "no edges in the frame", heading_used=heading)
-        r = int(math.ceil(self.search_radius_m / self.ref.resolution_m))
+        r = int(math.ceil(self.search_radius_m / self.ref.resolution_m)) if radius_px is None else int(radius_px)
         # the template centre is the frame centre = the canvas centre; it is searched within r of the GPS
         got = self._ref_window(gc, gr, q // 2 + r)
         if got is None:
@@ -250,4 +289,4 @@ class GeoRegistration:
         ctr = A @ np.array([self.cam.cx, self.cam.cy, 1.0])
         quality = 1.0 - max(second, 0.0) / peak if peak > 0 else 0.0
         return GeoMatch(True, "", None, self.ref.pixel_to_ned(ctr.reshape(1, 2))[0], heading, None, peak,
-                        second, sharp, quality, A)
+                        second, sharp, quality, A, height)
