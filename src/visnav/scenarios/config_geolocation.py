@@ -54,6 +54,9 @@ class MavGimbalConfig(_M):
     leak: float = Field(0.05, ge=0.0, le=1.0)
     bias_deg: float = Field(1.5, ge=0.0, le=10.0, description="1-sigma mount misalignment per axis")
     jitter_deg: float = Field(0.5, ge=0.0, le=5.0)
+    ahrs_turn_gain: float = Field(0.3, ge=0.0, le=1.0, description="share of the bank the autopilot's AHRS "
+                                  "loses in a sustained turn (the gimbal counters the estimate)")
+    ahrs_tau_s: float = Field(8.0, gt=0.0, le=120.0)
 
 
 class MavTelemetryConfig(_M):
@@ -88,7 +91,7 @@ class MavRegistrationConfig(_M):
     min_quality: float = Field(0.25, ge=0.0, le=1.0, description="1 - second/first peak below this: no sample")
     sigma_m: float = Field(1.5, ge=0.1, le=50.0)
     map_sigma_m: float = Field(10.0, ge=0.5, le=200.0)
-    gate_prob: Optional[float] = Field(0.999, gt=0.5, lt=1.0, description="chi-square gate; none: the thesis")
+    gate_prob: float = Field(0.999, ge=0.0, lt=1.0, description="chi-square gate (0: none, as the thesis)")
     false_match_m: float = Field(5.0, ge=1.0, le=50.0, description="a sample farther than this is a false match")
 
 
@@ -103,4 +106,4 @@ class GeolocationMissionConfig(_M):
     telemetry: MavTelemetryConfig = MavTelemetryConfig()
     control: MavControlConfig = MavControlConfig()
     registration: MavRegistrationConfig = MavRegistrationConfig()
-    max_samples: int = Field(60, ge=1, le=100000, description="stop once this many samples are in")
+    max_samples: int = Field(40, ge=1, le=100000, description="stop once this many samples are in")

@@ -84,7 +84,8 @@ class GeolocationSimulation:
         self.path = FigureEight(centre, ctl.half_length_m, math.radians(axis), ctl.l1_m)
         g = cfg.gimbal
         b = rng[3].normal(0.0, math.radians(g.bias_deg), 2)
-        self.gimbal = PitchRollGimbal(rng[3], g.lag_s, g.leak, b[0], b[1], math.radians(g.jitter_deg))
+        self.gimbal = PitchRollGimbal(rng[3], g.lag_s, g.leak, b[0], b[1], math.radians(g.jitter_deg),
+                                      ahrs_turn_gain=g.ahrs_turn_gain, ahrs_tau_s=g.ahrs_tau_s)
         tl = cfg.telemetry
         self.telemetry = AutopilotTelemetry(rng[4], tl.rate_hz, tl.gps_sigma_m, tl.gps_bias_m, 600.0, tl.gps_delay_s,
                                             tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg)
@@ -92,7 +93,7 @@ class GeolocationSimulation:
         self.nav = GeolocationNavigator(self.reference, self.camera, hough=r.hough, median_px=r.median_px,
                                         search_radius_m=r.search_radius_m, min_quality=r.min_quality,
                                         registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
-                                        gate_prob=r.gate_prob, process_size=(c.process_width_px, c.process_height_px),
+                                        gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
                                         check_rotation=r.check_rotation, scale_search=r.scale_search,
                                         rotation_refine_deg=r.rotation_refine_deg)
         self.mission = GeolocationMission(cfg, self.path, recorder=self.log.record)
