@@ -4,7 +4,7 @@ maps of ../shared/data (20 seeds each), the one-frame case, and the Hough-alignm
 is built from it by hand.
 
     PYTHONPATH=src nice -n 10 python scripts/geolocation_campaign.py --out runs/geoloc-campaign.json \
-        [--seeds 20] [--workers 2] [--parts main,single,hough]
+        [--seeds 20] [--hough-seeds 10] [--single-seeds 5] [--workers 2] [--parts main,hough,single,thesis]
 
 Target placement (documented in docs/geolocation.md): the real maps are small (199 x 519 m and
 596 x 173 m) against a 70 x 56 m footprint at 70 m, so the figure-eight (half length 80 m) runs along
@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"  # ../shared/data beside the repository
+if not DATA.is_dir() and os.environ.get("VISNAV_SHARED_DATA"):
+    DATA = Path(os.environ["VISNAV_SHARED_DATA"])
 MAPS = {
     "rural": [],
     "column": [f"mission.map.file={DATA / 'satellite_column.png'}", "mission.target.north_m=-45",
@@ -44,31 +47,23 @@ def one(job):
             **{k: r.metrics.get(k) for k in KEYS}}
 
 
-def jobs(parts, seeds):
+def jobs(parts, seeds, hough_seeds, single_seeds):
+    maps = {k: v for k, v in MAPS.items() if k == "rural" or DATA.is_dir()}
+    if len(maps) < len(MAPS):
+        print(f"real maps skipped: {DATA} not found", file=sys.stderr)
     out = []
-    for name, ov in MAPS.items():
-        if name != "rural" and not DATA.is_dir():
-            print(f"skip {name}: {DATA} not found", file=sys.stderr)
-            continue
-        for s in seeds:
-            if "main" in parts:
-                out.append(("main", name, s, ov, "mav-geolocation"))
-            if "single" in parts:
-                out.append(("single", name, s, ov, "mav-geolocation-single"))
-            if "thesis" in parts:  # Fig. 7.3 as printed: no scale / rotation refinement, no gating
-                out.append(("thesis", name, s, ov + ["mission.registration.scale_search=0",
-                                                     "mission.registration.rotation_refine_deg=0",
-                                                     "mission.registration.gate_prob=0",
-                                                     "mission.registration.min_quality=0"], "mav-geolocation"))
-    if "hough" in parts:
-        for name in ("rural", "column"):
-            if name != "rural" and not DATA.is_dir():
-                continue
-            for s in seeds:
-                for h in ("true", "false"):
-                    out.append((f"hough-{h}", name, s, MAPS[name] + ["mission.telemetry.extra_heading_deg=30",
-                                                                     f"mission.registration.hough={h}"],
-                                "mav-geolocation"))
+    if "main" in parts:
+        out += [("main", name, s, ov, "mav-geolocation") for name, ov in maps.items() for s in seeds]
+    if "hough" in parts:  # Algorithm 1 against the telemetry heading alone, +-30 deg of heading error
+        out += [(f"hough-{h}", "rural", s, ["mission.telemetry.extra_heading_deg=30", f"mission.registration.hough={h}"],
+                 "mav-geolocation") for s in hough_seeds for h in ("true", "false")]
+    if "single" in parts:
+        out += [("single", name, s, ov, "mav-geolocation-single") for name, ov in maps.items() for s in single_seeds]
+    if "thesis" in parts:  # Fig. 7.3 as printed: no scale / rotation refinement, no gating, no quality gate
+        out += [("thesis", name, s, ov + ["mission.registration.scale_search=0",
+                                          "mission.registration.rotation_refine_deg=0",
+                                          "mission.registration.gate_prob=0", "mission.registration.min_quality=0"],
+                 "mav-geolocation") for name, ov in maps.items() for s in single_seeds]
     return out
 
 
@@ -77,9 +72,12 @@ def main() -> None:
     ap.add_argument("--out", required=True)
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--parts", default="main,single,hough")
+    ap.add_argument("--hough-seeds", type=int, default=10)
+    ap.add_argument("--single-seeds", type=int, default=5)
+    ap.add_argument("--parts", default="main,hough,single")
     a = ap.parse_args()
-    todo = jobs(a.parts.split(","), list(range(1, a.seeds + 1)))
+    todo = jobs(a.parts.split(","), list(range(1, a.seeds + 1)), list(range(1, a.hough_seeds + 1)),
+                list(range(1, a.single_seeds + 1)))
     out = Path(a.out)
     done = json.loads(out.read_text()) if out.exists() else []
     seen = {(d["part"], d["map"], d["seed"]) for d in done}

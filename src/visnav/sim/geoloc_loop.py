@@ -118,8 +118,18 @@ class GeolocationSimulation:
         except Exception as exc:  # keep what we have
             error = f"{type(exc).__name__} at t={getattr(self, '_t', 0.0):.2f}s: {exc}"
             self.log.record("error", getattr(self, "_t", 0.0), message=error)
+        self._log_samples()
         wall = time.perf_counter() - wall0
         return RunResult(scenario=self.sc, log=self.log, metrics=geolocation_metrics(self, wall, error), error=error)
+
+    def _log_samples(self) -> None:
+        """The navigator's samples and RLS estimates, beside the true target (for the report)."""
+        self.log.record("target", 0.0, position=self.target.copy())
+        for s in self.nav.samples:
+            self.log.record("sample", s["t"], reg=s["reg"], map=s["map"], est_reg=s["est_reg"], est_map=s["est_map"],
+                            ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],
+                            hough=s["hough_applied"], heading_tel=s["heading_tel"], heading_used=s["heading_used"],
+                            height_used=s["height_used"], gps=s["gps"], uv=s["uv"])
 
     def _true_pixel(self, pos: np.ndarray, C_cn: np.ndarray) -> np.ndarray:
         p = (np.array([self.target[0], self.target[1], 0.0]) - pos) @ C_cn
