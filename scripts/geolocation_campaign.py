@@ -53,12 +53,12 @@ def jobs(parts, seeds, hough_seeds, single_seeds):
         print(f"real maps skipped: {DATA} not found", file=sys.stderr)
     out = []
     if "main" in parts:
-        out += [("main", name, s, ov, "mav-geolocation") for name, ov in maps.items() for s in seeds]
+        out += [("main", name, s, ov, "mav-geolocation") for s in seeds for name, ov in maps.items()]
     if "hough" in parts:  # Algorithm 1 against the telemetry heading alone, +-30 deg of heading error
         out += [(f"hough-{h}", "rural", s, ["mission.telemetry.extra_heading_deg=30", f"mission.registration.hough={h}"],
                  "mav-geolocation") for s in hough_seeds for h in ("true", "false")]
     if "single" in parts:
-        out += [("single", name, s, ov, "mav-geolocation-single") for name, ov in maps.items() for s in single_seeds]
+        out += [("single", name, s, ov, "mav-geolocation-single") for s in single_seeds for name, ov in maps.items()]
     if "thesis" in parts:  # Fig. 7.3 as printed: no scale / rotation refinement, no gating, no quality gate
         out += [("thesis", name, s, ov + ["mission.registration.scale_search=0",
                                           "mission.registration.rotation_refine_deg=0",
