@@ -40,14 +40,14 @@ class GeolocationNavigator:
                  min_quality: float = 0.05, registration_sigma_m: float = 1.5, map_sigma_m: float = 10.0,
                  gate_prob: float | None = 0.999, tracker_min_score: float = 0.75,
                  process_size=(360, 288), check_rotation: bool = False,
-                 scale_search: float = 0.0, rotation_refine_deg: float = 0.0) -> None:
+                 scale_search: float = 0.0, rotation_refine_deg: float = 0.0, quality_ref: float = 0.5) -> None:
         self.camera = camera
         self.registration = GeoRegistration(reference, camera, process_size=process_size, median_px=median_px,
                                             search_radius_m=search_radius_m, hough=hough,
                                             check_rotation=check_rotation, scale_search=scale_search,
                                             rot_step_deg=rotation_refine_deg)
         self.tracker = RotatingTemplateTracker(min_score=tracker_min_score)
-        self.min_quality = float(min_quality)
+        self.min_quality, self.quality_ref = float(min_quality), float(quality_ref)
         self.R_reg = registration_sigma_m ** 2 * np.eye(2)
         self.R_map = map_sigma_m ** 2 * np.eye(2)
         self.rls = {"registration": RecursiveLeastSquares(2, gate_prob=gate_prob),
@@ -107,8 +107,11 @@ class GeolocationNavigator:
              "heading_tel": tel.heading, "heading_used": g.heading_used, "height_used": g.height_used,
              "hough_applied": bool(g.alignment is not None and g.alignment.applied),
              "gps": tel.position[:2].copy(), "height": tel.height}
+        # a look-alike place (second peak close to the first: a straight road, crop rows) makes a sample
+        # less certain: its variance grows as (quality_ref / quality)^2, at most 25-fold
+        w = float(np.clip(g.quality / self.quality_ref, 0.2, 1.0)) if g.ok else 0.0
         s["reg_used"] = bool(g.ok and g.quality >= self.min_quality
-                             and self.rls["registration"].update(g.target_ne, R=self.R_reg))
+                             and self.rls["registration"].update(g.target_ne, R=self.R_reg / (w * w)))
         s["map_used"] = bool(np.all(np.isfinite(mb)) and self.rls["map_based"].update(mb, R=self.R_map))
         s["est_reg"] = self._x("registration")
         s["est_map"] = self._x("map_based")

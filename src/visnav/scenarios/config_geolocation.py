@@ -88,7 +88,9 @@ class MavRegistrationConfig(_M):
                                 "searched around the baro (0: baro scale only, as the thesis)")
     median_px: int = Field(5, ge=1, le=15)
     search_radius_m: float = Field(25.0, ge=5.0, le=200.0)
-    min_quality: float = Field(0.25, ge=0.0, le=1.0, description="1 - second/first peak below this: no sample")
+    min_quality: float = Field(0.05, ge=0.0, le=1.0, description="1 - second/first peak below this: no sample")
+    quality_ref: float = Field(0.5, gt=0.0, le=1.0, description="quality below this inflates the sample's "
+                               "variance by (quality_ref / quality)^2 (at most 25x)")
     sigma_m: float = Field(1.5, ge=0.1, le=50.0)
     map_sigma_m: float = Field(10.0, ge=0.5, le=200.0)
     gate_prob: float = Field(0.999, ge=0.0, lt=1.0, description="chi-square gate (0: none, as the thesis)")
