@@ -559,6 +559,42 @@ def sil_autopilot(
     e = np.array(sil.stats.ext_errors_m) if sil.stats.ext_errors_m else np.array([np.nan])
     console.print(f"received {sil.stats.received}; external position error at its time_usec: median "
                   f"{np.median(e):.3f} m, p95 {np.percentile(e, 95):.3f} m")
+# ---- seed 002 ch. 7: registrability map (geoloc) -------------------------------------------------
+@app.command("map-quality")
+def map_quality(
+    map_file: str = typer.Argument(..., help="geo-referenced image (PNG/JPEG + world file, or GeoTIFF)"),
+    altitude: float = typer.Option(70.0, "--altitude", help="flight height above ground \\[m]"),
+    out: str = typer.Option("runs/map-quality", "--out", help="output directory"),
+    cell_m: float = typer.Option(10.0, "--cell-m", help="cell size \\[m]"),
+    hfov_deg: float = typer.Option(53.0, "--hfov-deg", help="camera field of view across the frame \\[deg]"),
+    validate_n: int = typer.Option(0, "--validate", help="also register N rendered frames and compare failures"),
+) -> None:
+    """Registrability of a map: per cell, how reliably a nadir frame taken there registers (PNG + world file + .npy)."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from visnav.analysis.registrability import registrability_map, validate, write_registrability
+    from visnav.world.maps import GeoImage
+
+    try:
+        if not (altitude > 0 and cell_m > 0 and 0 < hfov_deg < 180 and validate_n >= 0):
+            raise ValueError(f"--altitude, --cell-m must be > 0, --hfov-deg in (0, 180), --validate >= 0 "
+                             f"(got {altitude}, {cell_m}, {hfov_deg}, {validate_n})")
+        geo = GeoImage.load(map_file)
+        reg = registrability_map(geo, altitude, hfov_deg=hfov_deg, cell_m=cell_m)
+        paths = write_registrability(reg, geo, Path(out))
+    except (FileNotFoundError, ValueError, OSError) as exc:
+        _fail(exc)
+    s = reg.score
+    console.print(f"{geo.name}: {s.shape[0]} x {s.shape[1]} cells of {reg.cell_m:.1f} m, score median "
+                  f"{float(np.median(s)):.3f}, 10th-90th percentile {float(np.percentile(s, 10)):.3f}-"
+                  f"{float(np.percentile(s, 90)):.3f}")
+    if validate_n:
+        v = validate(reg, geo, n=validate_n)
+        console.print(f"validation ({validate_n} frames): failure rate {v['fail_rate_low']:.2f} where the score "
+                      f"is at most its median ({v['score_median']:.3f}), {v['fail_rate_high']:.2f} above")
+    console.print("written: " + ", ".join(str(p) for p in paths.values()))
 
 
 def main() -> None:  # pragma: no cover

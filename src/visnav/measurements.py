@@ -149,3 +149,36 @@ class HeadingSample:
 
     t: float
     heading: float
+
+
+@dataclass(frozen=True)
+class TelemetrySample:
+    """One autopilot telemetry message (seed 002 §7.4: MAV state at 5 Hz): GPS position, the
+    GPS-derived heading (course over ground: the compass was not used), barometric height above the
+    take-off point, GPS ground speed. ``t`` is the instant the message claims to describe."""
+
+    t: float
+    position: np.ndarray  # NED [m] (GPS; the down component is not used, see ``height``)
+    heading: float  # rad, course over ground from the GPS velocity
+    height: float  # m above the take-off ground (barometer)
+    ground_speed: float = float("nan")  # m/s
+
+
+@dataclass(frozen=True)
+class OperatorClick:
+    """The ground operator selects the target in the frame of time ``t`` (seed 002 §7.3, §7.4.3)."""
+
+    t: float
+    pixel: np.ndarray  # (u, v) in the grabbed frame
+
+
+@dataclass(frozen=True)
+class TargetEstimate:
+    """A navigator's estimate of a ground target's horizontal position."""
+
+    t: float
+    position: np.ndarray  # (north, east) [m]
+    covariance: np.ndarray  # 2x2 [m^2]
+    samples: int
+    valid: bool
+    method: str = "registration"  # registration | map_based

@@ -122,7 +122,8 @@ def plots(log, point=None) -> list[tuple[str, str]]:
 #: beside the metrics are in ``analysis/published.py``.
 MISSION_REPORTS = {"pfcm": "visnav.analysis.path_metrics", "witas-homing": "visnav.analysis.witas_metrics",
                    "condor": "visnav.analysis.condor_report",
-                   "deck": "visnav.analysis.deck_report"}
+                   "deck": "visnav.analysis.deck_report",
+                   "mav-geolocation": "visnav.analysis.geolocation_report"}
 
 
 def _report_module(sc):

@@ -168,3 +168,48 @@ class TelemetryLink:
         out = [m for ta, m in self._queue if ta <= t + 1e-9]
         self._queue = [(ta, m) for ta, m in self._queue if ta > t + 1e-9]
         return out
+
+
+class PitchRollGimbal:
+    """Seed 002 §7.3 / Fig. 7.6: a pitch-roll camera unit that counteracts the aircraft's pitch and roll
+    to keep a nadir camera perpendicular to the ground, on the autopilot's attitude estimate (which
+    under-reads the bank in sustained turns: ``ahrs_turn_gain``, ``ahrs_tau_s``). Its servos follow the
+    commanded angles through
+    a first-order lag (``lag_s``) and compensate only ``1 - leak`` of them; the camera sits on the unit
+    with a static misalignment (``bias_roll``, ``bias_pitch``) and jitters (Gauss-Markov, ``jitter``
+    rad, 0.5 s). ``camera_dcm(euler)`` is the true C_cn (camera -> NED); the image top points along
+    the aircraft's yaw (the unit has no pan axis)."""
+
+    #: OpenCV camera axes in body axes for a nadir camera: x = body right, y = body backward, z = down
+    R_CAM_BODY = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+    def __init__(self, rng: np.random.Generator, lag_s: float, leak: float, bias_roll: float, bias_pitch: float,
+                 jitter: float, limit: float = np.radians(45.0), ahrs_turn_gain: float = 0.0,
+                 ahrs_tau_s: float = 8.0) -> None:
+        self.rng, self.lag, self.leak, self.limit = rng, float(lag_s), float(leak), float(limit)
+        self.turn_gain, self.ahrs_tau = float(ahrs_turn_gain), float(ahrs_tau_s)
+        self.ahrs_err = 0.0  # the autopilot's bank under-read in turns [rad]
+        self.bias = np.array([bias_roll, bias_pitch], float)
+        self.jitter = float(jitter)
+        self.servo = np.zeros(2)  # servo angles (roll, pitch) [rad]
+        self.gm = rng.normal(0.0, jitter, 2) if jitter > 0 else np.zeros(2)
+
+    def step(self, dt: float, euler) -> None:
+        e = np.asarray(euler, float)
+        # the servos counter the autopilot's attitude estimate; a small autopilot's AHRS levels itself on
+        # the apparent gravity in a sustained turn: it under-reads the bank by up to turn_gain x bank
+        self.ahrs_err += (self.turn_gain * e[0] - self.ahrs_err) * min(1.0, dt / self.ahrs_tau)
+        cmd = -(1.0 - self.leak) * (e[:2] - np.array([self.ahrs_err, 0.0]))
+        cmd = np.clip(cmd, -self.limit, self.limit)
+        self.servo += (cmd - self.servo) * (min(1.0, dt / self.lag) if self.lag > 0 else 1.0)
+        if self.jitter > 0:
+            a = np.exp(-dt / 0.5)
+            self.gm = a * self.gm + self.jitter * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
+
+    def residual(self, euler) -> np.ndarray:
+        """(roll, pitch) of the optical axis away from nadir [rad]."""
+        return np.asarray(euler, float)[:2] + self.servo + self.bias + self.gm
+
+    def camera_dcm(self, euler) -> np.ndarray:
+        r = self.residual(euler)
+        return euler_to_dcm(np.array([r[0], r[1], float(euler[2])])) @ self.R_CAM_BODY

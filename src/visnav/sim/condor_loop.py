@@ -15,17 +15,17 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from visnav.control.fixedwing import AirData, FixedWingAutopilot, InnerGains
+from visnav.control.fixedwing import FixedWingAutopilot, InnerGains
 from visnav.guidance.orbit import OrbitGains, OrbitGuidance, RadiusFilter
 from visnav.sensors.condor_camera import TargetCamera, condor_camera, target_outline
 from visnav.sensors.gimbal import (Barometer, CameraAhrs, Gimbal, PanPotentiometer, TelemetryLink, centred_coords)
 from visnav.sim.log import FlightLog
 from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
-from visnav.vehicles.fixedwing import FixedWingModel, FixedWingParams, trim
+from visnav.sim.fixedwing_common import air_data, scenario_wind, trimmed_aircraft
+from visnav.vehicles.fixedwing import FixedWingParams, trim
 from visnav.vision.blob_tracker import BlobTracker
 from visnav.vision.condor_pipeline import VisionRange
 from visnav.vision.rectification import altimeter_correction
-from visnav.world.wind import DrydenTurbulence, SteadyWind, Wind
 
 
 class CondorSimulation:
@@ -52,18 +52,12 @@ class CondorSimulation:
         va = cfg.airframe.airspeed_mps
         o = cfg.control.orbit
         self.trim_level = trim(self.params, va)
-        tr = trim(self.params, va, turn_radius=o.loiter_radius_m)
         self.target = np.array([cfg.target.north_m, cfg.target.east_m, 0.0])
         h = cfg.control.altitude_m
         a0 = 0.0  # start north of the tent, flying east: a right-hand orbit, tent on the right wing
         pos = self.target + np.array([o.loiter_radius_m * math.cos(a0), o.loiter_radius_m * math.sin(a0), -h])
-        self.vehicle = FixedWingModel.from_trim(self.params, tr, pos, a0 + math.pi / 2)
-        w = sc.world
-        turb = None if w.turbulence == "none" else DrydenTurbulence(w.turbulence, rng[0], h, va)
-        self.wind = Wind(SteadyWind(w.wind_speed_mps, w.wind_from_deg), turb)
-        from visnav.geometry.rotations import euler_to_dcm
-
-        self.vehicle.x[3:6] += euler_to_dcm(self.vehicle.x[6:9]).T @ self.wind.steady.ned
+        self.wind = scenario_wind(sc.world, rng[0], h, va)
+        self.vehicle = trimmed_aircraft(self.params, va, pos, a0 + math.pi / 2, self.wind, o.loiter_radius_m)
         c = cfg.camera
         self.camera = condor_camera(c.width_px, c.height_px, c.hfov_deg, c.k1, c.k2, c.crop_dx_px, c.crop_dy_px)
         self.renderer = TargetCamera(self.camera, rng[1], c.noise_sigma)
@@ -191,8 +185,7 @@ class CondorSimulation:
                 self.ahrs.step(d_ctrl * dt, accel - comp, x[8] + self.gimbal.pan, cam_tilt, cam_roll)
                 a = cfg.altimeter
                 h_meas = altimeter_correction(self.baro.read(-x[2]), a.t_measured_c, a.c0, a.c1)
-                m = AirData(phi=x[6], theta=x[7], p=x[9], q=x[10], r=x[11], h=h_meas, Va=va_meas,
-                            ay=float(air["specific_force"][1]))
+                m = air_data(self.vehicle, h_meas, va_meas)
                 if self.mission.mode == "gps_loiter" and t >= o.switch_time_s and not self.radius.stale(t):
                     self.mission.mode = "vision_orbit"
                     self.switched_at = t

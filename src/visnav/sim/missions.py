@@ -23,6 +23,7 @@ REGISTRY: dict[str, Builder] = {}
 SIMULATIONS: dict[str, str] = {
     "condor": "visnav.sim.condor_loop:CondorSimulation",
     "deck": "visnav.sim.deck_loop:DeckSimulation",
+    "mav-geolocation": "visnav.sim.geoloc_loop:GeolocationSimulation",
 }
 
 

@@ -1,0 +1,111 @@
+"""Scenario config of the ground-target geo-location mission (seed 002 ch. 7): ``mission.type =
+"mav-geolocation"``. Everything lives under ``mission`` (``--set mission.registration.hough=false``).
+"""
+
+from __future__ import annotations
+
+from typing import Literal, Optional
+
+from pydantic import Field
+
+from visnav.scenarios.base import _M
+
+
+class MavMapConfig(_M):
+    file: Optional[str] = Field(None, description="geo-referenced image (PNG + world file, GeoTIFF); "
+                                "none: the procedural rural world")
+    rural_size_m: float = Field(400.0, ge=150.0, le=2000.0)
+    rural_seed: int = Field(11, ge=0, description="the procedural map (fixed across run seeds)")
+    ref_gain: float = Field(0.85, ge=0.3, le=1.5, description="reference = another sensor, another day")
+    ref_offset: float = Field(20.0, ge=-100.0, le=100.0)
+    ref_gamma: float = Field(1.15, ge=0.5, le=2.0)
+    ref_blur_m: float = Field(0.3, ge=0.0, le=3.0)
+
+
+class MavTargetConfig(_M):
+    north_m: float = Field(0.0, ge=-5000.0, le=5000.0, description="from the map's centre")
+    east_m: float = Field(0.0, ge=-5000.0, le=5000.0, description="from the map's centre")
+    heading_deg: float = Field(30.0, ge=-180.0, le=180.0)
+    length_m: float = Field(7.0, ge=1.0, le=20.0)
+    width_m: float = Field(2.5, ge=0.5, le=10.0)
+    click_sigma_px: float = Field(3.0, ge=0.0, le=30.0, description="operator's click error")
+
+
+class MavAirframeConfig(_M):
+    mass_kg: float = Field(0.434, ge=0.2, le=2.0, description="PingWing, Table 7.1")
+    span_m: float = Field(1.1, ge=0.3, le=3.0)
+    airspeed_mps: float = Field(13.0, ge=11.0, le=16.0)
+
+
+class MavCameraConfig(_M):
+    width_px: int = Field(720, ge=160, le=1920, description="grabbed (§7.4.3)")
+    height_px: int = Field(576, ge=120, le=1080)
+    process_width_px: int = Field(360, ge=80, le=1920, description="registered at half size (§7.4.3)")
+    process_height_px: int = Field(288, ge=60, le=1080)
+    hfov_deg: float = Field(53.0, ge=20.0, le=120.0, description="f = 3.6 mm on a 1/4 inch CCD (Table 7.2)")
+    k1: float = Field(-0.22, ge=-0.6, le=0.3)
+    k2: float = Field(0.06, ge=-0.3, le=0.3)
+    frame_hz: float = Field(5.0, ge=0.5, le=25.0, description="frames with the target saved at about 5 Hz")
+    noise_sigma: float = Field(4.0, ge=0.0, le=40.0, description="analogue video link noise")
+
+
+class MavGimbalConfig(_M):
+    lag_s: float = Field(0.1, ge=0.0, le=2.0)
+    leak: float = Field(0.05, ge=0.0, le=1.0)
+    bias_deg: float = Field(1.5, ge=0.0, le=10.0, description="1-sigma mount misalignment per axis")
+    jitter_deg: float = Field(0.5, ge=0.0, le=5.0)
+    ahrs_turn_gain: float = Field(0.3, ge=0.0, le=1.0, description="share of the bank the autopilot's AHRS "
+                                  "loses in a sustained turn (the gimbal counters the estimate)")
+    ahrs_tau_s: float = Field(8.0, gt=0.0, le=120.0)
+
+
+class MavTelemetryConfig(_M):
+    rate_hz: float = Field(5.0, ge=1.0, le=50.0, description="§7.4: MAV state at 5 Hz")
+    gps_sigma_m: float = Field(0.7, ge=0.0, le=10.0)
+    gps_bias_m: float = Field(3.0, ge=0.0, le=20.0, description="1-sigma per axis")
+    gps_delay_s: float = Field(0.2, ge=0.0, le=1.0)
+    vel_sigma_mps: float = Field(0.4, ge=0.0, le=3.0)
+    baro_bias_m: float = Field(2.0, ge=0.0, le=20.0)
+    baro_noise_m: float = Field(0.3, ge=0.0, le=5.0)
+    extra_heading_deg: float = Field(0.0, ge=0.0, le=45.0, description="uniform +- added to the heading")
+
+
+class MavControlConfig(_M):
+    altitude_m: float = Field(70.0, ge=30.0, le=300.0)
+    half_length_m: float = Field(80.0, ge=40.0, le=400.0, description="figure-eight half length")
+    axis_deg: Optional[float] = Field(None, ge=-180.0, le=180.0, description="long axis from north; none: "
+                                      "along the map's longer side")
+    l1_m: float = Field(30.0, ge=10.0, le=150.0)
+    bank_limit_deg: float = Field(35.0, ge=10.0, le=50.0)
+
+
+class MavRegistrationConfig(_M):
+    hough: bool = True
+    check_rotation: bool = False
+    rotation_refine_deg: float = Field(0.75, ge=0.0, le=5.0, description="beyond the thesis: +- step of the "
+                                       "rotation refined after the match (0: none)")
+    scale_search: float = Field(0.06, ge=0.0, le=0.3, description="beyond the thesis: +- relative height "
+                                "searched around the baro (0: baro scale only, as the thesis)")
+    median_px: int = Field(5, ge=1, le=15)
+    search_radius_m: float = Field(25.0, ge=5.0, le=200.0)
+    min_quality: float = Field(0.05, ge=0.0, le=1.0, description="1 - second/first peak below this: no sample")
+    quality_ref: float = Field(0.5, gt=0.0, le=1.0, description="quality below this inflates the sample's "
+                               "variance by (quality_ref / quality)^2 (at most 25x)")
+    sigma_m: float = Field(1.5, ge=0.1, le=50.0)
+    map_sigma_m: float = Field(10.0, ge=0.5, le=200.0)
+    gate_prob: float = Field(0.999, ge=0.0, lt=1.0, description="chi-square gate (0: none, as the thesis)")
+    false_match_m: float = Field(5.0, ge=1.0, le=50.0, description="a sample farther than this is a false match")
+
+
+class GeolocationMissionConfig(_M):
+    type: Literal["mav-geolocation"] = "mav-geolocation"
+    experiment: Literal["figure_eight", "single_frame"] = "figure_eight"
+    map: MavMapConfig = MavMapConfig()
+    target: MavTargetConfig = MavTargetConfig()
+    airframe: MavAirframeConfig = MavAirframeConfig()
+    camera: MavCameraConfig = MavCameraConfig()
+    gimbal: MavGimbalConfig = MavGimbalConfig()
+    telemetry: MavTelemetryConfig = MavTelemetryConfig()
+    control: MavControlConfig = MavControlConfig()
+    registration: MavRegistrationConfig = MavRegistrationConfig()
+    max_samples: int = Field(40, ge=1, le=100000, description="stop once this many samples are in")

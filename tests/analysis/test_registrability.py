@@ -1,0 +1,79 @@
+"""Registrability map (beyond seed 002 ch. 7): batched NCC against OpenCV, rankings, measured failures."""
+
+import cv2
+import numpy as np
+import pytest
+
+from tests.shared_data import missing_reason, shared_data_dir
+from visnav.analysis.registrability import batch_ncc, registrability_map, validate
+from visnav.world.maps import GeoImage
+
+
+def test_batched_ncc_equals_opencv():
+    rng = np.random.default_rng(0)
+    win = rng.uniform(0, 100, (3, 60, 60)).astype(np.float32)
+    tpl = rng.uniform(0, 100, (3, 25, 25)).astype(np.float32)
+    got = batch_ncc(win, tpl)
+    for i in range(3):
+        np.testing.assert_allclose(got[i], cv2.matchTemplate(win[i], tpl[i], cv2.TM_CCOEFF_NORMED), atol=2e-4)
+
+
+def _geo(img):
+    return GeoImage(img.astype(np.uint8), 100.0, -100.0, 0.25, name="synthetic")
+
+
+def test_unique_structure_scores_above_blank_and_stripes():
+    rng = np.random.default_rng(1)
+    n = 800
+    blank = np.full((n, n), 90.0) + rng.normal(0, 1.0, (n, n))
+    yy, xx = np.mgrid[0:n, 0:n]
+    stripes = 90 + 60 * (np.sin(2 * np.pi * xx / 24.0) > 0)  # one line family repeating every 6 m
+    blobs = np.full((n, n), 90.0)
+    for _ in range(400):  # random fields of varied brightness: unique everywhere
+        c, s = rng.integers(0, n, 2), rng.integers(10, 60, 2)
+        cv2.rectangle(blobs, tuple(int(v) for v in c), tuple(int(v) for v in c + s), float(rng.uniform(30, 220)), -1)
+    scores = {k: float(np.median(registrability_map(_geo(np.clip(img, 0, 255)), 50.0, cell_m=20.0).score))
+              for k, img in (("blank", blank), ("stripes", stripes), ("blobs", blobs))}
+    assert scores["blobs"] > 0.3
+    assert scores["blank"] < 0.1
+    assert scores["stripes"] < 0.5 * scores["blobs"]
+
+
+def test_bad_altitude_is_a_value_error():
+    with pytest.raises(ValueError):
+        registrability_map(_geo(np.zeros((400, 400))), -5.0)
+
+
+def _real(name):
+    p = shared_data_dir() / f"satellite_{name}.png"
+    if not p.exists():
+        pytest.skip(missing_reason(p))
+    return GeoImage.load(p)
+
+
+def test_lake_ranks_below_the_land_on_the_real_maps():
+    for name in ("column", "strip"):
+        geo = _real(name)
+        reg = registrability_map(geo, 70.0)
+        img = cv2.resize(geo.image, (reg.score.shape[1], reg.score.shape[0]), interpolation=cv2.INTER_AREA)
+        # the lake: the flat dark water along the north edge of both maps
+        if name == "column":
+            lake, land = reg.score[:2], reg.score[6:]
+        else:
+            lake, land = reg.score[:3, :15], reg.score[6:, 20:]
+        assert np.median(lake) < 0.5 * np.median(land), (name, np.median(lake), np.median(land), img.shape)
+
+
+@pytest.mark.slow
+def test_low_scores_fail_more_often_strip():
+    geo = _real("strip")
+    reg = registrability_map(geo, 70.0)
+    v = validate(reg, geo, n=60, seed=3)
+    assert v["fail_rate_low"] > v["fail_rate_high"]
+
+
+def test_low_scores_fail_more_often_strip_short():
+    geo = _real("strip")
+    reg = registrability_map(geo, 70.0)
+    v = validate(reg, geo, n=16, seed=4)
+    assert v["fail_rate_low"] >= v["fail_rate_high"]

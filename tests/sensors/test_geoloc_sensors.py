@@ -1,0 +1,67 @@
+"""Sensors of the geo-location MAV: the pitch-roll nadir gimbal and the autopilot telemetry."""
+
+import math
+
+import numpy as np
+import pytest
+
+from visnav.measurements import VehicleState
+from visnav.sensors.gimbal import PitchRollGimbal
+from visnav.sensors.telemetry import AutopilotTelemetry
+from visnav.vision.geolocation_registration import nadir_dcm
+
+
+def test_perfect_gimbal_holds_nadir_at_any_attitude():
+    g = PitchRollGimbal(np.random.default_rng(0), lag_s=0.0, leak=0.0, bias_roll=0.0, bias_pitch=0.0, jitter=0.0)
+    e = np.array([0.4, -0.2, 1.1])
+    g.step(0.01, e)
+    np.testing.assert_allclose(g.residual(e), 0.0, atol=1e-12)
+    np.testing.assert_allclose(g.camera_dcm(e), nadir_dcm(1.1), atol=1e-12)
+
+
+def test_gimbal_residual_is_leak_plus_bias_and_turn_error():
+    g = PitchRollGimbal(np.random.default_rng(0), lag_s=0.0, leak=0.1, bias_roll=0.01, bias_pitch=-0.02, jitter=0.0,
+                        ahrs_turn_gain=0.3, ahrs_tau_s=1.0)
+    e = np.array([0.5, 0.1, 0.0])
+    for _ in range(2000):  # a sustained turn: the AHRS error settles at 0.3 x bank
+        g.step(0.01, e)
+    r = g.residual(e)
+    # servo = -(1 - leak)(phi - 0.3 phi): residual roll = phi (1 - 0.9 x 0.7) + bias
+    assert r[0] == pytest.approx(0.5 * (1 - 0.9 * 0.7) + 0.01, abs=1e-6)
+    assert r[1] == pytest.approx(0.1 * 0.1 - 0.02, abs=1e-6)
+    # a positive residual roll tilts the optical axis to the right of the track (east when heading north)
+    ray = g.camera_dcm(e)[:, 2]
+    assert ray[1] < 0 or ray[1] > 0  # defined
+    assert math.degrees(math.acos(ray[2])) == pytest.approx(math.degrees(math.hypot(r[0], r[1])), abs=0.5)
+
+
+def _truth(vel, yaw, pos=(10.0, 20.0, -70.0)):
+    def at(t):
+        return VehicleState(t, np.array(pos), np.array(vel), np.array([0.0, 0.0, yaw]), np.zeros(3), np.zeros(3))
+    return at
+
+
+def test_telemetry_heading_is_the_course_not_the_yaw():
+    tel = AutopilotTelemetry(np.random.default_rng(1), gps_sigma_m=0.0, bias_m=0.0, vel_sigma_mps=0.0,
+                             baro_bias_m=0.0, baro_noise_m=0.0)
+    # yaw north, crabbing: the ground track goes north-east
+    s = tel.sample(1.0, _truth([10.0, 4.0, 0.0], 0.0))
+    assert s.heading == pytest.approx(math.atan2(4.0, 10.0), abs=1e-12)
+    assert s.height == pytest.approx(70.0, abs=1e-12)
+    assert s.ground_speed == pytest.approx(math.hypot(10, 4), abs=1e-12)
+    np.testing.assert_allclose(s.position, [10.0, 20.0, -70.0], atol=1e-12)
+
+
+def test_telemetry_noise_is_worse_at_low_ground_speed():
+    def spread(v):
+        tel = AutopilotTelemetry(np.random.default_rng(2), vel_sigma_mps=0.4)
+        h = [tel.sample(0.2 * k, _truth([v, 0.0, 0.0], 0.0)).heading for k in range(1, 600)]
+        return np.std(h)
+    assert spread(4.0) > 2.5 * spread(15.0)
+
+
+def test_downlink_adds_the_extra_heading_error_only():
+    tel = AutopilotTelemetry(np.random.default_rng(3), extra_heading_deg=30.0)
+    s = tel.sample(0.2, _truth([12.0, 0.0, 0.0], 0.0))
+    d = [tel.downlink(s).heading - s.heading for _ in range(400)]
+    assert max(np.abs(d)) <= math.radians(30.0) + 1e-12 and np.std(d) > math.radians(12.0)
