@@ -81,6 +81,21 @@ def make_ground(cfg, seed: int):
     return rural_map(size, mc.resolution_m, rng, pond_ne=pond), (sn, se, r, (0.0, 0.0))
 
 
+def mission_rngs(seed: int) -> list[np.random.Generator]:
+    """The mission's generators (ground, camera, baro, compass, navigator, spare) from the run seed; the
+    replay rebuilds the navigator's (index 4) from the recorded scenario."""
+    return [np.random.default_rng(s) for s in np.random.SeedSequence([seed, 5]).spawn(6)]
+
+
+def reference_map(cfg, ground):
+    """The navigator's degraded reference map of the world raster ``ground`` (``mission.map`` keys)."""
+    from visnav.world.maps import degrade_reference
+
+    mc = cfg.map
+    return degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
+                             mc.reference_gamma, mc.reference_blur_m)
+
+
 def build(sim):
     from visnav.analysis.witas_metrics import witas_metrics
     from visnav.control.rmax_path import PathFollowingController
@@ -92,17 +107,14 @@ def build(sim):
     from visnav.sensors.baro import Baro, Compass
     from visnav.sensors.camera import Camera
     from visnav.sim.missions import MissionParts
-    from visnav.world.maps import degrade_reference
     from visnav.world.scene import World
 
     cfg = sim.sc.mission
-    pc, cc, mc = cfg.path, cfg.camera, cfg.map
-    seeds = np.random.SeedSequence([sim.sc.run.seed, 5]).spawn(6)
-    rng = [np.random.default_rng(s) for s in seeds]
+    pc, cc = cfg.path, cfg.camera
+    rng = mission_rngs(sim.sc.run.seed)
     ground, (sn, se, r, centre) = make_ground(cfg, sim.sc.run.seed)
     sim.world = World(ground=ground, surface="grass", wind=sim.world.wind, detail=None)
-    reference = degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
-                                  mc.reference_gamma, mc.reference_blur_m)
+    reference = reference_map(cfg, ground)
     P, T = loop_waypoints(sn, se, r, pc.altitude_m, centre, pc.direction)
     path = HermitePath.from_waypoints(P, T, scale="arc")
     sim.log.record("witas_setup", 0.0, waypoints=P, loop_length=path.length, home=P[0], map_extent=np.array(

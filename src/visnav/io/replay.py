@@ -1,0 +1,268 @@
+"""``visnav replay``: run a navigator on a recorded flight and write the usual run directory.
+
+The measurements of a ``Recording`` go to the navigator in delivery order; the recorded mission
+requests (``commands.csv``) are replayed at their place in that order, and the estimate is asked at the
+recorded times (a simulated recording) or at a fixed output rate (a recording without ``estimate``
+rows). A navigator is a registered builder (``@register_navigator``): adding the deck or CONDOR
+navigator later is one function that takes the recording and returns an object with ``update``,
+``estimate`` and ``health``.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from visnav.io.recording import STREAM_NAMES, Recording, RecordingError
+from visnav.sim.log import FlightLog
+
+Builder = Callable[["Recording", "ReplayOptions", Callable], object]
+NAVIGATORS: dict[str, tuple[Builder, tuple[str, ...]]] = {}
+
+
+def register_navigator(name: str, needs: tuple[str, ...]):
+    """Register ``builder(recording, options, recorder) -> navigator``; ``needs`` are the streams it needs."""
+
+    def deco(fn: Builder) -> Builder:
+        NAVIGATORS[name] = (fn, needs)
+        return fn
+
+    return deco
+
+
+@dataclass
+class ReplayOptions:
+    map_path: str | None = None  # reference map (GeoImage: PNG/JPEG + world file) where the navigator needs one
+    output_rate_hz: float = 10.0  # estimate rate when the recording has no recorded estimate queries
+    time_offset: str | float | None = None  # None: camera.yaml's; "auto": gyro/camera cross-correlation; seconds
+    scenario_overrides: list[str] = field(default_factory=list)
+
+
+@dataclass
+class ReplayResult:
+    log: FlightLog
+    metrics: dict
+    scenario: object
+    notes: list[str]
+    frame: str = "NED world, body FRD"
+
+
+def scenario_of(rec: Recording, default: str, overrides=()):
+    """The recording's resolved scenario (``scenario.toml``), else the built-in ``default`` one."""
+    import tomllib
+
+    from visnav.scenarios.schema import apply_overrides, load_scenario, validate
+
+    if rec.scenario_toml is None:
+        return load_scenario(default, list(overrides))
+    try:
+        data = tomllib.loads(rec.scenario_toml)
+    except tomllib.TOMLDecodeError as exc:
+        raise RecordingError(f"{rec.path / 'scenario.toml'}: not valid TOML ({exc})") from None
+    return validate(apply_overrides(data, list(overrides)))
+
+
+# ------------------------------------------------------------------------------------ navigators
+@register_navigator("palace", needs=("imu", "attitude", "gps"))
+def _palace(rec: Recording, opts: ReplayOptions, recorder):
+    from visnav.navigation.palace import PalaceNavigator
+
+    sc = scenario_of(rec, "palace-landing", opts.scenario_overrides)
+    if rec.camera is None:
+        raise RecordingError(f"{rec.path / 'camera.yaml'}: missing (PALACE's MPE needs the camera)")
+    return PalaceNavigator(sc.navigation, rec.camera.camera, rec.camera.mount, recorder=recorder), sc
+
+
+@register_navigator("witas", needs=("imu", "attitude", "gps", "baro", "frames"))
+def _witas(rec: Recording, opts: ReplayOptions, recorder):
+    from visnav.mission.witas import make_ground, mission_rngs, reference_map
+    from visnav.navigation.witas import WitasNavigator
+
+    sc = scenario_of(rec, "witas-homing", opts.scenario_overrides)
+    cfg = sc.mission
+    if opts.map_path:
+        from visnav.world.maps import GeoImage
+
+        try:
+            reference = GeoImage.load(opts.map_path)
+        except (OSError, ValueError) as exc:
+            raise RecordingError(f"{opts.map_path}: cannot load the reference map ({exc})") from None
+    elif rec.scenario_toml is not None:  # a simulated recording: the same degraded map as the closed loop
+        reference = reference_map(cfg, make_ground(cfg, sc.run.seed)[0])
+    else:
+        raise RecordingError(f"{rec.path}: the witas navigator needs a reference map: give --map MAP "
+                             "(PNG/JPEG + world file)")
+    nav = WitasNavigator(cfg.filter, rec.camera.camera.K, rec.camera.mount, reference, recorder=recorder,
+                         rng=mission_rngs(sc.run.seed)[4])
+    return nav, sc
+
+
+# ------------------------------------------------------------------------------------ the replay
+def _events(rec: Recording, out_rate: float):
+    """Measurements and commands merged in delivery order: arrays (kind, a, b, time) with kind 0 =
+    measurement (a = stream index, b = row), 1 = recorded command (b = row), 2 = estimate at ``time``."""
+    tr, sq, si, ri = rec.delivery()
+    kinds, a, b, times, seqs = [np.zeros(len(tr), int)], [si], [ri], [tr], [sq]
+    c = rec.commands
+    has_estimates = c is not None and np.any(c["method"] == "estimate")
+    if c is not None and len(c["t_s"]):
+        n = len(c["t_s"])
+        kinds.append(np.ones(n, int))
+        a.append(np.zeros(n, int))
+        b.append(np.arange(n))
+        times.append(c["t_s"])
+        seqs.append(c["seq"] if "seq" in c else np.full(n, np.inf))
+    if not has_estimates and len(tr):
+        q = np.arange(np.ceil(tr[0] * out_rate), np.floor(tr[-1] * out_rate) + 1) / out_rate
+        kinds.append(np.full(len(q), 2))
+        a.append(np.zeros(len(q), int))
+        b.append(np.arange(len(q)))
+        times.append(q)
+        seqs.append(np.full(len(q), np.inf))  # after the samples delivered at the same instant
+    kinds, a, b, times, seqs = (np.concatenate(x) for x in (kinds, a, b, times, seqs))
+    o = np.lexsort((np.arange(len(times)), seqs, times))
+    return kinds[o], a[o], b[o], times[o]
+
+
+def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, progress=None) -> ReplayResult:
+    opts = opts or ReplayOptions()
+    if navigator not in NAVIGATORS:
+        raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))} "
+                             "(deck and CONDOR follow issue #13)")
+    builder, needs = NAVIGATORS[navigator]
+    rec.require(needs, navigator)
+    notes: list[str] = []
+    metrics: dict = {}
+    if opts.time_offset is not None:
+        if opts.time_offset == "auto":
+            from visnav.estimation.timesync import estimate_offset_from_recording
+
+            est = estimate_offset_from_recording(rec)
+            rec.time_offset_s = est.offset_s
+            metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
+            notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
+                         f"cross-correlation, peak {est.peak:.2f})")
+        else:
+            rec.time_offset_s = float(opts.time_offset)
+            metrics["time_offset_s"] = rec.time_offset_s
+    log = FlightLog()
+    nav, sc = builder(rec, opts, log.record)
+    kinds, a, b, times = _events(rec, opts.output_rate_hz)
+    c = rec.commands
+    n_frames = n_imu = 0
+    i_frames, i_imu = STREAM_NAMES.index("frames"), STREAM_NAMES.index("imu")
+    streams = list(rec.streams)
+    stream_idx = [STREAM_NAMES.index(s) for s in streams]
+    by_order = {j: s for j, s in zip(stream_idx, streams)}
+    wall0 = time.perf_counter()
+    for k in range(len(kinds)):
+        kind = kinds[k]
+        if kind == 0:
+            m = rec.sample(by_order[a[k]], int(b[k]))
+            if m is None:
+                continue
+            n_frames += a[k] == i_frames
+            n_imu += a[k] == i_imu
+            nav.update(m)
+        elif kind == 2 or c["method"][b[k]] == "estimate":
+            t = float(times[k])
+            e = nav.estimate(t)
+            log.record("estimate", t, position=e.position, velocity=e.velocity, euler=e.attitude, source=e.source,
+                       valid=e.valid)
+        else:
+            meth, t = str(c["method"][b[k]]), float(times[k])
+            if meth == "health":
+                h = nav.health(t)
+                log.record("status", t, source=h.source, coherence=h.coherence, tracking=h.tracking,
+                           mpe_rate_hz=h.mpe_rate_hz, laser_ok=h.laser_ok)
+                continue
+            args = json.loads(c["args"][b[k]]) if "args" in c and c["args"][b[k]] else {}
+            fn = getattr(nav, meth, None)
+            if fn is None:
+                notes.append(f"commands.csv: {meth!r} is not a {navigator} navigator request; skipped")
+                continue
+            fn(*args.get("args", []), **args.get("kwargs", {}))
+            log.record("command", t, method=meth, args=json.dumps(args))
+        if progress is not None and k % 2000 == 0:
+            progress(k, len(kinds))
+    wall = time.perf_counter() - wall0
+    tr = rec.truth
+    if tr is not None:
+        e = np.column_stack([tr[k] if k in tr else np.zeros(len(tr["t_s"])) for k in ("roll_rad", "pitch_rad",
+                                                                                      "yaw_rad")])
+        v = np.column_stack([tr[k] if k in tr else np.full(len(tr["t_s"]), np.nan) for k in ("vn_mps", "ve_mps",
+                                                                                             "vd_mps")])
+        for i, t in enumerate(tr["t_s"]):
+            log.record("truth", t, position=np.array([tr["n_m"][i], tr["e_m"][i], tr["d_m"][i]]), velocity=v[i],
+                       euler=e[i])
+    h = nav.health(None)
+    dur = float(times[-1] - times[0]) if len(times) else 0.0
+    metrics |= {"frames_used": int(n_frames), "frames_dropped": int(rec.skipped.get("frames", 0)),
+                "frames_in_recording": rec.count("frames"), "imu_samples": int(n_imu),
+                "samples_rejected": int(getattr(h, "rejected_samples", 0))}
+    metrics |= _accuracy(log, tr is not None)
+    metrics |= {"replay_wall_s": wall, "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
+                "flight_duration_s": dur}
+    notes += rec.notes
+    if rec.skipped:
+        notes.append(f"skipped during the replay: {', '.join(f'{v} {k}' for k, v in rec.skipped.items())}")
+    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes)
+
+
+def trajectories(log: FlightLog, frame: str = "NED world, body FRD"):
+    """(valid estimates, truth) as ``Trajectory`` (truth None when the recording has none)."""
+    from scipy.spatial.transform import Rotation
+
+    from visnav.analysis.trajectory_eval import Trajectory
+
+    def traj(s, name, mask=None):
+        e = np.asarray(s["euler"], float).reshape(-1, 3)
+        p = np.asarray(s["position"], float).reshape(-1, 3)
+        t = np.asarray(s["t"], float)
+        if mask is not None:
+            t, p, e = t[mask], p[mask], e[mask]
+        q = Rotation.from_euler("ZYX", e[:, ::-1]).as_quat() if len(t) else np.zeros((0, 4))
+        return Trajectory(t, p, q, name, frame)
+
+    es = log.get("estimate")
+    valid = np.asarray(es["valid"], bool) & np.all(np.isfinite(np.asarray(es["position"], float)), axis=1) \
+        if es else None
+    est = traj(es, "estimate", valid) if es else None
+    tr = log.get("truth")
+    return est, (traj(tr, "truth") if tr else None)
+
+
+def _accuracy(log: FlightLog, has_truth: bool) -> dict:
+    from visnav.analysis.trajectory_eval import TrajectoryError, evaluate
+
+    est, ref = trajectories(log)
+    if not has_truth or est is None or ref is None or len(est) == 0:
+        return {}
+    try:
+        s = evaluate(ref, est, alignment="none", max_diff=0.02).summary()
+    except TrajectoryError as exc:
+        return {"ate_note": str(exc)}
+    return {"ate_rmse_m": s["ate_rmse_m"], "ate_max_m": s["ate_max_m"], "rpe_rmse_m": s["rpe_rmse_m"]}
+
+
+def write_replay(result: ReplayResult, out_dir: Path) -> Path:
+    """log.h5, scenario.toml, estimate.tum (valid estimates only; the header names the frame), truth.tum,
+    metrics.json."""
+    from visnav.io.runs import _jsonable
+    from visnav.io.trajectory_export import write_tum_file
+    from visnav.scenarios.schema import to_toml
+
+    result.log.to_hdf5(out_dir / "log.h5", attrs={"replay": 1})
+    (out_dir / "scenario.toml").write_text(to_toml(result.scenario))
+    (out_dir / "metrics.json").write_text(json.dumps(_jsonable(result.metrics), indent=2) + "\n")
+    est, ref = trajectories(result.log, result.frame)
+    if est is not None:
+        write_tum_file(out_dir / "estimate.tum", est, result.frame)
+    if ref is not None:
+        write_tum_file(out_dir / "truth.tum", ref, result.frame)
+    return out_dir
