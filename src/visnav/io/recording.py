@@ -103,7 +103,7 @@ def read_csv(path: Path, spec: Stream) -> dict[str, np.ndarray]:
             out[name] = col.astype(float)
         except ValueError:
             bad = next(i for i, v in enumerate(col) if not _is_float(v))
-            raise RecordingError(f"{path}: line {bad + 2}: column {name} holds {col[bad]!r}, not a number") from None
+            raise RecordingError(f"{path}: line {bad + 2}: column {name} holds {str(col[bad])!r}, not a number") from None
     for name in ("t_s", "t_recv_s"):
         if name not in out:
             continue
@@ -114,8 +114,8 @@ def read_csv(path: Path, spec: Stream) -> dict[str, np.ndarray]:
         back = np.flatnonzero(np.diff(t) < 0)
         if back.size:
             i = int(back[0]) + 1
-            raise RecordingError(f"{path}: line {i + 2}: timestamps out of order ({name} {t[i]!r} after "
-                                 f"{t[i - 1]!r})")
+            raise RecordingError(f"{path}: line {i + 2}: timestamps out of order ({name} {float(t[i])!r} after "
+                                 f"{float(t[i - 1])!r})")
     return out
 
 
