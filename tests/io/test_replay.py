@@ -2,7 +2,8 @@
 
 A short palace-landing (start at 14 m so that the MPE switch at 12 m, with its tracking request, re-base
 and source switch, happens at 9.2 s) and a short witas-homing (GPS lost at 3 s: visual odometry, map
-registration and the PMF run from there) are flown once with the recording proxy; the replay of the
+registration and the PMF run from there; settle, acceleration and light turbulence excite the
+attitude enough for the clock-offset estimate) are flown once with the recording proxy; the replay of the
 folder must give the same estimate at every output time (<= 1e-6 m; in practice bit for bit).
 """
 
@@ -20,7 +21,7 @@ from visnav.scenarios.schema import load_scenario
 from visnav.sim.record import record
 
 PALACE = ["run.duration_s=10.5", "mission.start_height_m=14"]
-WITAS = ["run.duration_s=7", "mission.gps_loss_s=3", "mission.settle_s=2"]
+WITAS = ["run.duration_s=12", "mission.gps_loss_s=3", "mission.settle_s=2"]
 
 
 @pytest.fixture(scope="module")
@@ -111,3 +112,27 @@ def test_corrupt_frame_inside_a_replay_is_counted_not_fatal(palace_rec, tmp_path
     assert res.metrics["frames_dropped"] == 1
     assert res.metrics["frames_used"] == rec.counts["frames"] - 1
     assert any("000010.png" in n for n in res.notes)
+
+
+def test_camera_clock_shifted_by_80_ms_is_found_and_corrected(witas_rec, tmp_path):
+    """Frame stamps 80 ms behind the IMU clock: the gyro/camera cross-correlation finds the shift within
+    5 ms, and the replay with the found offset is close to the unshifted one (the uncorrected is not)."""
+    import shutil
+
+    from visnav.io.recording import read_csv, STREAMS, write_csv
+
+    d, rec = witas_rec
+    shifted = tmp_path / "shifted"
+    shutil.copytree(d, shifted)
+    f = read_csv(shifted / "frames.csv", STREAMS["frames"])
+    f["t_s"] = f["t_s"] - 0.08
+    write_csv(shifted / "frames.csv", f)
+    closed = rec.run.log
+    found = replay(Recording.open(shifted), "witas", ReplayOptions(time_offset="auto"))
+    m = found.metrics
+    assert abs(m["time_offset_s"] - 0.08) < 0.005
+    assert 0 < m["time_offset_sigma_s"] < 0.005
+    raw = replay(Recording.open(shifted), "witas")
+    d_found, _ = _max_difference(closed, found.log)
+    d_raw, _ = _max_difference(closed, raw.log)
+    assert d_found < 0.1 < d_raw

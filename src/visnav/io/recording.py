@@ -380,10 +380,11 @@ class Recording:
             return HeadingSample(t, float(s["heading_rad"][i]))
         return self._frame(t + self.time_offset_s, s, i)
 
-    def _frame(self, t: float, s, i: int):
+    def image(self, i: int) -> tuple[np.ndarray | None, str | None]:
+        """Frame ``i`` decoded to 8-bit gray, or (None, why it cannot be used)."""
         import cv2
 
-        f = self.path / str(s["file"][i])
+        f = self.path / str(self.streams["frames"]["file"][i])
         img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
         if img is not None and img.ndim == 3:
             img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY if img.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
@@ -391,10 +392,14 @@ class Recording:
         why = ("cannot be decoded" if img is None else f"is {img.dtype}, not 8-bit" if img.dtype != np.uint8 else
                f"is {img.shape[1]}x{img.shape[0]}, camera.yaml says {cam.width}x{cam.height}"
                if cam is not None and img.shape != (cam.height, cam.width) else None)
-        if why is not None:
+        return (img, None) if why is None else (None, f"{f}: {why}")
+
+    def _frame(self, t: float, s, i: int):
+        img, why = self.image(i)
+        if img is None:
             self.skipped["frames"] = self.skipped.get("frames", 0) + 1
             if len(self.notes) < 20:
-                self.notes.append(f"{f}: {why}; frame skipped")
+                self.notes.append(f"{why}; frame skipped")
             return None
         idx = int(s["index"][i]) if "index" in s else i
         return Frame(t, img, idx)

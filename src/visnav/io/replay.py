@@ -102,6 +102,25 @@ def _witas(rec: Recording, opts: ReplayOptions, recorder):
     return nav, sc
 
 
+def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
+    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``): gyro of ``imu.csv`` against
+    the frames' rotation; the ground is assumed below the body (the camera's view of body down)."""
+    from visnav.estimation.timesync import estimate_offset, frame_rotation_angles
+
+    rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
+    s = rec.streams["imu"]
+    gyro = np.column_stack([s["gx_radps"], s["gy_radps"], s["gz_radps"]])
+    decoded = [(float(t), rec.image(i)[0]) for i, t in enumerate(rec.streams["frames"]["t_s"])]
+    decoded = [(t, im) for t, im in decoded if im is not None]
+    cam = rec.camera
+    down = cam.mount.R_cam_to_body.T @ np.array([0.0, 0.0, 1.0])
+    pairs, ang = frame_rotation_angles([t for t, _ in decoded], (im for _, im in decoded), cam.camera.K, down)
+    try:
+        return estimate_offset(s["t_s"], gyro, pairs, ang, max_offset_s=max_offset_s)
+    except ValueError as exc:
+        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {exc}") from None
+
+
 # ------------------------------------------------------------------------------------ the replay
 def _events(rec: Recording, out_rate: float):
     """Measurements and commands merged in delivery order: arrays (kind, a, b, time) with kind 0 =
@@ -140,9 +159,7 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     metrics: dict = {}
     if opts.time_offset is not None:
         if opts.time_offset == "auto":
-            from visnav.estimation.timesync import estimate_offset_from_recording
-
-            est = estimate_offset_from_recording(rec)
+            est = offset_from_recording(rec)
             rec.time_offset_s = est.offset_s
             metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
             notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
