@@ -341,7 +341,8 @@ def record_(
 
 @app.command("replay")
 def replay_(
-    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md)"),
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
+                                    "ROS bag"),
     navigator: str = typer.Option(..., help="navigator: palace or witas"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
@@ -351,7 +352,8 @@ def replay_(
     rate: float = typer.Option(10.0, help="estimate rate when the recording has no recorded queries \\[Hz]"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
-    from visnav.io.recording import Recording, RecordingError
+    from visnav.io.logs import open_recording
+    from visnav.io.recording import RecordingError
     from visnav.io.replay import ReplayOptions, replay, write_replay
     from visnav.io.runs import new_run_dir
     from visnav.scenarios.schema import ScenarioError
@@ -366,7 +368,7 @@ def replay_(
                 raise RecordingError(f"--time-offset must be 'auto' or seconds, got {time_offset!r}") from None
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
-        rec = Recording.open(recording)
+        rec = open_recording(recording)
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)

@@ -311,6 +311,7 @@ class Recording:
     skipped: dict[str, int] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     time_offset_s: float = 0.0  # added to frame stamps (camera clock -> IMU clock); camera.yaml's by default
+    images: list | None = None  # decoded frames held in memory (logs: rosbag images), else files
 
     @classmethod
     def open(cls, path: str | Path) -> "Recording":
@@ -385,7 +386,7 @@ class Recording:
         import cv2
 
         f = self.path / str(self.streams["frames"]["file"][i])
-        img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
+        img = self.images[i] if self.images is not None else cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
         if img is not None and img.ndim == 3:
             img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY if img.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
         cam = self.camera.camera if self.camera else None

@@ -73,9 +73,17 @@ def _palace(rec: Recording, opts: ReplayOptions, recorder):
     from visnav.navigation.palace import PalaceNavigator
 
     sc = scenario_of(rec, "palace-landing", opts.scenario_overrides)
-    if rec.camera is None:
-        raise RecordingError(f"{rec.path / 'camera.yaml'}: missing (PALACE's MPE needs the camera)")
-    return PalaceNavigator(sc.navigation, rec.camera.camera, rec.camera.mount, recorder=recorder), sc
+    if rec.camera is not None:
+        camera, mount = rec.camera.camera, rec.camera.mount
+    else:  # no frames and no camera.yaml: GPS / inertial only; the scenario's camera stands in for MPE's
+        from visnav.geometry.camera import PinholeCamera
+        from visnav.geometry.mounts import FixedMount
+
+        c = sc.sensors.camera
+        camera = PinholeCamera.ideal(c.width, c.height, c.focal_px)
+        mount = FixedMount.depressed(c.depression_deg, lever_arm=tuple(c.lever_arm_m))
+        rec.notes.append("no camera.yaml and no frames: PALACE runs on GPS / inertial only")
+    return PalaceNavigator(sc.navigation, camera, mount, recorder=recorder), sc
 
 
 @register_navigator("witas", needs=("imu", "attitude", "gps", "baro", "frames"))
