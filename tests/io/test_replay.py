@@ -136,3 +136,13 @@ def test_camera_clock_shifted_by_80_ms_is_found_and_corrected(witas_rec, tmp_pat
     d_found, _ = _max_difference(closed, found.log)
     d_raw, _ = _max_difference(closed, raw.log)
     assert d_found < 0.1 < d_raw
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scenario,navigator", [("palace-landing", "palace"), ("witas-homing", "witas")])
+def test_whole_default_flight_replays_exactly(tmp_path, scenario, navigator):
+    """The built-in scenarios, whole flights (palace-landing to touchdown, the 1 km WITAS loop)."""
+    rec = record(load_scenario(scenario), tmp_path)
+    res = replay(Recording.open(tmp_path), navigator)
+    diff, n = _max_difference(rec.run.log, res.log)
+    assert n > 500 and diff <= 1e-6
