@@ -8,7 +8,8 @@ import struct
 import numpy as np
 import pytest
 
-from visnav.io.logs import headings_from_mag, open_recording
+from visnav.io.logs import open_recording
+from visnav.io.streams import headings_from_mag
 from visnav.io.recording import RecordingError
 
 _STRUCT = {"Q": "Q", "B": "B", "f": "f", "c": "h", "C": "H", "L": "i", "h": "h", "I": "I", "H": "H"}

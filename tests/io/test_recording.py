@@ -125,3 +125,27 @@ def test_navigator_needs_streams_and_cli_says_so_in_one_line(tmp_path):
     (tmp_path / "imu.csv").write_text("t_s,ax_mps2\n0,1\n")
     r = CliRunner().invoke(app, ["replay", str(tmp_path), "--navigator", "palace"])
     assert r.exit_code == 2 and "imu.csv: missing column(s) ay_mps2" in r.output
+
+
+def test_geodetic_gps_and_magnetometer_vectors_are_converted(tmp_path):
+    """A user's gps.csv in latitude / longitude without velocity, a magnetometer.csv of field vectors."""
+    from visnav.io.recording import write_csv
+
+    _write(tmp_path, _samples(np.random.default_rng(0))[:2])
+    t = np.arange(0.0, 2.0, 0.2)
+    lat = 45.0 + 1e-5 * t  # due north at M * radians(1e-5) m/s
+    write_csv(tmp_path / "gps.csv", {"t_s": t, "lat_deg": lat, "lon_deg": 7.0 + 0 * t, "alt_m": 100 + 0 * t})
+    yaw = np.radians(30.0)
+    write_csv(tmp_path / "attitude.csv", {"t_s": t, "roll_rad": 0 * t, "pitch_rad": 0 * t, "yaw_rad": yaw + 0 * t})
+    write_csv(tmp_path / "magnetometer.csv", {"t_s": t, "mx": 0.2 * np.cos(yaw) + 0 * t, "my": -0.2 * np.sin(yaw) + 0 * t,
+                                              "mz": 0.4 + 0 * t})
+    rec = Recording.open(tmp_path)
+    g = rec.streams["gps"]
+    a, e2 = 6378137.0, 6.69437999014e-3
+    M = a * (1 - e2) / (1 - e2 * np.sin(np.radians(45.0)) ** 2) ** 1.5
+    np.testing.assert_allclose(g["vn_mps"], M * np.radians(1e-5), rtol=1e-4)
+    np.testing.assert_allclose(g["n_m"][-1], M * np.radians(1e-5 * t[-1]), rtol=1e-4)
+    np.testing.assert_allclose(rec.streams["magnetometer"]["heading_rad"], yaw, atol=1e-12)
+    (tmp_path / "gps.csv").write_text("t_s,lat_deg\n0,45\n")
+    with pytest.raises(RecordingError, match=r"gps\.csv: missing column.*or t_s, lat_deg, lon_deg, alt_m"):
+        Recording.open(tmp_path)

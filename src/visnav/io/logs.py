@@ -21,6 +21,7 @@ import numpy as np
 
 from visnav.geometry.rotations import dcm_to_euler
 from visnav.io.recording import Recording, RecordingError, read_camera_yaml
+from visnav.io.streams import gps_stream, heading_stream
 
 
 def open_recording(path: str | Path) -> Recording:
@@ -43,34 +44,6 @@ def open_recording(path: str | Path) -> Recording:
 def _camera_beside(p: Path):
     f = p.parent / "camera.yaml" if not p.is_dir() else p / "camera.yaml"
     return read_camera_yaml(f) if f.is_file() else None
-
-
-def headings_from_mag(mag: np.ndarray, roll, pitch, declination: float = 0.0) -> np.ndarray:
-    """Tilt-compensated heading [rad] of body-frame field vectors, vectorised ``eskf.heading_from_mag``."""
-    m = np.asarray(mag, float).reshape(-1, 3)
-    cr, sr, cp, sp = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch)
-    mx = m[:, 0] * cp + m[:, 1] * sr * sp + m[:, 2] * cr * sp
-    my = m[:, 1] * cr - m[:, 2] * sr
-    return np.angle(np.exp(1j * (np.arctan2(-my, mx) + declination)))
-
-
-def _heading_stream(t, mag, att: dict, declination: float = 0.0) -> dict:
-    roll = np.interp(t, att["t_s"], att["roll_rad"])
-    pitch = np.interp(t, att["t_s"], att["pitch_rad"])
-    return {"t_s": t, "heading_rad": headings_from_mag(mag, roll, pitch, declination)}
-
-
-def _gps_stream(t, lat, lon, alt, vel=None, t_recv=None) -> dict:
-    from visnav.geometry.frames import LocalTangentPlane
-
-    ned = LocalTangentPlane(lat[0], lon[0], alt[0]).geodetic_to_ned(lat, lon, alt)
-    if vel is None:  # no velocity in the message: central differences of the positions
-        vel = np.column_stack([np.gradient(ned[:, j], t) for j in range(3)]) if len(t) > 1 else np.zeros((len(t), 3))
-    out = {"t_s": t, "n_m": ned[:, 0], "e_m": ned[:, 1], "d_m": ned[:, 2], "vn_mps": vel[:, 0], "ve_mps": vel[:, 1],
-           "vd_mps": vel[:, 2]}
-    if t_recv is not None:
-        out["t_recv_s"] = t_recv
-    return out
 
 
 def _sorted(stream: dict, notes: list, what: str) -> dict:
@@ -154,7 +127,7 @@ def read_dataflash(path: Path) -> Recording:
         if len(g["TimeUS"]):
             crs = np.radians(g["GCrs"].astype(float))
             vel = np.column_stack([g["Spd"] * np.cos(crs), g["Spd"] * np.sin(crs), g["VZ"]]).astype(float)
-            streams["gps"] = _sorted(_gps_stream(ts(g), g["Lat"], g["Lng"], g["Alt"].astype(float), vel), notes, "GPS")
+            streams["gps"] = _sorted(gps_stream(ts(g), g["Lat"], g["Lng"], g["Alt"].astype(float), vel), notes, "GPS")
         else:
             notes.append("GPS: no 3D fix in the log")
     if get["RFND"] is not None:
@@ -166,7 +139,7 @@ def read_dataflash(path: Path) -> Recording:
     if get["MAG"] is not None and "attitude" in streams:
         m = first(get["MAG"])
         mag = np.column_stack([m["MagX"], m["MagY"], m["MagZ"]]).astype(float)
-        streams["magnetometer"] = _sorted(_heading_stream(ts(m), mag, streams["attitude"]), notes, "MAG")
+        streams["magnetometer"] = _sorted(heading_stream(ts(m), mag, streams["attitude"]), notes, "MAG")
     rec = Recording(path, _camera_beside(path), streams)
     rec.notes += notes
     return rec
@@ -188,7 +161,7 @@ def read_px4(path: Path) -> Recording:
     e = dcm_to_euler(Rotation.from_quat(u.att_quat[:, [1, 2, 3, 0]]).as_matrix())
     streams["attitude"] = {"t_s": u.att_t, "roll_rad": e[:, 0], "pitch_rad": e[:, 1], "yaw_rad": e[:, 2]}
     if u.mag is not None:
-        streams["magnetometer"] = _heading_stream(u.mag_t, u.mag, streams["attitude"],
+        streams["magnetometer"] = heading_stream(u.mag_t, u.mag, streams["attitude"],
                                                   np.radians(u.declination_deg or 0.0))
     rec = Recording(path, _camera_beside(path), streams)
     rec.notes += list(u.notes)
@@ -248,7 +221,8 @@ def read_rosbag(path: Path) -> Recording:
     if fix:
         tr, ts, msgs = zip(*fix)
         lla = np.array([[m.latitude, m.longitude, m.altitude] for m in msgs])
-        streams["gps"] = _sorted(_gps_stream(sec(ts), lla[:, 0], lla[:, 1], lla[:, 2], t_recv=sec(tr)), notes, "NavSatFix")
+        streams["gps"] = _sorted(gps_stream(sec(ts), lla[:, 0], lla[:, 1], lla[:, 2]) | {"t_recv_s": sec(tr)}, notes,
+                                 "NavSatFix")
     if rows["sensor_msgs/msg/Range"]:
         tr, ts, msgs = zip(*rows["sensor_msgs/msg/Range"])
         r = np.array([m.range if m.min_range <= m.range <= m.max_range else np.nan for m in msgs])

@@ -46,6 +46,7 @@ class Stream:
     required: tuple[str, ...]
     optional: tuple[str, ...] = ()
     text: tuple[str, ...] = ()  # columns that stay strings
+    alternatives: tuple[tuple[str, ...], ...] = ()  # other column sets accepted instead of ``required``
 
 
 #: stream name -> its CSV; the order is the tie-break of samples delivered at the same instant
@@ -53,10 +54,11 @@ class Stream:
 STREAMS: dict[str, Stream] = {
     "imu": Stream("imu.csv", ("t_s", "ax_mps2", "ay_mps2", "az_mps2", "gx_radps", "gy_radps", "gz_radps")),
     "attitude": Stream("attitude.csv", ("t_s", "roll_rad", "pitch_rad", "yaw_rad")),
-    "gps": Stream("gps.csv", ("t_s", "n_m", "e_m", "d_m", "vn_mps", "ve_mps", "vd_mps"), ("sigma_m",)),
+    "gps": Stream("gps.csv", ("t_s", "n_m", "e_m", "d_m", "vn_mps", "ve_mps", "vd_mps"), ("sigma_m",),
+                  alternatives=(("t_s", "n_m", "e_m", "d_m"), ("t_s", "lat_deg", "lon_deg", "alt_m"))),
     "range": Stream("range.csv", ("t_s", "range_m", "sensor"), ("beam_offset_rad",), text=("sensor",)),
     "baro": Stream("baro.csv", ("t_s", "altitude_m")),
-    "magnetometer": Stream("magnetometer.csv", ("t_s", "heading_rad")),
+    "magnetometer": Stream("magnetometer.csv", ("t_s", "heading_rad"), alternatives=(("t_s", "mx", "my", "mz"),)),
     "frames": Stream("frames.csv", ("t_s", "file"), ("index",), text=("file",)),
 }
 TRUTH = Stream("truth.csv", ("t_s", "n_m", "e_m", "d_m"), ("vn_mps", "ve_mps", "vd_mps", "roll_rad", "pitch_rad",
@@ -82,9 +84,10 @@ def read_csv(path: Path, spec: Stream) -> dict[str, np.ndarray]:
         raise RecordingError(f"{path}: cannot read ({exc.strerror or exc})") from None
     names = [c.strip() for c in header.split(",")]
     missing = [c for c in spec.required if c not in names]
-    if missing:
+    if missing and not any(all(c in names for c in alt) for alt in spec.alternatives):
+        alts = "".join(f" or {', '.join(a)}" for a in spec.alternatives)
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing)} (header: {header!r}; "
-                             f"needed: {', '.join(spec.required)})")
+                             f"needed: {', '.join(spec.required)}{alts})")
     try:
         raw = np.loadtxt(path, delimiter=",", skiprows=1, dtype=str, ndmin=2, quotechar='"', comments=None)
     except ValueError as exc:
@@ -328,6 +331,7 @@ class Recording:
             if missing:
                 raise RecordingError(f"{d / missing[0]}: frame file missing (listed in frames.csv; "
                                      f"{len(missing)} of {len(files)} missing)")
+        _convert(streams, d)
         truth = read_csv(d / TRUTH.file, TRUTH) if (d / TRUTH.file).is_file() else None
         cmds = read_csv(d / COMMANDS.file, COMMANDS) if (d / COMMANDS.file).is_file() else None
         sc = (d / "scenario.toml").read_text() if (d / "scenario.toml").is_file() else None
@@ -404,6 +408,31 @@ class Recording:
             return None
         idx = int(s["index"][i]) if "index" in s else i
         return Frame(t, img, idx)
+
+
+def _convert(streams: dict, d: Path) -> None:
+    """Alternative columns into the canonical ones: GPS in latitude / longitude (NED about the first fix;
+    velocity by central differences when absent), magnetometer field vectors (tilt-compensated heading
+    with attitude.csv)."""
+    from visnav.io.streams import gps_stream, heading_stream
+
+    g = streams.get("gps")
+    if g is not None and "n_m" not in g:
+        vel = np.column_stack([g[k] for k in ("vn_mps", "ve_mps", "vd_mps")]) if "vn_mps" in g else None
+        keep = {k: v for k, v in g.items() if k in ("sigma_m", "t_recv_s", "seq")}
+        streams["gps"] = gps_stream(g["t_s"], g["lat_deg"], g["lon_deg"], g["alt_m"], vel) | keep
+    elif g is not None and "vn_mps" not in g:
+        ned = np.column_stack([g["n_m"], g["e_m"], g["d_m"]])
+        v = np.column_stack([np.gradient(ned[:, j], g["t_s"]) for j in range(3)]) if len(ned) > 1 else 0 * ned
+        g.update(vn_mps=v[:, 0], ve_mps=v[:, 1], vd_mps=v[:, 2])
+    m = streams.get("magnetometer")
+    if m is not None and "heading_rad" not in m:
+        if "attitude" not in streams:
+            raise RecordingError(f"{d / 'magnetometer.csv'}: field vectors (mx, my, mz) need attitude.csv for the "
+                                 "tilt compensation; or give heading_rad")
+        keep = {k: v for k, v in m.items() if k in ("t_recv_s", "seq")}
+        streams["magnetometer"] = heading_stream(m["t_s"], np.column_stack([m["mx"], m["my"], m["mz"]]),
+                                                 streams["attitude"]) | keep
 
 
 STREAM_ORDER = {n: j for j, n in enumerate(STREAMS)}
