@@ -149,3 +149,26 @@ def test_geodetic_gps_and_magnetometer_vectors_are_converted(tmp_path):
     (tmp_path / "gps.csv").write_text("t_s,lat_deg\n0,45\n")
     with pytest.raises(RecordingError, match=r"gps\.csv: missing column.*or t_s, lat_deg, lon_deg, alt_m"):
         Recording.open(tmp_path)
+
+
+def test_frames_from_one_video_file(tmp_path):
+    """frames.csv may name one video and per-frame times; frames come back in order (lossless FFV1 here)."""
+    import cv2
+
+    from visnav.io.recording import write_csv
+
+    _write(tmp_path, _samples(np.random.default_rng(0))[:2])
+    rng = np.random.default_rng(9)
+    imgs = [cv2.GaussianBlur(rng.integers(0, 256, (48, 64), dtype=np.uint8), (5, 5), 1.0) for _ in range(6)]
+    vw = cv2.VideoWriter(str(tmp_path / "flight.avi"), cv2.VideoWriter_fourcc(*"FFV1"), 10.0, (64, 48), False)
+    assert vw.isOpened()
+    for im in imgs:
+        vw.write(im)
+    vw.release()
+    t = 0.3 + 0.1 * np.arange(6)
+    write_csv(tmp_path / "frames.csv", {"t_s": t, "file": np.array(["flight.avi"] * 6, dtype=object)})
+    rec = Recording.open(tmp_path)
+    got = [rec.sample("frames", i) for i in (0, 1, 2, 4, 5, 3)]  # forward, a skip, then back
+    for f, k in zip(got, (0, 1, 2, 4, 5, 3)):
+        assert f.t == t[k]
+        np.testing.assert_array_equal(f.image, imgs[k])

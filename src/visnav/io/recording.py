@@ -59,7 +59,7 @@ STREAMS: dict[str, Stream] = {
     "range": Stream("range.csv", ("t_s", "range_m", "sensor"), ("beam_offset_rad",), text=("sensor",)),
     "baro": Stream("baro.csv", ("t_s", "altitude_m")),
     "magnetometer": Stream("magnetometer.csv", ("t_s", "heading_rad"), alternatives=(("t_s", "mx", "my", "mz"),)),
-    "frames": Stream("frames.csv", ("t_s", "file"), ("index",), text=("file",)),
+    "frames": Stream("frames.csv", ("t_s", "file"), ("index", "video_frame"), text=("file",)),
 }
 TRUTH = Stream("truth.csv", ("t_s", "n_m", "e_m", "d_m"), ("vn_mps", "ve_mps", "vd_mps", "roll_rad", "pitch_rad",
                                                           "yaw_rad"))
@@ -315,6 +315,7 @@ class Recording:
     notes: list[str] = field(default_factory=list)
     time_offset_s: float = 0.0  # added to frame stamps (camera clock -> IMU clock); camera.yaml's by default
     images: list | None = None  # decoded frames held in memory (logs: rosbag images), else files
+    _video: dict = field(default_factory=dict, repr=False)  # file -> [cv2.VideoCapture, next frame number]
 
     @classmethod
     def open(cls, path: str | Path) -> "Recording":
@@ -331,6 +332,11 @@ class Recording:
             if missing:
                 raise RecordingError(f"{d / missing[0]}: frame file missing (listed in frames.csv; "
                                      f"{len(missing)} of {len(files)} missing)")
+            for v in {f for f in files if Path(f).suffix.lower() in VIDEO_SUFFIXES}:
+                import cv2
+
+                if not cv2.VideoCapture(str(d / v)).isOpened():
+                    raise RecordingError(f"{d / v}: cannot open the video (format or codec not supported by OpenCV)")
         _convert(streams, d)
         truth = read_csv(d / TRUTH.file, TRUTH) if (d / TRUTH.file).is_file() else None
         cmds = read_csv(d / COMMANDS.file, COMMANDS) if (d / COMMANDS.file).is_file() else None
@@ -390,7 +396,12 @@ class Recording:
         import cv2
 
         f = self.path / str(self.streams["frames"]["file"][i])
-        img = self.images[i] if self.images is not None else cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
+        if self.images is not None:
+            img = self.images[i]
+        elif f.suffix.lower() in VIDEO_SUFFIXES:
+            img = self._video_frame(f, i)
+        else:
+            img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
         if img is not None and img.ndim == 3:
             img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY if img.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
         cam = self.camera.camera if self.camera else None
@@ -398,6 +409,28 @@ class Recording:
                f"is {img.shape[1]}x{img.shape[0]}, camera.yaml says {cam.width}x{cam.height}"
                if cam is not None and img.shape != (cam.height, cam.width) else None)
         return (img, None) if why is None else (None, f"{f}: {why}")
+
+    def _video_frame(self, f: Path, i: int):
+        """Frame ``video_frame[i]`` (default: the row's rank among the rows of this file) of a video file,
+        read sequentially (a seek only when going back)."""
+        import cv2
+
+        fr = self.streams["frames"]
+        if "video_frame" in fr:
+            n = int(fr["video_frame"][i])
+        else:
+            n = int(np.count_nonzero(fr["file"][:i] == fr["file"][i]))
+        cap, nxt = self._video.get(str(f), (None, 0))
+        if cap is None or n < nxt:
+            cap = cv2.VideoCapture(str(f))
+            if n:
+                cap.set(cv2.CAP_PROP_POS_FRAMES, n)
+            nxt = n
+        while nxt < n and cap.grab():
+            nxt += 1
+        ok, img = cap.read()
+        self._video[str(f)] = (cap, nxt + 1)
+        return img if ok else None
 
     def _frame(self, t: float, s, i: int):
         img, why = self.image(i)
@@ -435,5 +468,6 @@ def _convert(streams: dict, d: Path) -> None:
                                                  streams["attitude"]) | keep
 
 
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".m4v")
 STREAM_ORDER = {n: j for j, n in enumerate(STREAMS)}
 STREAM_NAMES = list(STREAMS)
