@@ -350,6 +350,8 @@ def replay_(
                                               "cross-correlation) or seconds (t_imu = t_camera + offset); "
                                               "default camera.yaml's"),
     rate: float = typer.Option(10.0, help="estimate rate when the recording has no recorded queries \\[Hz]"),
+    gps_until: Optional[float] = typer.Option(None, help="withhold GPS after this time \\[s] (a GPS-denied run on a "
+                                              "real flight; the fixes stay the reference when there is no truth.csv)"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -369,7 +371,8 @@ def replay_(
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
         rec = open_recording(recording)
-        opts = ReplayOptions(map_path=map_, output_rate_hz=rate, time_offset="auto" if time_offset == "auto" else offset)
+        opts = ReplayOptions(map_path=map_, output_rate_hz=rate, time_offset="auto" if time_offset == "auto" else offset,
+                             gps_until_s=gps_until)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)
         out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out))
@@ -388,6 +391,8 @@ def replay_(
     for n in res.notes:
         console.print(f"[yellow]note:[/yellow] {escape(n)}")
     console.print(f"run directory: {out_dir}")
+    if "error" in res.metrics:
+        raise typer.Exit(1)
 
 
 def main() -> None:  # pragma: no cover

@@ -46,6 +46,8 @@ def test_round_trip_is_exact_and_in_delivery_order(tmp_path):
     np.testing.assert_array_equal(rec.camera.mount.R_cam_to_body, MOUNT.R_cam_to_body)
     tr, sq, si, ri = rec.delivery()
     assert np.all(np.diff(tr) >= 0)
+    np.testing.assert_array_equal(tr, [m.t + 0.5 for m in src])  # delivery times and order come back
+    np.testing.assert_array_equal(sq, np.arange(1, len(src) + 1))
     got = [rec.sample(_name(rec, j), int(i)) for j, i in zip(si, ri)]
     assert [type(m) for m in got] == [type(m) for m in src]
     for a, b in zip(src, got):

@@ -146,3 +146,35 @@ def test_whole_default_flight_replays_exactly(tmp_path, scenario, navigator):
     res = replay(Recording.open(tmp_path), navigator)
     diff, n = _max_difference(rec.run.log, res.log)
     assert n > 500 and diff <= 1e-6
+
+
+def test_gps_withheld_after_a_time_and_used_as_the_reference(palace_rec, tmp_path):
+    import shutil
+
+    d, rec = palace_rec
+    copy = tmp_path / "rec"
+    shutil.copytree(d, copy)
+    (copy / "truth.csv").unlink()
+    r = Recording.open(copy)
+    res = replay(r, "palace", ReplayOptions(gps_until_s=5.0))
+    m = res.metrics
+    assert m["gps_withheld"] == int(np.sum(r.streams["gps"]["t_s"] > 5.0)) > 0
+    assert m["reference"] == "gps.csv" and m["ate_rmse_m"] > 0
+    full = replay(Recording.open(copy), "palace")
+    assert full.metrics["reference"] == "gps.csv" and full.metrics.get("gps_withheld") is None
+
+
+def test_an_error_inside_the_replay_keeps_what_it_has(palace_rec, tmp_path):
+    import shutil
+
+    d, rec = palace_rec
+    copy = tmp_path / "rec"
+    shutil.copytree(d, copy)
+    lines = (copy / "commands.csv").read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines[1:], 1) if float(ln.split(",")[0]) > 5.05)
+    lines.insert(i, '5.05,1e9,set_source,"{""args"": [""bogus""], ""kwargs"": {}}"')  # a request it refuses
+    (copy / "commands.csv").write_text("\n".join(lines) + "\n")
+    res = replay(Recording.open(copy), "palace")
+    assert "ValueError at t=5.050 s" in res.metrics["error"] and "bogus" in res.metrics["error"]
+    est = res.log.get("estimate")
+    assert est["t"][-1] == pytest.approx(5.0) and len(est["t"]) == 51  # 0.0 .. 5.0 s at 10 Hz, kept

@@ -47,6 +47,11 @@ class Stream:
     optional: tuple[str, ...] = ()
     text: tuple[str, ...] = ()  # columns that stay strings
     alternatives: tuple[tuple[str, ...], ...] = ()  # other column sets accepted instead of ``required``
+    written: tuple[str, ...] = ()  # what ``RecordingWriter`` writes (before t_recv_s, seq); default all
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        return self.written or self.required + self.optional
 
 
 #: stream name -> its CSV; the order is the tie-break of samples delivered at the same instant
@@ -59,7 +64,8 @@ STREAMS: dict[str, Stream] = {
     "range": Stream("range.csv", ("t_s", "range_m", "sensor"), ("beam_offset_rad",), text=("sensor",)),
     "baro": Stream("baro.csv", ("t_s", "altitude_m")),
     "magnetometer": Stream("magnetometer.csv", ("t_s", "heading_rad"), alternatives=(("t_s", "mx", "my", "mz"),)),
-    "frames": Stream("frames.csv", ("t_s", "file"), ("index", "video_frame"), text=("file",)),
+    "frames": Stream("frames.csv", ("t_s", "file"), ("index", "video_frame"), text=("file",),
+                     written=("t_s", "file", "index")),
 }
 TRUTH = Stream("truth.csv", ("t_s", "n_m", "e_m", "d_m"), ("vn_mps", "ve_mps", "vd_mps", "roll_rad", "pitch_rad",
                                                           "yaw_rad"))
@@ -269,7 +275,7 @@ class RecordingWriter:
             rows = self.rows[kind]
             if not rows:
                 continue
-            names = list(spec.required) + list(spec.optional) + list(DELIVERY)
+            names = list(spec.columns) + list(DELIVERY)
             cols = list(zip(*rows))
             data = {}
             for n, c in zip(names, cols):

@@ -41,6 +41,8 @@ class ReplayOptions:
     output_rate_hz: float = 10.0  # estimate rate when the recording has no recorded estimate queries
     time_offset: str | float | None = None  # None: camera.yaml's; "auto": gyro/camera cross-correlation; seconds
     scenario_overrides: list[str] = field(default_factory=list)
+    gps_until_s: float | None = None  # GPS samples describing later instants are withheld from the navigator
+    gps_reference: bool = True  # without truth.csv, score against the GPS fixes
 
 
 @dataclass
@@ -157,6 +159,8 @@ def _events(rec: Recording, out_rate: float):
 
 
 def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, progress=None) -> ReplayResult:
+    """Run ``navigator`` on ``rec``; an error inside the replay stops it and keeps what it has
+    (``metrics["error"]``)."""
     opts = opts or ReplayOptions()
     if navigator not in NAVIGATORS:
         raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))} "
@@ -165,78 +169,104 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     rec.require(needs, navigator)
     notes: list[str] = []
     metrics: dict = {}
-    if opts.time_offset is not None:
-        if opts.time_offset == "auto":
-            est = offset_from_recording(rec)
-            rec.time_offset_s = est.offset_s
-            metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
-            notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
-                         f"cross-correlation, peak {est.peak:.2f})")
-        else:
-            rec.time_offset_s = float(opts.time_offset)
-            metrics["time_offset_s"] = rec.time_offset_s
+    if opts.time_offset == "auto":
+        est = offset_from_recording(rec)
+        rec.time_offset_s = est.offset_s
+        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
+        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
+                     f"cross-correlation, peak {est.peak:.2f})")
+    elif opts.time_offset is not None:
+        rec.time_offset_s = float(opts.time_offset)
+        metrics["time_offset_s"] = rec.time_offset_s
     log = FlightLog()
     nav, sc = builder(rec, opts, log.record)
     kinds, a, b, times = _events(rec, opts.output_rate_hz)
-    c = rec.commands
-    n_frames = n_imu = 0
-    i_frames, i_imu = STREAM_NAMES.index("frames"), STREAM_NAMES.index("imu")
-    streams = list(rec.streams)
-    stream_idx = [STREAM_NAMES.index(s) for s in streams]
-    by_order = {j: s for j, s in zip(stream_idx, streams)}
     wall0 = time.perf_counter()
-    for k in range(len(kinds)):
-        kind = kinds[k]
-        if kind == 0:
-            m = rec.sample(by_order[a[k]], int(b[k]))
-            if m is None:
-                continue
-            n_frames += a[k] == i_frames
-            n_imu += a[k] == i_imu
-            nav.update(m)
-        elif kind == 2 or c["method"][b[k]] == "estimate":
-            t = float(times[k])
-            e = nav.estimate(t)
-            log.record("estimate", t, position=e.position, velocity=e.velocity, euler=e.attitude, source=e.source,
-                       valid=e.valid)
-        else:
-            meth, t = str(c["method"][b[k]]), float(times[k])
-            if meth == "health":
-                h = nav.health(t)
-                log.record("status", t, source=h.source, coherence=h.coherence, tracking=h.tracking,
-                           mpe_rate_hz=h.mpe_rate_hz, laser_ok=h.laser_ok)
-                continue
-            args = json.loads(c["args"][b[k]]) if "args" in c and c["args"][b[k]] else {}
-            fn = getattr(nav, meth, None)
-            if fn is None:
-                notes.append(f"commands.csv: {meth!r} is not a {navigator} navigator request; skipped")
-                continue
-            fn(*args.get("args", []), **args.get("kwargs", {}))
-            log.record("command", t, method=meth, args=json.dumps(args))
-        if progress is not None and k % 2000 == 0:
-            progress(k, len(kinds))
+    counts, error = _feed(rec, nav, navigator, log, notes, (kinds, a, b, times), opts, progress)
     wall = time.perf_counter() - wall0
-    tr = rec.truth
-    if tr is not None:
-        e = np.column_stack([tr[k] if k in tr else np.zeros(len(tr["t_s"])) for k in ("roll_rad", "pitch_rad",
-                                                                                      "yaw_rad")])
-        v = np.column_stack([tr[k] if k in tr else np.full(len(tr["t_s"]), np.nan) for k in ("vn_mps", "ve_mps",
-                                                                                             "vd_mps")])
-        for i, t in enumerate(tr["t_s"]):
-            log.record("truth", t, position=np.array([tr["n_m"][i], tr["e_m"][i], tr["d_m"][i]]), velocity=v[i],
-                       euler=e[i])
+    reference = _log_reference(rec, log, opts)
     h = nav.health(None)
     dur = float(times[-1] - times[0]) if len(times) else 0.0
-    metrics |= {"frames_used": int(n_frames), "frames_dropped": int(rec.skipped.get("frames", 0)),
-                "frames_in_recording": rec.count("frames"), "imu_samples": int(n_imu),
+    metrics |= {"frames_used": counts["frames"], "frames_dropped": int(rec.skipped.get("frames", 0)),
+                "frames_in_recording": rec.count("frames"), "imu_samples": counts["imu"],
                 "samples_rejected": int(getattr(h, "rejected_samples", 0))}
-    metrics |= _accuracy(log, tr is not None)
+    if opts.gps_until_s is not None:
+        metrics["gps_withheld"] = counts["gps_withheld"]
+    if reference:
+        metrics["reference"] = reference
+        metrics |= _accuracy(log, True)
     metrics |= {"replay_wall_s": wall, "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
                 "flight_duration_s": dur}
+    if error:
+        metrics["error"] = error
+        notes.append(f"the replay stopped early: {error} (what it had is kept)")
     notes += rec.notes
     if rec.skipped:
         notes.append(f"skipped during the replay: {', '.join(f'{v} {k}' for k, v in rec.skipped.items())}")
     return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes)
+
+
+def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict, str | None]:
+    """The replay loop: samples to ``update``, recorded requests to their methods, estimates to the log."""
+    kinds, a, b, times = events
+    c = rec.commands
+    counts = {"frames": 0, "imu": 0, "gps_withheld": 0}
+    by_index = {STREAM_NAMES.index(s): s for s in rec.streams}
+    cut = opts.gps_until_s if opts.gps_until_s is not None else np.inf
+    k, t = 0, float("nan")
+    try:
+        for k in range(len(kinds)):
+            t = float(times[k])
+            if kinds[k] == 0:
+                name = by_index[a[k]]
+                m = rec.sample(name, int(b[k]))
+                if m is None:
+                    continue
+                if name == "gps" and m.t > cut:
+                    counts["gps_withheld"] += 1
+                    continue
+                if name in ("frames", "imu"):
+                    counts[name] += 1
+                nav.update(m)
+            elif kinds[k] == 2 or c["method"][b[k]] == "estimate":
+                e = nav.estimate(t)
+                log.record("estimate", t, position=e.position, velocity=e.velocity, euler=e.attitude,
+                           source=e.source, valid=e.valid)
+            elif c["method"][b[k]] == "health":
+                h = nav.health(t)
+                log.record("status", t, source=h.source, coherence=h.coherence, tracking=h.tracking,
+                           mpe_rate_hz=h.mpe_rate_hz, laser_ok=h.laser_ok)
+            else:
+                meth = str(c["method"][b[k]])
+                args = json.loads(c["args"][b[k]]) if "args" in c and c["args"][b[k]] else {}
+                fn = getattr(nav, meth, None)
+                if fn is None:
+                    notes.append(f"commands.csv: {meth!r} is not a {navigator} navigator request; skipped")
+                    continue
+                fn(*args.get("args", []), **args.get("kwargs", {}))
+                log.record("command", t, method=meth, args=json.dumps(args))
+            if progress is not None and k % 2000 == 0:
+                progress(k, len(kinds))
+    except (Exception, KeyboardInterrupt) as exc:  # keep what the replay has
+        return counts, f"{type(exc).__name__} at t={t:.3f} s (event {k} of {len(kinds)}): {exc}"
+    return counts, None
+
+
+def _log_reference(rec: Recording, log: FlightLog, opts: ReplayOptions) -> str | None:
+    """truth.csv into the log's ``truth`` stream; without one, the GPS fixes (all of them, also those
+    withheld from the navigator by ``gps_until_s``) serve as the reference. Returns its name."""
+    tr, name = rec.truth, "truth.csv"
+    if tr is None and "gps" in rec.streams and opts.gps_reference:
+        tr, name = rec.streams["gps"], "gps.csv"
+    if tr is None:
+        return None
+    n = len(tr["t_s"])
+    col = lambda keys, fill: np.column_stack([tr[k] if k in tr else np.full(n, fill) for k in keys])  # noqa: E731
+    p, v, e = col(("n_m", "e_m", "d_m"), np.nan), col(("vn_mps", "ve_mps", "vd_mps"), np.nan), \
+        col(("roll_rad", "pitch_rad", "yaw_rad"), 0.0)
+    for i, t in enumerate(tr["t_s"]):
+        log.record("truth", t, position=p[i], velocity=v[i], euler=e[i])
+    return name
 
 
 def trajectories(log: FlightLog, frame: str = "NED world, body FRD"):
