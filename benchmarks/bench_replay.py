@@ -63,7 +63,8 @@ def main(argv=None) -> list[dict]:
           "replay RTF (wall / CPU) | max position difference to the closed loop [m] | ATE rmse [m] |")
     print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        print(f"| {r['navigator']} | {r['scenario']} | {r['flight_s']:.1f} | {r['frames']} | {r['record_wall_s']:.1f} | "
+        print(f"| {r['navigator']} | {r['scenario']} | {r['flight_s']:.1f} | {r['frames']} | "
+              f"{r['record_wall_s']:.1f} | "
               f"{r['folder_mb']:.0f} | {r['replay_wall_s']:.1f} | {r['rtf']:.1f} / {r['rtf_cpu']:.1f} | "
               f"{r['max_diff_m']:.3g} | {r['ate_rmse_m']:.3f} |")
     return rows

@@ -371,8 +371,8 @@ def replay_(
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
         rec = open_recording(recording)
-        opts = ReplayOptions(map_path=map_, output_rate_hz=rate, time_offset="auto" if time_offset == "auto" else offset,
-                             gps_until_s=gps_until)
+        opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
+                             time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)
         out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out))

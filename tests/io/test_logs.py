@@ -53,7 +53,8 @@ def _dataflash(path, n=200, truncate=False):
         if k % 10 == 0:
             out += _msg("BARO", tu, 0, 12.5 + 0.01 * k)
             out += _msg("MAG", tu, 0, int(300 * np.cos(YAW)), int(-300 * np.sin(YAW)), 400)
-            out += _msg("GPS", tu, 0, 3, 300_000_000 + tu // 1000, 2300, int(round((LAT0 + 1e-5 * k / 10) * 1e7)), int(LON0 * 1e7), 100.0, 11.1, 0.0, 0.0)
+            lat = int(round((LAT0 + 1e-5 * k / 10) * 1e7))
+            out += _msg("GPS", tu, 0, 3, 300_000_000 + tu // 1000, 2300, lat, int(LON0 * 1e7), 100.0, 11.1, 0.0, 0.0)
             out += _msg("RFND", tu, 0, 4.25, 25)
     if truncate:
         out = out[:-5]
@@ -152,7 +153,8 @@ def _write_bag(path, ros1: bool, n=100):
         for k in range(n):
             ns = t0 + k * 10**7
             recv = ns + 2 * 10**6  # received 2 ms after the instant it describes
-            m = T[types["imu"]](header=header(ns), orientation=Q(x=0.0, y=0.0, z=0.0, w=1.0), orientation_covariance=cov,
+            m = T[types["imu"]](header=header(ns), orientation=Q(x=0.0, y=0.0, z=0.0, w=1.0),
+                                orientation_covariance=cov,
                                 angular_velocity=V3(x=0.1, y=0.2, z=0.3), angular_velocity_covariance=cov,
                                 linear_acceleration=V3(x=0.0, y=0.0, z=9.81), linear_acceleration_covariance=cov)
             w.write(c["imu"], recv, ser(m, types["imu"]))

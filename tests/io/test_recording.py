@@ -8,7 +8,8 @@ from typer.testing import CliRunner
 
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
-from visnav.io.recording import Recording, RecordingError, RecordingWriter
+from visnav.io.recording import Recording, RecordingError
+from visnav.io.recording_writer import RecordingWriter
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, ImuSample,
                                  RangeSample)
 
@@ -139,8 +140,8 @@ def test_geodetic_gps_and_magnetometer_vectors_are_converted(tmp_path):
     write_csv(tmp_path / "gps.csv", {"t_s": t, "lat_deg": lat, "lon_deg": 7.0 + 0 * t, "alt_m": 100 + 0 * t})
     yaw = np.radians(30.0)
     write_csv(tmp_path / "attitude.csv", {"t_s": t, "roll_rad": 0 * t, "pitch_rad": 0 * t, "yaw_rad": yaw + 0 * t})
-    write_csv(tmp_path / "magnetometer.csv", {"t_s": t, "mx": 0.2 * np.cos(yaw) + 0 * t, "my": -0.2 * np.sin(yaw) + 0 * t,
-                                              "mz": 0.4 + 0 * t})
+    write_csv(tmp_path / "magnetometer.csv", {"t_s": t, "mx": 0.2 * np.cos(yaw) + 0 * t,
+                                              "my": -0.2 * np.sin(yaw) + 0 * t, "mz": 0.4 + 0 * t})
     rec = Recording.open(tmp_path)
     g = rec.streams["gps"]
     a, e2 = 6378137.0, 6.69437999014e-3

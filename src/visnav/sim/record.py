@@ -15,7 +15,8 @@ from typing import Callable
 
 import numpy as np
 
-from visnav.io.recording import RecordingError, RecordingWriter
+from visnav.io.recording import RecordingError
+from visnav.io.recording_writer import RecordingWriter
 from visnav.scenarios.schema import Scenario, to_toml
 
 #: what a mission may ask a navigator (logged with arguments and replayed); everything else passes through
