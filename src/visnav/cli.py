@@ -375,7 +375,8 @@ def replay_(
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)
-        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out))
+        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out),
+                               title=f"replay of {recording} on {navigator}")
     except (RecordingError, ScenarioError, ValueError) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(2)

@@ -99,6 +99,8 @@ def test_cli_replay_writes_the_run_directory(palace_rec, tmp_path):
     assert t[0] == pytest.approx(closed["t"][valid][0], abs=1e-9)
     assert "frame: NED world" in (out / "estimate.tum").read_text().splitlines()[0]
     assert (out / "log.h5").is_file()
+    page = (out / "report.html").read_text()
+    assert "<h2>Error</h2><img" in page and "<td>ate_rmse_m</td>" in page
 
 
 def test_corrupt_frame_inside_a_replay_is_counted_not_fatal(palace_rec, tmp_path):

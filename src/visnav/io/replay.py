@@ -305,9 +305,9 @@ def _accuracy(log: FlightLog, has_truth: bool) -> dict:
     return {"ate_rmse_m": s["ate_rmse_m"], "ate_max_m": s["ate_max_m"], "rpe_rmse_m": s["rpe_rmse_m"]}
 
 
-def write_replay(result: ReplayResult, out_dir: Path) -> Path:
+def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title: str = "visnav replay") -> Path:
     """log.h5, scenario.toml, estimate.tum (valid estimates only; the header names the frame), truth.tum,
-    metrics.json."""
+    metrics.json, report.html."""
     from visnav.io.runs import _jsonable
     from visnav.io.trajectory_export import write_tum_file
     from visnav.scenarios.schema import to_toml
@@ -320,4 +320,8 @@ def write_replay(result: ReplayResult, out_dir: Path) -> Path:
         write_tum_file(out_dir / "estimate.tum", est, result.frame)
     if ref is not None:
         write_tum_file(out_dir / "truth.tum", ref, result.frame)
+    if report:
+        from visnav.analysis.replay_report import write_replay_report
+
+        write_replay_report(result, out_dir / "report.html", title)
     return out_dir
