@@ -1,18 +1,56 @@
-"""Command line: ``visnav run SCENARIO``, ``visnav scenarios``."""
+"""Command line: ``visnav run SCENARIO``, ``visnav scenarios``, ``visnav keys``, ``visnav montecarlo``, ...
+
+User errors (bad scenario, key, value, file, unwritable or occupied ``--out``) are one line on
+stderr and exit code 2, never a traceback; Ctrl-C writes what a run has and exits 130. Help texts are
+rich markup: units in brackets are written escaped (``\\[m]``).
+"""
 
 from __future__ import annotations
 
+import json
 import sys
-from typing import List, Optional
+from pathlib import Path
+from typing import List, NoReturn, Optional
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.markup import escape
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
+
+import visnav
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="visnav: UAV navigation without GPS")
 console = Console()
+err_console = Console(stderr=True)
+
+
+def _builtin_names() -> str:
+    return ", ".join(sorted(p.stem for p in (Path(visnav.__file__).parent / "scenarios").glob("*.toml")))
+
+
+def _fail(message, code: int = 2) -> NoReturn:
+    """One line on stderr, then exit (2: a user error)."""
+    err_console.print(f"[red]error:[/red] {escape(str(message))}", soft_wrap=True)
+    raise typer.Exit(code)
+
+
+def _print_json(obj) -> None:
+    from visnav.io.runs import _jsonable
+
+    print(json.dumps(_jsonable(obj), indent=2))
+
+
+def _version(value: bool) -> None:
+    if value:
+        print(f"visnav {visnav.__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                       help="print the version and exit")) -> None:
+    """visnav: UAV navigation without GPS"""
 
 
 def _fmt(v) -> str:
@@ -23,17 +61,22 @@ def _fmt(v) -> str:
     return str(v)
 
 
-@app.command()
+@app.command(help="Run one closed-loop simulation and write its run directory (scenario.toml, log.h5, "
+             "truth.tum, estimate.tum, metrics.json, report.html). Built-in scenarios: " + _builtin_names() + ".")
 def run(
-    scenario: str = typer.Argument("palace-landing", help="built-in scenario name or path to a .toml file"),
+    scenario: str = typer.Argument("palace-landing", help="built-in scenario name or path to a .toml file "
+                                   "(visnav scenarios lists them; visnav keys SCENARIO lists what --set takes)"),
     seed: Optional[int] = typer.Option(None, help="override run.seed"),
-    out: Optional[str] = typer.Option(None, help="run directory (default runs/<scenario>-<time>)"),
+    out: Optional[str] = typer.Option(None, help="run directory (default runs/<scenario>-<time>); must be new or "
+                                      "empty unless --force"),
     set_: List[str] = typer.Option([], "--set", help="override a key, e.g. --set sensors.imu.delay_s=0.043"),
     report: bool = typer.Option(True, help="write report.html"),
     map_: Optional[str] = typer.Option(None, "--map", help="geo-referenced image (PNG/JPEG + world file) as the "
                                        "world (and, for witas-homing, the degraded reference map)"),
+    force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier "
+                               "run there are removed first)"),
+    json_: bool = typer.Option(False, "--json", help="print a machine-readable summary (JSON) on stdout"),
 ) -> None:
-    """Run one closed-loop simulation and write its run directory."""
     from visnav.analysis.report import published_figures
     from visnav.io.runs import new_run_dir, write_run
     from visnav.scenarios.schema import ScenarioError, load_scenario
@@ -42,17 +85,19 @@ def run(
     try:
         sc = load_scenario(scenario, set_, seed)
         if map_:  # the mission's own map if it has one (witas-homing fits its loop inside), else the world's
-            from pathlib import Path
-
             key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
-            sc = load_scenario(scenario, list(set_) + [f"{key}={Path(map_).resolve()}"], seed)
+            sc = load_scenario(scenario, list(set_) + [f"{key}={json.dumps(str(Path(map_).resolve()))}"], seed)
         sim = make_simulation(sc)
+        out_dir = new_run_dir(sc.run.name, out, force)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
-        raise typer.Exit(2)
-    out_dir = new_run_dir(sc.run.name, out)
+        _fail(exc)
+    except KeyboardInterrupt:
+        err_console.print("interrupted before the run started: nothing written")
+        raise typer.Exit(130)
+    for note in getattr(sim, "notes", []):
+        err_console.print(f"[yellow]note:[/yellow] {escape(note)}", soft_wrap=True)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
-                  TimeElapsedColumn(), console=console, transient=True) as prog:
+                  TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=True) as prog:
         task = prog.add_task(sc.run.name, total=sc.run.duration_s, info="")
 
         def progress(t, total):
@@ -60,7 +105,20 @@ def run(
                 prog.update(task, completed=t, info=f"t={t:5.1f}s {sim.mission.mode}")
 
         result = sim.run(progress=progress)
-    write_run(result, out_dir, report=report)
+    try:
+        write_run(result, out_dir, report=report)
+    except OSError as exc:
+        _fail(f"cannot write the run directory {out_dir}: {exc}")
+    except KeyboardInterrupt:
+        result.interrupted = True
+    if result.interrupted:
+        err_console.print(f"interrupted: what the run had is in {out_dir} (metrics.json: \"interrupted\": true)",
+                          soft_wrap=True)
+        raise typer.Exit(130)
+    if json_:
+        _print_json({"run_dir": str(out_dir), "scenario": sc.run.name, "seed": sc.run.seed,
+                     "metrics": result.metrics, "error": result.error})
+        raise typer.Exit(1 if result.error else 0)
     table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
     table.add_column("metric")
     table.add_column("this run", justify="right")
@@ -71,7 +129,7 @@ def run(
     console.print(table)
     console.print(f"run directory: {out_dir}")
     if result.error:
-        console.print(f"[red]the run stopped early:[/red] {result.error} (what it had is saved)")
+        err_console.print(f"[red]the run stopped early:[/red] {escape(result.error)} (what it had is saved)")
         raise typer.Exit(1)
 
 
@@ -85,8 +143,12 @@ def montecarlo(
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     grid: List[str] = typer.Option([], "--grid", help="sweep a key: --grid mission.altitude_m=6,12,18"),
     out: Optional[str] = typer.Option(None, help="campaign directory (default runs/<scenario>-mc-<time>)"),
+    new: bool = typer.Option(False, "--new", help="--out holds a campaign of another configuration: start a "
+                             "fresh one beside it (<out>-2, ...) instead of refusing"),
+    json_: bool = typer.Option(False, "--json", help="print the summary (JSON) on stdout"),
 ) -> None:
-    """Run N seeds (times every grid point); resumable: rerunning with --out skips finished runs."""
+    """Run N seeds (times every grid point). Resumable: rerunning the same campaign with its --out skips
+    finished runs; another configuration there is refused (or --new)."""
     import time as _time
 
     from visnav.analysis.montecarlo import Campaign, CampaignError, parse_grid
@@ -97,9 +159,17 @@ def montecarlo(
         g = parse_grid(grid)
         out_dir = out or f"runs/{scenario.rsplit('/', 1)[-1].removesuffix('.toml')}-mc-{_time.strftime('%Y%m%d-%H%M%S')}"
         camp = Campaign(scenario, list(range(first_seed, first_seed + n)), out_dir, list(set_), g, workers, scheduler)
+        done, todo = camp.prepare(new=new)
+    except CampaignError as exc:
+        _fail(exc)
+    if camp.moved_from is not None:
+        err_console.print(f"{camp.moved_from} holds another campaign: starting a new one in {camp.out}", soft_wrap=True)
+    if done:
+        err_console.print(f"{done} already done, {todo} to run", soft_wrap=True)
+    try:
         with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
-                      TimeElapsedColumn(), console=console) as prog:
-            task = prog.add_task(f"campaign {scenario}", total=None, info="")
+                      TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(), console=err_console) as prog:
+            task = prog.add_task(f"campaign {scenario}", total=todo or None, info="")
 
             def progress(i, total, row):
                 prog.update(task, total=total, completed=i,
@@ -107,13 +177,24 @@ def montecarlo(
 
             summary = camp.run(progress)
     except CampaignError as exc:
-        console.print(f"[red]error:[/red] {exc}")
-        raise typer.Exit(2)
+        _fail(exc)
+    except KeyboardInterrupt:
+        from visnav.analysis.montecarlo import _read_csv
+
+        err_console.print(f"interrupted: {len(_read_csv(camp.runs_csv))} finished runs are in {camp.runs_csv}; to "
+                          f"resume, run the same command with --out {camp.out}", soft_wrap=True)
+        raise typer.Exit(130)
+    if json_:
+        _print_json({"campaign_dir": str(camp.out), "summary": summary})
+        raise typer.Exit(1 if summary["failed"] else 0)
+    source = summary.get("published_source", "")
     table = Table(title=f"{scenario}: {summary['count']} runs, {summary['failed']} failed")
-    for col in ("metric", "mean", "median", "p95", "min", "max"):
+    for col in ("metric", "mean", "median", "p95", "min", "max", source or "thesis"):
         table.add_column(col, justify="left" if col == "metric" else "right")
     for k, v in summary["metrics"].items():
-        table.add_row(k, *(f"{v[c]:.4g}" for c in ("mean", "median", "p95", "min", "max")))
+        table.add_row(k, *(f"{v[c]:.4g}" for c in ("mean", "median", "p95", "min", "max")), v.get("published", ""))
+    for k, v in summary.get("rates", {}).items():
+        table.add_row(k, f"rate {v['rate']:.0%}", f"{v['count']} of {v['n']}", "", "", "", v.get("published", ""))
     console.print(table)
     console.print(f"campaign directory: {camp.out}")
     if summary["failed"]:
@@ -123,37 +204,42 @@ def montecarlo(
 @app.command()
 def margins(
     scenario: str = typer.Argument("palace-sweep", help="a hover scenario (mission.type = hover)"),
-    altitudes: str = typer.Option("6,12,18,30,54", help="heights AGL [m], comma separated"),
-    delays: str = typer.Option("0,0.1", help="simulated IMU delays [s], comma separated"),
+    altitudes: str = typer.Option("6,12,18,30,54", help="heights AGL \\[m], comma separated"),
+    delays: str = typer.Option("0,0.1", help="simulated IMU delays \\[s], comma separated"),
     compensate: bool = typer.Option(False, help="also fly each delay compensated by the identified delays"),
-    laser_delay: float = typer.Option(0.0, help="simulated laser delay [s] for every sweep"),
-    identify_altitude: float = typer.Option(12.0, help="height [m] of the identification sweeps (on GPS)"),
+    laser_delay: float = typer.Option(0.0, help="simulated laser delay \\[s] for every sweep"),
+    identify_altitude: float = typer.Option(12.0, help="height \\[m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
     seeds: int = typer.Option(1, help="seeds per sweep, merged (weighted by coherence)"),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
+    force: bool = typer.Option(False, "--force", help="write into a non-empty --out (replaces margins.csv, frf.npz)"),
 ) -> None:
     """Stability margins at the cyclic actuators from closed-loop chirps (seed 000 Tables 5.1/5.2)."""
     import csv
     import time as _time
-    from pathlib import Path
 
-    from visnav.analysis.margins_campaign import margins_campaign
-    from visnav.scenarios.schema import ScenarioError, load_scenario
+    from visnav.analysis.margins_campaign import check_margins_scenario, margins_campaign
+    from visnav.io.runs import prepare_out_dir
+
+    def numbers(text: str, option: str) -> list[float]:
+        try:
+            return [float(a) for a in text.split(",") if a.strip()]
+        except ValueError:
+            raise ValueError(f"{option} takes comma-separated numbers, got '{text}'") from None
 
     try:
-        alts = [float(a) for a in altitudes.split(",") if a.strip()]
-        dels = [float(d) for d in delays.split(",") if d.strip()]
+        alts, dels = numbers(altitudes, "--altitudes"), numbers(delays, "--delays")
         if not alts or not dels:
             raise ValueError("--altitudes and --delays need at least one value each")
-        load_scenario(scenario, list(set_))
-    except (ValueError, ScenarioError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
-        raise typer.Exit(2)
-    out_dir = Path(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), console=console) as prog:
+        check_margins_scenario(scenario, list(set_))
+        out_dir = prepare_out_dir(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}", force=force,
+                                  clear=("margins.csv", "frf.npz"))
+    except ValueError as exc:  # ScenarioError and OutputDirError are ValueErrors
+        _fail(exc)
+    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
+                  console=err_console) as prog:
         task = prog.add_task("sweeps", total=None)
         frfs: dict = {}
         rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario, frf_sink=frfs,
@@ -192,9 +278,8 @@ def palace_report(
 
     try:
         path = write_palace_report(out, drift, margins)
-    except (ValueError, FileNotFoundError, KeyError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
-        raise typer.Exit(2)
+    except (ValueError, OSError, KeyError) as exc:
+        _fail(exc)
     console.print(f"written: {path}")
 
 
@@ -212,31 +297,62 @@ def scenarios() -> None:
 
 
 @app.command()
+def keys(
+    scenario: str = typer.Argument(..., help="built-in scenario name or path to a .toml file"),
+    json_: bool = typer.Option(False, "--json", help="print the keys as JSON on stdout"),
+) -> None:
+    """Every key --set takes for a scenario: its value there, unit, allowed range and description."""
+    from visnav.scenarios.keys import settable_keys
+    from visnav.scenarios.schema import ScenarioError, load_scenario
+
+    try:
+        rows = settable_keys(load_scenario(scenario))
+    except ScenarioError as exc:
+        _fail(exc)
+    if json_:
+        _print_json(rows)
+        return
+    table = Table(title=f"settable keys of {scenario} (--set key=value)")
+    table.add_column("key", no_wrap=True)
+    table.add_column("value", overflow="fold", ratio=1)
+    table.add_column("unit", no_wrap=True)
+    table.add_column("allowed", ratio=1)
+    table.add_column("description", ratio=2)
+    for r in rows:
+        table.add_row(r["key"], escape(json.dumps(r["value"])), r["unit"], escape(r["allowed"]), escape(r["description"]))
+    console.print(table)
+
+
+@app.command()
 def ahrs(
     log: str = typer.Argument(..., help="PX4 ULog file (.ulg)"),
     out: Optional[str] = typer.Option(None, "--out", help="output directory (default: runs/ahrs-<log name>)"),
     declination_deg: Optional[float] = typer.Option(
-        None, "--declination-deg", help="magnetic declination [deg]; default: the log's EKF2_MAG_DECL, else 0"),
+        None, "--declination-deg", help="magnetic declination \\[deg]; default: the log's EKF2_MAG_DECL, else 0"),
 ) -> None:
     """Our INS attitude filter (AHRS mode) on a PX4 log's raw IMU vs PX4's vehicle_attitude."""
-    from pathlib import Path
-
     from visnav.analysis.ahrs_check import ahrs_check
+
+    from visnav.io.runs import prepare_out_dir
 
     out_dir = Path(out) if out else Path("runs") / f"ahrs-{Path(log).stem}"
     try:
+        prepare_out_dir(out_dir, force=True, clear=())  # writable? (ahrs overwrites its own two files)
         m = ahrs_check(log, out_dir, declination_deg)
-    except (FileNotFoundError, ValueError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
-        raise typer.Exit(code=2)
+    except (OSError, ValueError) as exc:
+        _fail(exc)
     for note in m["log_notes"]:
-        console.print(f"[yellow]log:[/yellow] {note}")
+        err_console.print(f"[yellow]log:[/yellow] {escape(note)}", soft_wrap=True)
     table = Table(title=f"AHRS vs PX4 vehicle_attitude ({Path(log).name})")
     table.add_column("metric")
     table.add_column("value", justify="right")
+    if m.get("log_truncated"):
+        table.add_row("log file", f"TRUNCATED: {m['duration_s']:.1f} s read")
+    table.add_row("magnetometer", m.get("magnetometer_source") or "NOT FOUND (yaw gyro-only)")
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
-        table.add_row(k, _fmt(m[k]))
+        gyro_only = k == "yaw_rms_diff_deg" and not m["magnetometer"]
+        table.add_row(k, _fmt(m[k]) + (" (gyro-only: no magnetometer)" if gyro_only else ""))
     console.print(table)
     console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
 
@@ -265,7 +381,6 @@ def eval_(
 
     from visnav.analysis.trajectory_eval import TrajectoryError, evaluate, read_trajectory
 
-    err = Console(stderr=True)
     try:
         ref_path = Path(reference)
         if estimate is None and not ref_path.is_dir():
@@ -292,8 +407,7 @@ def eval_(
             except OSError as exc:
                 raise TrajectoryError(f"cannot write to {out}: {exc.strerror or exc}") from None
     except TrajectoryError as exc:
-        err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-        raise typer.Exit(2)
+        _fail(exc)
     s = ev.summary()
     if json_:
         print(json.dumps(s, indent=2))

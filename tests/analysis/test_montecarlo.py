@@ -1,6 +1,7 @@
 """Campaign runner: local pool == Dask cluster row for row, resume, failures kept, bad input."""
 
 import csv
+import json
 
 import pytest
 from typer.testing import CliRunner
@@ -68,3 +69,83 @@ def test_parse_grid_values_are_toml():
     assert g["world.surface"] == ["grass"]
     with pytest.raises(CampaignError):
         parse_grid(["nokey"])
+
+
+# ---------------------------------------------------------------- issue 12: resume key, --new, rates, Ctrl-C
+def _mc(out, *extra):
+    args = ["montecarlo", "palace-hover-drift", "-n", "1", "--workers", "1", "--out", str(out)]
+    args += [a for s in TINY for a in ("--set", s)]
+    return CliRunner().invoke(app, args + list(extra))
+
+
+def test_resume_with_another_configuration_is_refused_naming_the_keys(tmp_path):
+    out = tmp_path / "c"
+    assert _mc(out).exit_code == 0
+    before = (out / "runs.csv").read_text(), (out / "campaign.json").read_text()
+    r = _mc(out, "-n", "2", "--set", "sensors.imu.delay_s=0.05")
+    assert r.exit_code == 2 and "Traceback" not in r.output
+    line = r.stderr.strip()
+    assert "\n" not in line and "another configuration" in line and "sensors.imu.delay_s: 0.0 -> 0.05" in line
+    assert "--new" in line
+    assert ((out / "runs.csv").read_text(), (out / "campaign.json").read_text()) == before  # untouched
+    # the same configuration resumes, and says how much is left
+    r = _mc(out, "-n", "2")
+    assert r.exit_code == 0, r.output
+    assert "1 already done, 1 to run" in r.stderr
+    assert len(_rows(out / "runs.csv")) == 2
+
+
+def test_new_starts_a_fresh_campaign_beside_and_says_where(tmp_path):
+    out = tmp_path / "c"
+    assert _mc(out).exit_code == 0
+    r = _mc(out, "--set", "sensors.imu.delay_s=0.05", "--new", "--json")
+    assert r.exit_code == 0, r.output
+    assert f"starting a new one in {tmp_path / 'c-2'}" in " ".join(r.stderr.split())
+    d = json.loads(r.stdout)
+    assert d["campaign_dir"] == str(tmp_path / "c-2") and d["summary"]["count"] == 1
+    assert json.loads((tmp_path / "c-2" / "campaign.json").read_text())["resolved"]["sensors"]["imu"]["delay_s"] == 0.05
+    assert len(_rows(out / "runs.csv")) == 1
+
+
+def test_summary_has_rates_of_boolean_metrics_and_the_thesis_figures():
+    from visnav.analysis.montecarlo import summarize
+
+    rows = [{"seed": str(s), "status": "ok", "error": "", "landed": v, "touchdown_error_m": str(e)}
+            for s, v, e in ((1, "True", 0.1), (2, "False", 0.3), (3, "True", 0.2), (4, "True", 0.4))]
+    rows.append({"seed": "5", "status": "failed", "error": "x", "landed": "", "touchdown_error_m": ""})
+    s = summarize(rows, [], {"touchdown_error_m": "0.5 m", "landed": "8 of 8"})
+    assert s["rates"]["landed"] == {"rate": 0.75, "count": 3, "n": 4, "published": "8 of 8"}
+    assert s["metrics"]["touchdown_error_m"]["mean"] == pytest.approx(0.25)
+    assert s["metrics"]["touchdown_error_m"]["published"] == "0.5 m" and "landed" not in s["metrics"]
+
+
+def test_campaign_summary_json_carries_rates_and_source(tmp_path):
+    out = tmp_path / "c"
+    assert _mc(out).exit_code == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert "aborted" not in s["metrics"] and s["published_source"]
+    assert s["rates"] and all(set(v) >= {"rate", "count", "n"} for v in s["rates"].values())
+
+
+def test_ctrl_c_in_a_campaign_keeps_finished_rows_and_says_how_to_resume(tmp_path, monkeypatch):
+    import visnav.analysis.montecarlo as mc
+
+    orig, n = mc.run_job, []
+
+    def job(j):
+        n.append(1)
+        if len(n) == 2:
+            raise KeyboardInterrupt
+        return orig(j)
+
+    monkeypatch.setattr(mc, "run_job", job)
+    out = tmp_path / "c"
+    r = _mc(out, "-n", "3")
+    assert r.exit_code == 130, r.output
+    assert f"run the same command with --out {out}" in " ".join(r.stderr.split())
+    rows = _rows(out / "runs.csv")
+    assert [x["seed"] for x in rows] == ["1"] and rows[0]["status"] == "ok"
+    monkeypatch.setattr(mc, "run_job", orig)
+    r = _mc(out, "-n", "3")
+    assert r.exit_code == 0 and "1 already done, 2 to run" in r.stderr
+    assert [x["seed"] for x in _rows(out / "runs.csv")] == ["1", "2", "3"]

@@ -186,6 +186,18 @@ def _call(kwargs: dict) -> dict:
 IDENT_SWEEP = SweepSettings(amplitude=64.0, f0_hz=0.4, f1_hz=2.5, duration_s=40.0, start_s=1.0)
 
 
+def check_margins_scenario(scenario: str, overrides=()) -> None:
+    """The sweeps hover with a chirp at an actuator: only a ``mission.type = "hover"`` scenario fits.
+    Any other raises ScenarioError naming the scenarios that do."""
+    from visnav.scenarios.schema import ScenarioError, builtin_names, load_scenario
+
+    sc = load_scenario(scenario, list(overrides))
+    if sc.mission.type != "hover":
+        fit = [n for n in builtin_names() if load_scenario(n).mission.type == "hover"]
+        raise ScenarioError(f"visnav margins flies hover sweeps: '{scenario}' is a '{sc.mission.type}' mission; "
+                            f"it takes a scenario with mission.type = \"hover\" (built-in: {', '.join(fit)})")
+
+
 def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
                      sweep: SweepSettings = SweepSettings(), scenario: str = "palace-sweep",
                      overrides: tuple[str, ...] = (), workers: int = 1, executor=None,
@@ -217,6 +229,7 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         raise ValueError(f"seeds must be >= 1, got {seeds}")
     if not (np.isfinite(laser_delay_s) and 0 <= laser_delay_s <= 1):
         raise ValueError(f"laser_delay_s must be in [0, 1] s, got {laser_delay_s}")
+    check_margins_scenario(scenario, overrides)
     base = dict(scenario=scenario, overrides=tuple(overrides), laser_delay_s=laser_delay_s)
     runs: dict[tuple, dict] = {}
 

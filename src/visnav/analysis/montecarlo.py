@@ -6,6 +6,11 @@ to ``<out>/runs.csv`` as runs finish, so an interrupted campaign resumes and ski
 that raises is recorded as failed with its error and the campaign goes on. ``runs.csv`` holds only
 reproducible columns (the same seeds give identical rows on any executor); wall-clock figures go to
 ``timings.csv``. ``summary.json`` and ``report.html`` are written at the end.
+
+Resuming is safe: ``campaign.json`` holds the SHA-256 of the resolved scenario (``--set`` applied,
+seed left out) and the grid keys; a directory holding a campaign of another configuration is refused
+with the keys that differ (``new=True`` starts a fresh directory beside it instead). More seeds or
+more grid values extend a campaign. Ctrl-C leaves ``runs.csv`` with the finished runs only.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 import numpy as np
+
+from visnav.analysis.campaign_report import _as_number, write_campaign_report
 
 TIMING_KEYS = ("wall_time_s", "real_time_factor")
 ID_KEYS = ("seed", "status", "error")
@@ -72,6 +79,8 @@ def run_job(job: Job) -> dict:
     try:
         sets = list(job.overrides) + [f"{k}={_toml_value(v)}" for k, v in job.grid]
         res = make_simulation(load_scenario(job.scenario, sets, seed=job.seed)).run()
+        if res.interrupted:  # Ctrl-C inside the run: no row (the campaign stops, resumable)
+            raise KeyboardInterrupt
         row["status"] = "failed" if res.error else "ok"
         row["error"] = res.error or ""
         row.update(res.metrics)
@@ -151,37 +160,78 @@ def _append_csv(path: Path, row: dict) -> None:
         w.writerow(row)
 
 
-def _as_number(v: str):
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        return None
-    return x
+_BOOL = {"True": True, "False": False, "true": True, "false": False}
 
 
-def summarize(rows: list[dict], grid_keys: list[str]) -> dict:
-    """count, failures, and mean / median / p95 / min / max of every numeric metric (overall and per grid point)."""
+def summarize(rows: list[dict], grid_keys: list[str], published: dict | None = None) -> dict:
+    """count, failures, and mean / median / p95 / min / max of every numeric metric, the rate of
+    every boolean one (landed, aborted, returned_home, ...), overall and per grid point; with
+    ``published`` (metric -> the thesis' figure) that figure beside each metric that has one."""
+    published = published or {}
 
-    def stats(rs: list[dict]) -> dict:
-        out = {}
+    def stats(rs: list[dict]) -> tuple[dict, dict]:
+        out, rates = {}, {}
         keys = [k for k in (rs[0].keys() if rs else []) if k not in ID_KEYS and k not in grid_keys]
+        ok = [r for r in rs if r.get("status") == "ok"]
         for k in keys:
-            vals = [_as_number(r.get(k)) for r in rs if r.get("status") == "ok"]
+            cells = [r.get(k) for r in ok if r.get(k) not in (None, "")]
+            if cells and all(c in _BOOL for c in cells):
+                b = np.array([_BOOL[c] for c in cells])
+                rates[k] = {"rate": float(b.mean()), "count": int(b.sum()), "n": int(b.size)}
+                if k in published:
+                    rates[k]["published"] = published[k]
+                continue
+            vals = [_as_number(c) for c in cells]
             vals = np.array([v for v in vals if v is not None and math.isfinite(v)])
             if vals.size:
                 out[k] = {"mean": float(vals.mean()), "median": float(np.median(vals)),
                           "p95": float(np.percentile(vals, 95)), "min": float(vals.min()),
                           "max": float(vals.max()), "n": int(vals.size)}
-        return out
+                if k in published:
+                    out[k]["published"] = published[k]
+        return out, rates
 
-    summary = {"count": len(rows), "failed": sum(r.get("status") != "ok" for r in rows), "metrics": stats(rows)}
+    metrics, rates = stats(rows)
+    summary = {"count": len(rows), "failed": sum(r.get("status") != "ok" for r in rows), "metrics": metrics,
+               "rates": rates}
     if grid_keys:
         groups: dict[str, list] = {}
         for r in rows:
             groups.setdefault(", ".join(f"{k}={r.get(k)}" for k in grid_keys), []).append(r)
-        summary["by_grid"] = {g: {"count": len(rs), "failed": sum(x.get("status") != "ok" for x in rs),
-                                  "metrics": stats(rs)} for g, rs in groups.items()}
+        summary["by_grid"] = {}
+        for g, rs in groups.items():
+            m, rt = stats(rs)
+            summary["by_grid"][g] = {"count": len(rs), "failed": sum(x.get("status") != "ok" for x in rs),
+                                     "metrics": m, "rates": rt}
     return summary
+
+
+def _flatten(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out.update(_flatten(v, f"{prefix}{k}."))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+def config_diff(old: dict, new: dict, limit: int = 8) -> str:
+    """'key: old -> new' for every key that differs between two resolved scenarios (dicts)."""
+    a, b = _flatten(old), _flatten(new)
+    diffs = [f"{k}: {a.get(k, '(absent)')!r} -> {b.get(k, '(absent)')!r}" for k in sorted(set(a) | set(b))
+             if a.get(k, None) != b.get(k, None)]
+    more = f" and {len(diffs) - limit} more" if len(diffs) > limit else ""
+    return "; ".join(diffs[:limit]) + more
+
+
+def _published(sc) -> tuple[dict, str]:
+    try:
+        from visnav.analysis.report import published_figures
+
+        return published_figures(sc)
+    except Exception:  # noqa: BLE001 - the figures are a comment beside the numbers, never a reason to stop
+        return {}, ""
 
 
 # --------------------------------------------------------------------------------------- runner
@@ -211,6 +261,72 @@ class Campaign:
         return [j for j in make_jobs(self.scenario, self.seeds, self.overrides, self.grid) if
                 tuple(_cell(x) for x in j.key) not in done]
 
+    def identity(self) -> dict:
+        """What a resume must match: the resolved scenario without its seed (hash and content), the grid keys."""
+        from visnav.scenarios.schema import load_scenario, scenario_hash
+
+        sc = load_scenario(self.scenario, self.overrides, seed=0)
+        self._published = _published(sc)
+        return {"scenario_hash": scenario_hash(sc, ignore_seed=True), "grid_keys": list(self.grid),
+                "resolved": sc.model_dump(mode="json")}
+
+    def prepare(self, new: bool = False) -> tuple[int, int]:
+        """Check the campaign and its directory, write campaign.json; returns (runs done, runs to do).
+        A directory holding another configuration's campaign (or anything else) is refused, or with
+        ``new`` the campaign moves to the first free ``<out>-2``, ``<out>-3``, ... (``self.moved_from``)."""
+        from visnav.io.runs import OutputDirError, prepare_out_dir
+
+        validate_campaign(self.scenario, self.overrides, self.grid)
+        ident = self.identity()
+        self.moved_from = None
+        problem = self._conflict(ident)
+        if problem and new:
+            self.moved_from, i = self.out, 2
+            while (self.out.parent / f"{self.moved_from.name}-{i}").exists():
+                i += 1
+            self.out = self.out.parent / f"{self.moved_from.name}-{i}"
+        elif problem:
+            raise CampaignError(f"{self.out}: {problem}; use --new to start a fresh campaign beside it, "
+                                "or another --out")
+        try:
+            prepare_out_dir(self.out, force=True, clear=())
+        except OutputDirError as exc:
+            raise CampaignError(str(exc)) from None
+        old = self._read_json()
+        seeds = sorted(set(self.seeds) | set(old.get("seeds", [])))
+        grid = {k: list(dict.fromkeys(list(old.get("grid", {}).get(k, [])) + list(v))) for k, v in self.grid.items()}
+        (self.out / "campaign.json").write_text(json.dumps(
+            {"scenario": self.scenario, "seeds": seeds, "overrides": self.overrides, "grid": grid, **ident},
+            indent=2, default=str))
+        todo = len(self.pending())
+        self._prepared = True
+        return len(make_jobs(self.scenario, self.seeds, self.overrides, self.grid)) - todo, todo
+
+    def _read_json(self) -> dict:
+        p = self.out / "campaign.json"
+        try:
+            return json.loads(p.read_text()) if p.is_file() else {}
+        except (OSError, ValueError):
+            return {"unreadable": True}
+
+    def _conflict(self, ident: dict) -> str | None:
+        """Why ``self.out`` cannot take this campaign (None when it can: absent, empty or the same configuration)."""
+        if not self.out.exists():
+            return None
+        if not self.out.is_dir():
+            return "exists and is not a directory"
+        old = self._read_json()
+        if not old:
+            return None if not any(self.out.iterdir()) else "not empty and holds no campaign.json (not a campaign)"
+        if "scenario_hash" not in old:
+            return "its campaign.json has no configuration hash (older visnav or unreadable): cannot resume it safely"
+        if old["scenario_hash"] != ident["scenario_hash"]:
+            return "holds a campaign of another configuration (" + config_diff(old.get("resolved", {}),
+                                                                              ident["resolved"]) + ")"
+        if list(old.get("grid_keys", [])) != ident["grid_keys"]:
+            return f"holds a campaign over another grid (keys {old.get('grid_keys')} -> {ident['grid_keys']})"
+        return None
+
     def _record(self, row: dict) -> None:
         timing = {k: row.pop(k) for k in TIMING_KEYS if k in row}
         _append_csv(self.runs_csv, row)
@@ -218,11 +334,10 @@ class Campaign:
                                                 **timing})
 
     def run(self, progress: Callable[[int, int, dict], None] | None = None) -> dict:
-        validate_campaign(self.scenario, self.overrides, self.grid)
-        self.out.mkdir(parents=True, exist_ok=True)
-        (self.out / "campaign.json").write_text(json.dumps(
-            {"scenario": self.scenario, "seeds": self.seeds, "overrides": self.overrides, "grid": self.grid},
-            indent=2, default=str))
+        """Run what is pending (``prepare`` first when not done); Ctrl-C propagates with runs.csv
+        holding the finished runs only."""
+        if not getattr(self, "_prepared", False):
+            self.prepare()
         jobs = self.pending()
         total = len(jobs)
         for i, row in enumerate(self._execute(jobs), 1):
@@ -230,7 +345,10 @@ class Campaign:
             if progress is not None:
                 progress(i, total, row)
         rows = _read_csv(self.runs_csv)
-        summary = summarize(rows, list(self.grid))
+        published, source = getattr(self, "_published", ({}, ""))
+        summary = summarize(rows, list(self.grid), published)
+        if published:
+            summary["published_source"] = source
         (self.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         try:
             write_campaign_report(self.out, rows, summary, list(self.grid), self.scenario)
@@ -254,8 +372,12 @@ class Campaign:
         # spawn, not fork: forking a process that already runs OpenCV / render threads can deadlock
         with ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn")) as ex:
             futs = [ex.submit(run_job, j) for j in jobs]
-            for f in as_completed(futs):
-                yield f.result()
+            try:
+                for f in as_completed(futs):
+                    yield f.result()
+            except BaseException:  # Ctrl-C (or the consumer stops): queued runs are dropped, not waited for
+                ex.shutdown(wait=False, cancel_futures=True)
+                raise
 
     def _execute_dask(self, jobs: list[Job]) -> Iterable[dict]:
         try:
@@ -269,48 +391,3 @@ class Campaign:
         futs = client.map(run_job, jobs, pure=False)
         for f in as_completed(futs):
             yield f.result()
-
-
-def write_campaign_report(out: Path, rows: list[dict], summary: dict, grid_keys: list[str], scenario: str) -> None:
-    import base64
-    import html
-    import io
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    ok = [r for r in rows if r.get("status") == "ok"]
-    metrics = [k for k in summary.get("metrics", {}) if k not in ("sim_time_s",)][:12]
-    imgs = []
-    for k in metrics:
-        fig, ax = plt.subplots(figsize=(6, 3.2))
-        if grid_keys:
-            g = grid_keys[0]
-            labels = sorted({r.get(g) for r in ok}, key=lambda s: (_as_number(s) is None, _as_number(s) or 0, s))
-            data = [[_as_number(r[k]) for r in ok if r.get(g) == lab and _as_number(r.get(k)) is not None]
-                    for lab in labels]
-            ax.boxplot([d if d else [np.nan] for d in data])
-            ax.set_xticks(range(1, len(labels) + 1), labels)
-            ax.set_xlabel(g)
-        else:
-            vals = [_as_number(r.get(k)) for r in ok]
-            ax.hist([v for v in vals if v is not None and math.isfinite(v)], bins=20)
-        ax.set_title(k)
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=80, bbox_inches="tight")
-        plt.close(fig)
-        imgs.append('<img src="data:image/png;base64,' + base64.b64encode(buf.getvalue()).decode() + '"/>')
-    table = "".join(
-        f"<tr><td>{html.escape(k)}</td>" + "".join(f"<td>{v[s]:.4g}</td>" for s in ("mean", "median", "p95", "min", "max"))
-        + f"<td>{v['n']}</td></tr>" for k, v in summary.get("metrics", {}).items())
-    fails = "".join(f"<li>seed {html.escape(str(r.get('seed')))}: {html.escape(str(r.get('error')))}</li>"
-                    for r in rows if r.get("status") != "ok")
-    doc = f"""<!doctype html><html><head><meta charset="utf-8"><title>campaign {html.escape(scenario)}</title>
-<style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
-</head><body><h1>Campaign: {html.escape(scenario)}</h1><p>{summary['count']} runs, {summary['failed']} failed.
-Grid: {html.escape(', '.join(grid_keys) or 'none')}.</p>
-<table><tr><th>metric</th><th>mean</th><th>median</th><th>p95</th><th>min</th><th>max</th><th>n</th></tr>{table}</table>
-{('<h2>Failed runs</h2><ul>' + fails + '</ul>') if fails else ''}<h2>Plots</h2>{''.join(imgs)}</body></html>"""
-    (out / "report.html").write_text(doc)

@@ -9,22 +9,53 @@ from pathlib import Path
 
 import numpy as np
 
-from visnav.io.tum import write_tum
+from visnav.io.tum import tum_frame, write_run_tum
 from visnav.scenarios.schema import to_toml
 
+# every file a run writes (``--force`` removes them first so that none is left from an earlier run)
+RUN_FILES = ("scenario.toml", "metrics.json", "log.h5", "truth.tum", "estimate.tum", "report.html")
 
-def new_run_dir(name: str, out: str | Path | None = None) -> Path:
-    if out is not None:
-        d = Path(out)
-    else:
-        d = Path("runs") / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
-        i = 1
-        base = d
-        while d.exists():
-            d = base.with_name(f"{base.name}-{i}")
-            i += 1
-    d.mkdir(parents=True, exist_ok=True)
+
+class OutputDirError(ValueError):
+    """An output directory cannot be used; the message is one line for the user."""
+
+
+def prepare_out_dir(d: str | Path, *, force: bool = False, clear: tuple[str, ...] = RUN_FILES,
+                    what: str = "--out") -> Path:
+    """Create ``d`` (and parents) and check that it is writable. A directory that already holds
+    files is refused unless ``force`` (then the files named in ``clear`` are removed)."""
+    d = Path(d)
+    if d.exists() and not d.is_dir():
+        raise OutputDirError(f"{what} {d}: exists and is not a directory")
+    if d.is_dir() and any(d.iterdir()):
+        if not force:
+            raise OutputDirError(f"{what} {d}: directory is not empty; use --force to overwrite what visnav "
+                                 "wrote there, or leave --out out for a new timestamped directory")
+        for name in clear:
+            try:
+                (d / name).unlink(missing_ok=True)
+            except OSError as exc:
+                raise OutputDirError(f"{what} {d}: cannot remove {name} ({exc.strerror or exc})") from None
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        probe = d / ".visnav-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise OutputDirError(f"{what} {d}: cannot write there ({exc.strerror or type(exc).__name__})") from None
     return d
+
+
+def new_run_dir(name: str, out: str | Path | None = None, force: bool = False) -> Path:
+    """``out`` (refused when it holds files, unless ``force``), else a new ``runs/<name>-<time>``."""
+    if out is not None:
+        return prepare_out_dir(out, force=force)
+    base = Path("runs") / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    d, i = base, 1
+    while d.exists():
+        d = base.with_name(f"{base.name}-{i}")
+        i += 1
+    return prepare_out_dir(d)
 
 
 def _jsonable(x):
@@ -43,16 +74,18 @@ def _jsonable(x):
 
 
 def write_run(result, out_dir: Path, report: bool = True) -> Path:
-    """Write everything a run produced; each piece is written even if a later one fails."""
+    """Write everything a run produced; each piece is written even if a later one fails. An
+    interrupted run (Ctrl-C) is written as far as it got, ``"interrupted": true`` in metrics.json."""
     sc, log = result.scenario, result.log
     (out_dir / "scenario.toml").write_text(to_toml(sc))
-    (out_dir / "metrics.json").write_text(json.dumps(_jsonable(result.metrics), indent=2) + "\n")
+    metrics = dict(result.metrics)
+    if getattr(result, "interrupted", False):
+        metrics["interrupted"] = True
+    (out_dir / "metrics.json").write_text(json.dumps(_jsonable(metrics), indent=2) + "\n")
     log.to_hdf5(out_dir / "log.h5", attrs={"scenario": sc.run.name, "seed": sc.run.seed})
-    tr, es = log.get("truth"), log.get("estimate")
-    if tr:
-        write_tum(out_dir / "truth.tum", tr["t"], tr["position"], tr["euler"])
-    if es:
-        write_tum(out_dir / "estimate.tum", es["t"], es["position"], es["euler"])
+    frame = tum_frame(sc)
+    if frame is not None:
+        write_run_tum(out_dir, log, frame)
     if report:
         from visnav.analysis.report import write_report
 

@@ -117,6 +117,14 @@ def build(sim):
     reference = reference_map(cfg, ground)
     P, T = loop_waypoints(sn, se, r, pc.altitude_m, centre, pc.direction)
     path = HermitePath.from_waypoints(P, T, scale="arc")
+    if (sn, se) != (pc.size_north_m, pc.size_east_m):  # the map is smaller than the loop asked for: say so
+        r0 = min(pc.corner_radius_m, 0.45 * min(pc.size_north_m, pc.size_east_m))
+        full = HermitePath.from_waypoints(*loop_waypoints(pc.size_north_m, pc.size_east_m, r0, pc.altitude_m,
+                                                          centre, pc.direction), scale="arc")
+        note = (f"the WITAS loop was shrunk to fit the map {mc.file}: {pc.size_north_m:.0f} m x {pc.size_east_m:.0f} m "
+                f"-> {sn:.0f} m x {se:.0f} m, loop length {full.length:.0f} m -> {path.length:.0f} m")
+        sim.notes = [*getattr(sim, "notes", []), note]
+        sim.log.record("note", 0.0, message=note)
     sim.log.record("witas_setup", 0.0, waypoints=P, loop_length=path.length, home=P[0], map_extent=np.array(
         ground.extent_ned()), reference_resolution=reference.resolution_m)
     sim.witas_reference = reference

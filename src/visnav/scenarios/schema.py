@@ -399,17 +399,23 @@ def builtin_names() -> list[str]:
 
 
 def resolve_path(name_or_path: str) -> Path:
+    """A built-in name is the built-in scenario unless the argument is an existing *file* ending in
+    ``.toml``; anything else (a folder named like a scenario, a missing file) is one clear error."""
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
-        if not p.exists():
-            raise ScenarioError(f"scenario file not found: {p}")
+    if p.suffix == ".toml" and p.is_file():
         return p
     cand = BUILTIN_DIR / f"{name_or_path}.toml"
-    if not cand.exists():
-        raise ScenarioError(
-            f"unknown scenario '{name_or_path}'; built-in scenarios: {', '.join(builtin_names())}"
-        )
-    return cand
+    if "/" not in name_or_path and "\\" not in name_or_path and cand.is_file():
+        return cand
+    names = ", ".join(builtin_names())
+    if p.is_dir():
+        raise ScenarioError(f"'{name_or_path}' is a directory, not a scenario: give a built-in name ({names}) "
+                            "or a .toml file")
+    if p.exists():
+        raise ScenarioError(f"'{name_or_path}' is not a .toml file nor a built-in scenario; built-in: {names}")
+    if p.suffix == ".toml":
+        raise ScenarioError(f"scenario file not found: {p}")
+    raise ScenarioError(f"unknown scenario '{name_or_path}'; built-in scenarios: {names}")
 
 
 def load_scenario(name_or_path: str, overrides: list[str] | None = None, seed: int | None = None) -> Scenario:
@@ -418,6 +424,8 @@ def load_scenario(name_or_path: str, overrides: list[str] | None = None, seed: i
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"{path}: cannot read the scenario file ({exc})") from None
     data = apply_overrides(data, list(overrides or []))
     if seed is not None:
         data.setdefault("run", {})["seed"] = int(seed)

@@ -102,6 +102,7 @@ class CondorSimulation:
 
         wall0 = time.perf_counter()
         error = None
+        interrupted = False
         try:
             if self.cfg.experiment == "ground_test":
                 from visnav.sim.condor_ground import run_ground_test
@@ -114,8 +115,11 @@ class CondorSimulation:
             t = getattr(self, "_t", 0.0)
             error = f"{type(exc).__name__} at t={t:.2f}s: {exc}"
             self.log.record("error", t, message=error)
+        except KeyboardInterrupt:  # Ctrl-C: stop here and keep what the run has
+            interrupted = True
         wall = time.perf_counter() - wall0
-        return RunResult(scenario=self.sc, log=self.log, metrics=condor_metrics(self, wall, error), error=error)
+        return RunResult(scenario=self.sc, log=self.log, metrics=condor_metrics(self, wall, error), error=error,
+                         interrupted=interrupted)
 
     def _frame(self, t: float, x: np.ndarray) -> None:
         """One image: render, track, rectify, send through the link; the operator re-centres the tent."""

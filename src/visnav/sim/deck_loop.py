@@ -369,6 +369,7 @@ class DeckSimulation:
         self._set_mode(0.0, "manual", "pilot holds the start while the filter starts")
         wall0 = time.perf_counter()
         error = None
+        interrupted = False
         t = 0.0
         try:
             for k in range(n + 1):
@@ -397,9 +398,11 @@ class DeckSimulation:
                     progress(t, sc.run.duration_s)
         except Exception as exc:  # noqa: BLE001 - keep what the run has
             error = f"{type(exc).__name__} at t={t:.2f}s: {exc}"
+        except KeyboardInterrupt:  # Ctrl-C: stop here and keep what the run has
+            interrupted = True
         wall = time.perf_counter() - wall0
         metrics = deck_metrics(self, t, wall, error)
-        return RunResult(scenario=sc, log=self.log, metrics=metrics, error=error)
+        return RunResult(scenario=sc, log=self.log, metrics=metrics, error=error, interrupted=interrupted)
 
     def _camera(self, t, ds):
         c = self.cfg.camera

@@ -43,6 +43,15 @@ class RunResult:
     log: FlightLog
     metrics: dict = field(default_factory=dict)
     error: str | None = None
+    interrupted: bool = False  # Ctrl-C stopped the loop; the log and metrics are what it had
+
+    def __post_init__(self) -> None:
+        from visnav.io.tum import trajectory_rmse, tum_frame
+
+        if "ate_rmse_m" not in self.metrics and tum_frame(self.scenario) is not None:
+            ate = trajectory_rmse(self.log)  # = evo_ape on the run's truth.tum / estimate.tum
+            if ate is not None:
+                self.metrics["ate_rmse_m"] = ate
 
 
 class Simulation:
@@ -137,6 +146,7 @@ class Simulation:
         touchdown = None
         error = None
         t = 0.0
+        interrupted = False
         try:
             for k in range(n):
                 t = k * dt
@@ -193,13 +203,15 @@ class Simulation:
         except Exception as exc:  # keep what we have: the run directory is still written
             error = f"{type(exc).__name__} at t={t:.2f}s: {exc}"
             log.record("error", t, message=error)
+        except KeyboardInterrupt:  # Ctrl-C: stop here and keep what the run has
+            interrupted = True
         finally:
             if self._render_pool is not None:
                 self._render_pool.shutdown(wait=True, cancel_futures=True)
                 self._render_pool = None
         wall = time.perf_counter() - wall0
         metrics = self._metrics(self, wall_time_s=wall, error=error)
-        return RunResult(scenario=sc, log=log, metrics=metrics, error=error)
+        return RunResult(scenario=sc, log=log, metrics=metrics, error=error, interrupted=interrupted)
 
     def _log_step(self, t, truth, est, ref, cmd, mode, health) -> None:
         log = self.log

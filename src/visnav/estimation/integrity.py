@@ -1,0 +1,156 @@
+"""Integrity monitoring of a navigation filter: is the estimate consistent, and how wrong can it be?
+
+- A windowed chi-square test of the normalised innovation squared (NIS): over the last ``window``
+  accepted updates of one stream, sum(NIS) ~ chi2(sum of the update dimensions) when the filter's
+  covariance is honest. Above the upper ``1 - alpha`` quantile the filter is over-confident (the
+  dangerous case: wrong and sure of it); below the lower ``alpha`` quantile it is over-conservative.
+- The share of updates the filter's own gate rejected over the same window.
+- A consistency factor ``k^2 = max(1, mean(NIS) / dof)`` that inflates the covariance when the
+  innovations say it is too small.
+- A horizontal protection level (HPL): with a horizontal error ``e ~ N(0, k^2 P_h)``,
+  ``|e|^2 <= lambda_max(k^2 P_h) e^T (k^2 P_h)^-1 e`` and the last factor is chi2(2), so
+  ``HPL = k sqrt(lambda_max(P_h) chi2.ppf(p, 2)) = k sqrt(-2 ln(1 - p) lambda_max(P_h))``
+  bounds the true horizontal error with probability at least ``p``.
+- One state, ``ok | degraded | unusable``, with the reason: unusable when no update has arrived for
+  ``stale_s`` or the HPL exceeds the alert limit, degraded when a stream's chi-square test fails or
+  too many updates are rejected.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import chi2
+
+
+def horizontal_protection_level(P_h: np.ndarray, probability: float = 0.999, inflation: float = 1.0) -> float:
+    """Radius that contains the horizontal error with at least ``probability`` (2x2 covariance ``P_h``,
+    scaled by ``inflation`` = k^2)."""
+    if not 0.0 < probability < 1.0:
+        raise ValueError(f"probability must be in (0, 1), got {probability}")
+    P = np.asarray(P_h, float)
+    a, b, d = P[0, 0], 0.5 * (P[0, 1] + P[1, 0]), P[1, 1]
+    lam = 0.5 * (a + d) + math.sqrt(max(0.25 * (a - d) ** 2 + b * b, 0.0))  # largest eigenvalue, closed form
+    return math.sqrt(max(inflation, 0.0) * -2.0 * math.log1p(-probability) * max(lam, 0.0))
+
+
+@dataclass
+class StreamTest:
+    """Result of the windowed test of one update stream."""
+
+    stream: str
+    updates: int
+    nis_sum: float
+    dof: int
+    lower: float
+    upper: float
+    rejected_share: float
+
+    @property
+    def over_confident(self) -> bool:
+        return self.dof > 0 and self.nis_sum > self.upper
+
+    @property
+    def over_conservative(self) -> bool:
+        return self.dof > 0 and self.nis_sum < self.lower
+
+    @property
+    def mean_nis_per_dof(self) -> float:
+        return self.nis_sum / self.dof if self.dof else float("nan")
+
+
+@dataclass
+class IntegrityConfig:
+    window: int = 20  # updates per stream in the chi-square window
+    alpha: float = 0.001  # two-sided test level of the windowed NIS test
+    max_rejected_share: float = 0.3  # degraded above this share of gated-out updates
+    probability: float = 0.999  # the HPL's containment probability
+    alert_limit_m: float = math.inf  # unusable when the HPL exceeds it
+    stale_s: float = math.inf  # unusable when no accepted update for this long
+
+    def __post_init__(self):
+        if self.window < 1:
+            raise ValueError(f"IntegrityConfig.window must be >= 1, got {self.window}")
+        if not 0.0 < self.alpha < 0.5:
+            raise ValueError(f"IntegrityConfig.alpha must be in (0, 0.5), got {self.alpha}")
+
+
+@dataclass
+class IntegrityMonitor:
+    """Feed it every update a filter makes (``record``); ask it for the state (``assess``)."""
+
+    config: IntegrityConfig = field(default_factory=IntegrityConfig)
+
+    def __post_init__(self):
+        self._streams: dict[str, deque] = {}
+        self._last_accept: float = -math.inf
+        self._quantiles: dict[int, tuple[float, float]] = {}
+        self.transitions: list[tuple[float, str, str]] = []  # (t, state, reason)
+        self._state = "ok"
+
+    def record(self, t: float, stream: str, nis: float, dof: int, accepted: bool) -> None:
+        """One update: its NIS, its dimension, and whether the filter's gate accepted it."""
+        q = self._streams.get(stream)
+        if q is None:
+            q = self._streams[stream] = deque(maxlen=self.config.window)
+        q.append((float(nis), int(dof), bool(accepted)))
+        if accepted:
+            self._last_accept = max(self._last_accept, float(t))
+
+    def _bounds(self, dof: int) -> tuple[float, float]:
+        b = self._quantiles.get(dof)
+        if b is None:
+            a = self.config.alpha
+            b = self._quantiles[dof] = (float(chi2.ppf(a / 2, dof)), float(chi2.ppf(1 - a / 2, dof)))
+        return b
+
+    def test(self, stream: str) -> StreamTest:
+        """The windowed test of one stream (accepted updates only: rejected ones never reached the state)."""
+        q = self._streams.get(stream, ())
+        acc = [(n, d) for n, d, ok in q if ok]
+        dof = sum(d for _, d in acc)
+        s = float(sum(n for n, _ in acc))
+        lo, hi = self._bounds(dof) if dof else (0.0, math.inf)
+        rej = 1.0 - len(acc) / len(q) if len(q) else 0.0
+        return StreamTest(stream, len(acc), s, dof, lo, hi, rej)
+
+    def inflation(self) -> float:
+        """k^2 = max(1, mean NIS per degree of freedom) over all streams' windows."""
+        tot_n = tot_d = 0.0
+        for q in self._streams.values():
+            for n, d, ok in q:
+                if ok:
+                    tot_n, tot_d = tot_n + n, tot_d + d
+        return max(1.0, tot_n / tot_d) if tot_d else 1.0
+
+    def assess(self, t: float, P_h: np.ndarray | None = None) -> dict:
+        """The integrity output every navigator's ``health`` carries (one set of keys)."""
+        c = self.config
+        tests = [self.test(s) for s in self._streams]
+        k2 = self.inflation()
+        hpl = horizontal_protection_level(P_h, c.probability, k2) if P_h is not None else math.inf
+        state, reason = "ok", ""
+        if t - self._last_accept > c.stale_s:
+            state, reason = "unusable", f"no accepted update for {t - self._last_accept:.1f} s"
+        elif hpl > c.alert_limit_m:
+            state, reason = "unusable", f"HPL {hpl:.1f} m above the {c.alert_limit_m:g} m alert limit"
+        else:
+            bad = [x for x in tests if x.over_confident]
+            rej = [x for x in tests if x.rejected_share > c.max_rejected_share]
+            if bad:
+                state = "degraded"
+                reason = "; ".join(f"{x.stream} NIS {x.mean_nis_per_dof:.2f}/dof over {x.updates} updates "
+                                   f"(chi2 bound {x.upper / x.dof:.2f})" for x in bad)
+            elif rej:
+                state = "degraded"
+                reason = "; ".join(f"{x.stream} rejected {100 * x.rejected_share:.0f} %" for x in rej)
+        if state != self._state:
+            self.transitions.append((float(t), state, reason))
+            self._state = state
+        return {"integrity": state, "integrity_reason": reason, "hpl_m": hpl, "hpl_probability": c.probability,
+                "consistency_k2": k2,
+                "nis_per_dof": {x.stream: x.mean_nis_per_dof for x in tests},
+                "rejected_share": {x.stream: x.rejected_share for x in tests}}

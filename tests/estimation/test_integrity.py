@@ -1,0 +1,98 @@
+"""Integrity monitor: chi-square bounds vs scipy, false-alarm rate, detection, protection level coverage."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import binom, chi2, rayleigh
+
+from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, horizontal_protection_level
+
+
+def test_window_bounds_are_scipy_chi2_quantiles():
+    m = IntegrityMonitor(IntegrityConfig(window=10, alpha=0.01))
+    for k in range(10):
+        m.record(k * 0.1, "pos", 1.0, 2, True)
+    x = m.test("pos")
+    assert x.dof == 20
+    assert x.lower == pytest.approx(chi2.ppf(0.005, 20), rel=1e-12)
+    assert x.upper == pytest.approx(chi2.ppf(0.995, 20), rel=1e-12)
+
+
+def test_false_alarm_rate_of_a_consistent_filter_is_alpha_over_two():
+    rng = np.random.default_rng(1)
+    alpha, window, n_windows = 0.01, 10, 4000
+    nis = rng.chisquare(2, size=(n_windows, window))  # an honest 2-D position update
+    alarms = 0
+    for w in nis:
+        m = IntegrityMonitor(IntegrityConfig(window=window, alpha=alpha))
+        for k, v in enumerate(w):
+            m.record(0.1 * k, "pos", v, 2, True)
+        alarms += m.assess(1.0)["integrity"] != "ok"
+    lo, hi = binom.ppf([0.0005, 0.9995], n_windows, alpha / 2)
+    assert lo <= alarms <= hi, (alarms, lo, hi)
+
+
+def test_an_over_confident_filter_is_degraded_and_the_transition_is_logged():
+    rng = np.random.default_rng(2)
+    m = IntegrityMonitor(IntegrityConfig(window=20, alpha=0.001))
+    t = 0.0
+    for _ in range(20):  # consistent
+        t += 0.1
+        m.record(t, "registration", rng.chisquare(2), 2, True)
+    assert m.assess(t)["integrity"] == "ok"
+    for _ in range(20):  # true errors 3x what the filter believes: NIS x 9
+        t += 0.1
+        m.record(t, "registration", 9 * rng.chisquare(2), 2, True)
+    a = m.assess(t)
+    assert a["integrity"] == "degraded" and "registration NIS" in a["integrity_reason"]
+    assert a["consistency_k2"] == pytest.approx(np.mean([x for x, _, ok in m._streams["registration"]]) / 2)
+    assert m.transitions[-1][1] == "degraded"
+
+
+def test_rejected_share_and_staleness():
+    m = IntegrityMonitor(IntegrityConfig(window=10, max_rejected_share=0.3, stale_s=2.0))
+    for k in range(10):
+        m.record(0.1 * k, "pos", 1.0, 2, accepted=k % 2 == 0)  # half rejected
+    a = m.assess(1.0)
+    assert a["rejected_share"]["pos"] == pytest.approx(0.5)
+    assert a["integrity"] == "degraded" and "rejected 50 %" in a["integrity_reason"]
+    a = m.assess(0.8 + 2.5)
+    assert a["integrity"] == "unusable" and "no accepted update" in a["integrity_reason"]
+
+
+def test_largest_eigenvalue_closed_form_and_isotropic_hpl_is_the_rayleigh_quantile():
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        A = rng.normal(size=(2, 2))
+        P = A @ A.T
+        lam = np.linalg.eigvalsh(P)[-1]
+        assert horizontal_protection_level(P, 0.99) == pytest.approx(math.sqrt(lam * chi2.ppf(0.99, 2)), rel=1e-9)
+    s = 1.7
+    assert horizontal_protection_level(np.eye(2) * s * s, 0.999) == pytest.approx(rayleigh.ppf(0.999, scale=s),
+                                                                                  rel=1e-9)
+
+
+@pytest.mark.parametrize("P", [np.diag([4.0, 4.0]), np.array([[9.0, 2.5], [2.5, 1.0]]), np.diag([1.0, 1e-6])])
+def test_hpl_contains_the_error_with_the_stated_probability(P):
+    rng = np.random.default_rng(4)
+    n, p = 200_000, 0.999
+    e = rng.multivariate_normal([0, 0], P, size=n)
+    hpl = horizontal_protection_level(P, p)
+    violations = int(np.sum(np.linalg.norm(e, axis=1) > hpl))
+    assert violations <= binom.ppf(0.9999, n, 1 - p)  # never more often than 1 - p (isotropic: exactly)
+    if P[0, 0] == P[1, 1] and P[0, 1] == 0:
+        assert violations >= binom.ppf(0.0001, n, 1 - p)
+
+
+def test_inflation_widens_the_hpl_of_an_over_confident_filter():
+    m = IntegrityMonitor(IntegrityConfig(window=10, probability=0.99))
+    for k in range(10):
+        m.record(0.1 * k, "pos", 8.0, 2, True)  # mean NIS 4 per dof
+    a = m.assess(1.0, np.eye(2))
+    assert a["consistency_k2"] == pytest.approx(4.0)
+    assert a["hpl_m"] == pytest.approx(2.0 * horizontal_protection_level(np.eye(2), 0.99))
+    with pytest.raises(ValueError, match="window"):
+        IntegrityConfig(window=0)
