@@ -432,6 +432,8 @@ def record_(
     out: str = typer.Option(..., help="recording folder to write (docs/recordings.md)"),
     seed: Optional[int] = typer.Option(None, help="override run.seed"),
     set_: List[str] = typer.Option([], "--set", help="override a key, e.g. --set run.duration_s=20"),
+    force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the recording's own files "
+                               "there are removed first)"),
 ) -> None:
     """Fly a scenario's closed loop and write what its navigator saw as a recorded flight."""
     from visnav.io.recording import RecordingError
@@ -442,12 +444,15 @@ def record_(
     try:
         sc = load_scenario(scenario, set_, seed)
         with console.status(f"recording {sc.run.name}"):
-            res = record(sc, out)
+            res = record(sc, out, force=force)
     except (ScenarioError, RecordingError, FileNotFoundError, ValueError) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(2)
     console.print(f"recorded {escape(sc.run.name)}: " + ", ".join(f"{v} {k}" for k, v in res.counts.items() if v))
     console.print(f"recording: {res.out_dir}")
+    if getattr(res.run, "interrupted", False):
+        err.print(f"interrupted: the recording holds the flight up to the interruption ({res.out_dir})")
+        raise typer.Exit(130)
     if res.run.error:
         console.print(f"[red]the flight stopped early:[/red] {escape(res.run.error)} (what it had is recorded)")
         raise typer.Exit(1)
@@ -466,6 +471,8 @@ def replay_(
     rate: float = typer.Option(10.0, help="estimate rate when the recording has no recorded queries \\[Hz]"),
     gps_until: Optional[float] = typer.Option(None, help="withhold GPS after this time \\[s] (a GPS-denied run on a "
                                               "real flight; the fixes stay the reference when there is no truth.csv)"),
+    force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
+                               "there are removed first)"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -489,7 +496,7 @@ def replay_(
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)
-        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out),
+        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out, force),
                                title=f"replay of {recording} on {navigator}")
     except (RecordingError, ScenarioError, ValueError) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
@@ -506,6 +513,8 @@ def replay_(
     for n in res.notes:
         console.print(f"[yellow]note:[/yellow] {escape(n)}")
     console.print(f"run directory: {out_dir}")
+    if res.metrics.get("interrupted"):
+        raise typer.Exit(130)
     if "error" in res.metrics:
         raise typer.Exit(1)
 

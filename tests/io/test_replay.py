@@ -101,6 +101,10 @@ def test_cli_replay_writes_the_run_directory(palace_rec, tmp_path):
     assert (out / "log.h5").is_file()
     page = (out / "report.html").read_text()
     assert "<h2>Error</h2><img" in page and "<td>ate_rmse_m</td>" in page
+    again = ["replay", str(d), "--navigator", "palace", "--out", str(out)]
+    r = CliRunner().invoke(app, again)
+    assert r.exit_code == 2 and "not empty" in r.output
+    assert CliRunner().invoke(app, again + ["--force"]).exit_code == 0
     r = CliRunner().invoke(app, ["eval", str(out), "--json"])  # the run directory scores the same in visnav eval
     assert r.exit_code == 0, r.output
     assert json.loads(r.output)["ate_rmse_m"] == pytest.approx(m["ate_rmse_m"], abs=1e-6)
@@ -118,6 +122,11 @@ def test_cli_record_writes_the_folder(tmp_path):
         assert (out / f).is_file(), f
     assert len(list((out / "frames").glob("*.png"))) == 15  # 10 Hz processed frames over 1.5 s
     assert "seed = 3" in (out / "scenario.toml").read_text()
+    again = ["record", "palace-landing", "--out", str(out), "--set", "run.duration_s=0.5"]
+    r = CliRunner().invoke(app, again)
+    assert r.exit_code == 2 and "not empty" in r.output
+    assert CliRunner().invoke(app, again + ["--force"]).exit_code == 0
+    assert len(list((out / "frames").glob("*.png"))) == 5  # the earlier frames are gone
     r = CliRunner().invoke(app, ["record", "deck-static", "--out", str(tmp_path / "deck")])
     assert r.exit_code == 2 and "issue #13" in r.output
 

@@ -197,6 +197,9 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
         metrics |= _accuracy(log, True)
     metrics |= {"replay_wall_s": wall, "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
                 "flight_duration_s": dur}
+    if counts.get("interrupted"):
+        metrics["interrupted"] = True
+        notes.append("interrupted (Ctrl-C): the run directory holds the replay up to there")
     if error:
         metrics["error"] = error
         notes.append(f"the replay stopped early: {error} (what it had is kept)")
@@ -247,7 +250,9 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                 log.record("command", t, method=meth, args=json.dumps(args))
             if progress is not None and k % 2000 == 0:
                 progress(k, len(kinds))
-    except (Exception, KeyboardInterrupt) as exc:  # keep what the replay has
+    except KeyboardInterrupt:  # Ctrl-C: keep what the replay has
+        counts["interrupted"] = True
+    except Exception as exc:  # keep what the replay has
         return counts, f"{type(exc).__name__} at t={t:.3f} s (event {k} of {len(kinds)}): {exc}"
     return counts, None
 

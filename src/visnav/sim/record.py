@@ -72,9 +72,13 @@ class RecordResult:
     counts: dict
 
 
-def record(scenario: Scenario, out_dir: str | Path, progress=None) -> RecordResult:
+def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool = False) -> RecordResult:
     """Fly ``scenario`` in the R-MAX loop (``palace``, ``hover``, ``witas-homing``, ``pfcm``) and write
-    the recording to ``out_dir``; returns the closed-loop result beside the folder."""
+    the recording to ``out_dir`` (refused when it holds files, unless ``force``: then the recording's own
+    files are removed first); returns the closed-loop result beside the folder. Ctrl-C stops the flight
+    and the recording keeps what it had (``result.run.interrupted``)."""
+    from visnav.io.recording import COMMANDS, STREAMS, TRUTH
+    from visnav.io.runs import OutputDirError, prepare_out_dir
     from visnav.sim.loop import Simulation
     from visnav.sim.missions import SIMULATIONS
 
@@ -82,6 +86,14 @@ def record(scenario: Scenario, out_dir: str | Path, progress=None) -> RecordResu
     if kind in SIMULATIONS:
         raise RecordingError(f"visnav record flies the R-MAX loop (palace-landing, witas-homing, ...); mission.type "
                              f"{kind!r} has a loop of its own and no navigator interface yet (issue #13)")
+    own = tuple(s.file for s in STREAMS.values()) + (TRUTH.file, COMMANDS.file, "camera.yaml", "scenario.toml")
+    try:
+        prepare_out_dir(out_dir, force=force, clear=own)
+    except OutputDirError as exc:
+        raise RecordingError(str(exc)) from None
+    if force:
+        for f in Path(out_dir, "frames").glob("*.png"):
+            f.unlink()
     writer = RecordingWriter(out_dir)
     proxies: list[RecordingNavigator] = []
     holder: dict = {}
