@@ -110,7 +110,7 @@ def build(sim):
     from visnav.world.scene import World
 
     cfg = sim.sc.mission
-    pc, cc = cfg.path, cfg.camera
+    pc, cc, mc = cfg.path, cfg.camera, cfg.map
     rng = mission_rngs(sim.sc.run.seed)
     ground, (sn, se, r, centre) = make_ground(cfg, sim.sc.run.seed)
     sim.world = World(ground=ground, surface="grass", wind=sim.world.wind, detail=None)
