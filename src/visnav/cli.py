@@ -1,4 +1,4 @@
-"""Command line: ``visnav run SCENARIO``, ``visnav scenarios``, ``visnav keys``, ``visnav montecarlo``, ...
+"""Command line: ``visnav run SCENARIO``, ``visnav scenarios``, ``visnav keys``, ``visnav montecarlo``, ``visnav bridge``, ...
 
 User errors (bad scenario, key, value, file, unwritable or occupied ``--out``) are one line on
 stderr and exit code 2, never a traceback; Ctrl-C writes what a run has and exits 130. Help texts are
@@ -76,8 +76,12 @@ def run(
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier "
                                "run there are removed first)"),
     json_: bool = typer.Option(False, "--json", help="print a machine-readable summary (JSON) on stdout"),
+    sil: bool = typer.Option(False, "--sil", help="software in the loop: the navigator runs behind `visnav bridge` "
+                             "over MAVLink on 127.0.0.1, the simulation plays the autopilot (real time)"),
 ) -> None:
-    from visnav.analysis.report import published_figures
+    """Run one closed-loop simulation and write its run directory."""
+    from visnav.analysis.published import summary_rows
+    from visnav.analysis.report import run_notes
     from visnav.io.runs import new_run_dir, write_run
     from visnav.scenarios.schema import ScenarioError, load_scenario
     from visnav.sim.missions import make_simulation
@@ -104,7 +108,12 @@ def run(
             if int(t * 10) % 10 == 0:
                 prog.update(task, completed=t, info=f"t={t:5.1f}s {sim.mission.mode}")
 
-        result = sim.run(progress=progress)
+        if sil:  # the same scenario, its navigator behind the bridge (sim/sil.py)
+            from visnav.sim.sil import run_sil
+
+            result = run_sil(sc, progress=progress, sim=sim)
+        else:
+            result = sim.run(progress=progress)
     try:
         write_run(result, out_dir, report=report)
     except OSError as exc:
@@ -119,14 +128,19 @@ def run(
         _print_json({"run_dir": str(out_dir), "scenario": sc.run.name, "seed": sc.run.seed,
                      "metrics": result.metrics, "error": result.error})
         raise typer.Exit(1 if result.error else 0)
+    rows, omitted, source = summary_rows(sc, result.metrics)
     table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
     table.add_column("metric")
     table.add_column("this run", justify="right")
-    published, source = published_figures(sc)
-    table.add_column(source)
-    for k, v in result.metrics.items():
-        table.add_row(k, _fmt(v), published.get(k, ""))
+    table.add_column(f"thesis: {source}")
+    table.add_column("verdict")
+    for r in rows:
+        table.add_row(r.metric, escape(r.ours), escape(r.thesis), r.verdict)
     console.print(table)
+    if omitted:
+        console.print(f"not applicable to this run: {', '.join(omitted)}")
+    for line in run_notes(result):
+        console.print(escape(line))
     console.print(f"run directory: {out_dir}")
     if result.error:
         err_console.print(f"[red]the run stopped early:[/red] {escape(result.error)} (what it had is saved)")
@@ -422,6 +436,129 @@ def eval_(
         console.print(f"frame: {escape(ref.frame)}")
     for f in files:
         console.print(f"written: {f}")
+
+
+# ---------------------------------------------------------------------------------------------- bridge (#17)
+def _bridge_origin(text: Optional[str]):
+    from visnav.geometry.frames import LocalTangentPlane
+
+    if text is None:
+        return None
+    try:
+        lat, lon, alt = (float(x) for x in text.split(","))
+        return LocalTangentPlane(lat, lon, alt)
+    except ValueError as exc:
+        raise ValueError(f"--origin must be LAT_DEG,LON_DEG,ALT_M (AMSL), got {text!r} ({exc})") from None
+
+
+@app.command()
+def bridge(
+    mavlink_url: str = typer.Option(..., "--mavlink", help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or a "
+                                    "serial device (/dev/ttyACM0, /dev/ttyUSB0:921600)"),
+    camera: str = typer.Option(..., help="cv2.VideoCapture source (device index, file, RTSP/GStreamer URL) or a "
+                               "folder of images"),
+    navigator: str = typer.Option("witas", help="witas, palace, or a scenario name / .toml whose navigator to run"),
+    map_: Optional[str] = typer.Option(None, "--map", help="geo-referenced reference map (as visnav run --map)"),
+    output: str = typer.Option("odometry", help="odometry | vision | gps-input"),
+    frame: str = typer.Option("frd", help="ODOMETRY frame_id: frd (MAV_FRAME_LOCAL_FRD, PX4 and ArduPilot) or ned "
+                              "(MAV_FRAME_LOCAL_NED, PX4)"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml (recorded-flight format): "
+                                              "its time_offset_s stamps the frames"),
+    origin: Optional[str] = typer.Option(None, help="NED origin LAT_DEG,LON_DEG,ALT_M; default: the autopilot's "
+                                         "GPS_GLOBAL_ORIGIN, else its first position fix"),
+    baud: int = typer.Option(57600, help="serial baud rate"),
+    fps: Optional[float] = typer.Option(None, help="pace of a frame folder (default: the navigator's camera rate)"),
+    duration: Optional[float] = typer.Option(None, help="stop after this many seconds (default: Ctrl-C)"),
+    out: Optional[str] = typer.Option(None, help="log folder (default runs/bridge-<time>): bridge.tlog, metrics.json"),
+    set_: List[str] = typer.Option([], "--set", help="override a scenario key of the navigator's scenario"),
+    log_frames: bool = typer.Option(False, help="also keep every frame (lossless PNG + frames.csv) in the log folder"),
+) -> None:
+    """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
+    import time
+    from pathlib import Path
+
+    from rich.live import Live
+
+    from visnav.io.bridge import OUTPUTS, Bridge, BridgeConfig, status_line
+    from visnav.io.bridge_navigators import build_navigator
+    from visnav.io.camera_source import CameraSourceError, open_source, read_time_offset
+    from visnav.io.mavlink_link import MavlinkLink, MavlinkLinkError
+    from visnav.io.mavlink_messages import mavlink
+    from visnav.scenarios.schema import ScenarioError
+
+    fail = _fail
+
+    if output not in OUTPUTS:
+        fail(f"--output must be one of {', '.join(OUTPUTS)}, got {output!r}")
+    if frame not in ("frd", "ned"):
+        fail(f"--frame must be frd or ned, got {frame!r}")
+    out_dir = Path(out or f"runs/bridge-{time.strftime('%Y%m%d-%H%M%S')}")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        (out_dir / ".write-test").touch()
+        (out_dir / ".write-test").unlink()
+    except OSError as exc:
+        fail(f"log folder {out_dir} is not writable ({exc.strerror})")
+    link = src = None
+    try:
+        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
+                           frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
+        offset = read_time_offset(camera_yaml)
+        link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=lambda m: console.print(m))
+        built = build_navigator(navigator, map_, set_)
+        src = open_source(camera, fps=fps or built.camera_hz, time_offset_s=offset)
+    except (MavlinkLinkError, CameraSourceError, ScenarioError, FileNotFoundError, ValueError) as exc:
+        if link is not None:
+            link.close()
+        fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    console.print(f"bridge: {built.scenario} navigator, {mavlink_url} -> {output}, camera {camera} "
+                  f"({fps or built.camera_hz:g} Hz); log {out_dir}")
+    with Live(console=console, transient=False, auto_refresh=False) as live:
+        br = Bridge(link, src, built.navigator, cfg, notify=lambda m: live.console.print(m),
+                    on_status=lambda s: live.update(status_line(s), refresh=True))
+        try:
+            metrics = br.run(duration_s=duration)
+        except KeyboardInterrupt:
+            br.stop.set()
+            metrics = br.metrics()
+        finally:
+            link.close()
+            src.close()
+    br.write_metrics(out_dir / "metrics.json")
+    lat = metrics["latency_capture_to_send_ms"]
+    console.print(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
+                  f"{lat['median']:.1f} ms, p95 {lat['p95']:.1f} ms; reset_counter {metrics['reset_counter']}; "
+                  f"written {out_dir / 'metrics.json'}, {out_dir / 'bridge.tlog'}")
+
+
+@app.command("sil-autopilot")
+def sil_autopilot(
+    mavlink_url: str = typer.Option("udpout:127.0.0.1:14540", "--mavlink", help="where the bridge listens "
+                                    "(loopback only)"),
+    duration: float = typer.Option(30.0, help="seconds to run"),
+    gps_until: Optional[float] = typer.Option(None, help="stop sending GPS after this many seconds"),
+) -> None:
+    """A PX4 stand-in on 127.0.0.1 for trying `visnav bridge` on a desk (a circling vehicle's MAVLink)."""
+    import time
+
+    import numpy as np
+
+    from visnav.io.mavlink_sil import SilAutopilot
+
+    host = mavlink_url.split(":")[1] if ":" in mavlink_url else ""
+    if host not in ("127.0.0.1", "localhost"):
+        _fail(f"the SIL stand-in talks to 127.0.0.1 / localhost only, got {mavlink_url!r}")
+    sil = SilAutopilot(mavlink_url, gps_until_s=gps_until)
+    sil.start(duration)
+    try:
+        time.sleep(duration)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        sil.stop()
+    e = np.array(sil.stats.ext_errors_m) if sil.stats.ext_errors_m else np.array([np.nan])
+    console.print(f"received {sil.stats.received}; external position error at its time_usec: median "
+                  f"{np.median(e):.3f} m, p95 {np.percentile(e, 95):.3f} m")
 
 
 # ------------------------------------------------------------------ record / replay (issue #14)

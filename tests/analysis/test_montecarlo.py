@@ -125,6 +125,9 @@ def test_campaign_summary_json_carries_rates_and_source(tmp_path):
     s = json.loads((out / "summary.json").read_text())
     assert "aborted" not in s["metrics"] and s["published_source"]
     assert s["rates"] and all(set(v) >= {"rate", "count", "n"} for v in s["rates"].values())
+    camp = json.loads((out / "campaign.json").read_text())
+    assert s["provenance"]["scenario_hash"] == camp["scenario_hash"]  # the campaign's identity, not one run's
+    assert s["provenance"]["visnav_version"] and s["provenance"]["date_utc"]
 
 
 def test_ctrl_c_in_a_campaign_keeps_finished_rows_and_says_how_to_resume(tmp_path, monkeypatch):

@@ -77,6 +77,7 @@ def test_the_page_from_a_campaign_directory_and_a_margins_dir(tmp_path):
     for text in ("Table 4.1", "Table 5.1", "Table 5.2", "Bode plots at 6 m", "22.812", "MPE flight w/o correction"):
         assert text in page
     assert page.count("<img") == 4  # drift, noise, margins, one Bode
+    assert "<h2>Provenance</h2>" in page and "scenario hash" not in page  # a page of campaigns: no one scenario
     with pytest.raises(ValueError, match="nothing to report"):
         pr.write_palace_report(tmp_path / "x.html")
     with pytest.raises(FileNotFoundError, match="no such file"):

@@ -33,6 +33,7 @@ def _pair(tmp_path, seed=0, n=400, rate=10.0, jitter=0.004, scale=1.0):
     fr, fe = tmp_path / "ref.tum", tmp_path / "est.tum"
     write_tum_file(fr, ref, frame="test")
     write_tum_file(fe, est, frame="test")
+    assert read_trajectory(fr).frame == "test"
     return fr, fe
 
 

@@ -69,7 +69,9 @@ def ahrs_check(log_path, out_dir=None, declination_deg: float | None = None,
     if out_dir is not None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
+        from visnav.io.provenance import provenance
+
+        (out / "metrics.json").write_text(json.dumps({**metrics, "provenance": provenance()}, indent=2))
         _plot(out / "ahrs.png", data, res, ref, gyro_only, metrics)
     return metrics
 

@@ -8,19 +8,6 @@ import numpy as np
 
 from visnav.analysis.metrics import finish_metrics
 
-PUBLISHED = {
-    "radius_est_error_rms_pct": "flight: mostly accurate, 20-40 % in strong wind (ch. 8); ground: mean <= 3 %",
-    "radius_est_error_max_pct": "ground test: peak 9 % (Table 4.1, ch. 8)",
-    "orbit_radius_error_rms_m": "original controller drifts downwind (Figs. 7.4-7.5); modified: small error "
-                                "on the first half loop (Fig. 7.10)",
-    "orbit_radius_error_max_m": "SITL, 8 kt: stable but shifted orbit (Fig. 6.1)",
-    "tracking_lost_s": "flight 1: 4 s lost (seconds 54-58, Fig. 7.1)",
-    "thesis_mean_abs_error_pct": "Tables 4.1-4.2: mean |error| 3.6 % over the 12 rows; ch. 8: mean <= 3 %",
-    "thesis_max_abs_error_pct": "Table 4.1: 8.94 %",
-    "position_est_error_rms_m": "full relative coordinate of §3.3 (not flown on in the thesis)",
-    "real_time_factor": "no target in seed 004",
-}
-PUBLISHED_SOURCE = "seed 004 (Svitelskyi 2019)"
 KEYS = ("radius_est_error_rms_pct", "radius_est_error_max_pct", "orbit_radius_error_rms_m",
         "orbit_radius_error_max_m", "tracking_lost_s")
 

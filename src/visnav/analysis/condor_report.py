@@ -8,8 +8,6 @@ import math
 
 import numpy as np
 
-from visnav.analysis.condor_metrics import PUBLISHED, PUBLISHED_SOURCE  # noqa: F401  (report interface)
-
 
 def _error_map_figure(scenario):
     import matplotlib.pyplot as plt
@@ -22,7 +20,7 @@ def _error_map_figure(scenario):
     geom = CameraGeometry(c.width_px, c.height_px, half_h, math.atan(math.tan(half_h) * c.height_px / c.width_px))
     names = [("h", "+1 m height"), ("tilt", "+1 deg tilt"), ("roll", "+1 deg roll"), ("X", "+1 px X"),
              ("Y", "+1 px Y"), ("total", "sum (eq. 3.25)")]
-    fig, ax = plt.subplots(3, 6, figsize=(18, 7.5), sharex=True, sharey=True)
+    fig, ax = plt.subplots(3, 6, figsize=(18, 7.5), sharex=True, sharey=True, layout="constrained")
     for i, tilt in enumerate((-20.0, -30.0, -40.0)):
         m = error_maps(geom, 100.0, tilt, 0.0, step_px=8, method=scenario.mission.vision.method)
         ext = [m["X_px"].min(), m["X_px"].max(), m["Y_px"].min(), m["Y_px"].max()]
@@ -30,7 +28,8 @@ def _error_map_figure(scenario):
             z = m[k]
             lim = float(np.nanpercentile(np.abs(z), 95))  # the rows next to the horizon blow up
             im = ax[i, j].imshow(z, origin="lower", extent=ext, cmap="coolwarm", aspect="auto", vmin=-lim, vmax=lim)
-            fig.colorbar(im, ax=ax[i, j], fraction=0.046)
+            cb = fig.colorbar(im, ax=ax[i, j], fraction=0.046, format="%.3g")
+            cb.ax.tick_params(labelsize=7)
             if i == 0:
                 ax[i, j].set_title(label)
             if j == 0:
@@ -40,6 +39,48 @@ def _error_map_figure(scenario):
     fig.suptitle("Radius error [m] at 100 m AGL for one unit of each measurement error (eq. 3.25, "
                  "Figs. 3.7-3.21); blank: above the horizon")
     return fig
+
+
+def bank_oscillation(log, cfg) -> dict:
+    """The bank angle's swing on the vision orbit (from the switch plus the transition to the end) against
+    the GPS loiter before it: min, max, 5-95 % range [deg], the dominant period [s] (peak of the spectrum
+    of bank minus its mean) and the steady-turn bank atan(V^2 / (g R)) of the mean airspeed on the orbit."""
+    tr, modes = log.get("truth"), log.get("mode")
+    if not tr or not modes or "vision_orbit" not in list(modes["mode"]):
+        return {}
+    t0 = float(modes["t"][list(modes["mode"]).index("vision_orbit")])
+    t, phi = tr["t"], np.degrees(tr["euler"][:, 0])
+    on = t >= t0 + cfg.control.orbit.transition_s
+    if on.sum() < 20:
+        return {}
+    x = phi[on] - phi[on].mean()
+    dt = float(np.median(np.diff(t)))
+    f = np.fft.rfftfreq(x.size, dt)
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size)))
+    k = 1 + int(np.argmax(spec[1:]))
+    loiter = (t < t0) & (t >= min(10.0, t0 / 2))
+    v = float(np.mean(tr["airspeed"][on])) if "airspeed" in tr else float("nan")
+    out = {"t_from_s": float(t[on][0]), "min_deg": float(phi[on].min()), "max_deg": float(phi[on].max()),
+           "p5_deg": float(np.percentile(phi[on], 5)), "p95_deg": float(np.percentile(phi[on], 95)),
+           "period_s": float(1.0 / f[k]),
+           "steady_deg": float(np.degrees(np.arctan(v**2 / (9.80665 * cfg.control.orbit.radius_m))))}
+    if loiter.any():
+        out["loiter_p5_deg"] = float(np.percentile(phi[loiter], 5))
+        out["loiter_p95_deg"] = float(np.percentile(phi[loiter], 95))
+    return out
+
+
+def notes(log, scenario, metrics) -> list[str]:
+    """Flag the bank limit cycle of the vision orbit, measured in the log."""
+    b = bank_oscillation(log, scenario.mission)
+    if not b:
+        return []
+    line = (f"Bank limit cycle on the vision orbit: from t = {b['t_from_s']:.0f} s the bank swings between "
+            f"{b['min_deg']:.1f} and {b['max_deg']:.1f} deg (5-95 %: {b['p5_deg']:.1f} to {b['p95_deg']:.1f} deg, "
+            f"dominant period {b['period_s']:.1f} s) about a steady-turn bank of {b['steady_deg']:.1f} deg")
+    if "loiter_p5_deg" in b:
+        line += f"; on the GPS loiter before it {b['loiter_p5_deg']:.1f} to {b['loiter_p95_deg']:.1f} deg (5-95 %)"
+    return [line + f". The radius holds, but the aircraft rolls through this range every ~{b['period_s']:.0f} s."]
 
 
 def plots(log, scenario) -> list[tuple[str, str]]:
@@ -54,7 +95,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     out = []
     gt = log.get("ground_test")
     if gt:
-        fig, ax = plt.subplots(figsize=(11, 4))
+        fig, ax = plt.subplots(figsize=(11, 4), layout="constrained")
         i = np.arange(len(gt["t"]))
         ax.bar(i - 0.27, gt["published_error_pct"], 0.27, label="thesis flight hardware (Tables 4.1-4.2)")
         ax.bar(i, gt["thesis_error_pct"], 0.27, label="thesis method, simulated")
@@ -70,7 +111,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     target = np.array([cfg.target.north_m, cfg.target.east_m])
     R_des = cfg.control.orbit.radius_m
     modes = np.asarray(ctl["mode"]) if ctl else np.array([])
-    fig, ax = plt.subplots(figsize=(7.5, 7.5))
+    fig, ax = plt.subplots(figsize=(7.5, 7.5), layout="constrained")
     p = tr["position"]
     vis_mask = modes == "vision_orbit" if len(modes) == len(p) else np.zeros(len(p), bool)
     ax.plot(p[~vis_mask, 1], p[~vis_mask, 0], ".", ms=1.5, color="0.6", label="GPS loiter")
@@ -89,7 +130,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     ax.set_title(f"Orbit over the field, controller '{cfg.control.orbit.logic}' (cf. Figs. 6.1, 7.4, 7.10)")
     out.append(("Orbit track", _fig_to_img(fig)))
 
-    fig, ax = plt.subplots(figsize=(12, 4))
+    fig, ax = plt.subplots(figsize=(12, 4), layout="constrained")
     r_true = np.hypot(p[:, 0] - target[0], p[:, 1] - target[1])
     if vis:
         ok = vis["valid"].astype(bool)
@@ -99,7 +140,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     ax.set_xlabel("t [s]"), ax.set_ylabel("radius [m]"), ax.legend(), ax.set_title("Radius (cf. Figs. 7.1, 7.5, 7.11)")
     out.append(("Radius vs time", _fig_to_img(fig)))
     if ctl:
-        fig, ax = plt.subplots(3, 1, figsize=(12, 9), sharex=True)
+        fig, ax = plt.subplots(3, 1, figsize=(12, 9), sharex=True, layout="constrained")
         t = ctl["t"]
         ax[0].plot(t, ctl["base"], label="base heading rate (eq. 5.2 / 7.1)")
         ax[0].plot(t, ctl["err"], label="heading-rate error (eq. 5.1)")
@@ -107,7 +148,11 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         ax[0].set_ylabel("rad/s"), ax[0].legend(), ax[0].set_title("Outer loop components (cf. Figs. 7.6, 7.12)")
         ax[1].plot(tr["t"], np.degrees(tr["euler"][:, 0]), label="bank (truth)")
         ax[1].plot(t, np.degrees(ctl["phi_ref"]), "--", label="bank reference (eq. 5.4)")
-        ax[1].set_ylabel("deg"), ax[1].legend()
+        b = bank_oscillation(log, cfg)
+        if b:
+            ax[1].axhspan(b["p5_deg"], b["p95_deg"], xmin=0, color="C3", alpha=0.08, lw=0,
+                          label=f"limit cycle on the vision orbit: {b['p5_deg']:.0f} to {b['p95_deg']:.0f} deg (5-95 %)")
+        ax[1].set_ylabel("deg"), ax[1].legend(loc="lower left", fontsize=8)
         ax[2].plot(t, np.degrees(ctl["aileron"]), label="aileron")
         ax[2].plot(t, np.degrees(ctl["rudder"]), label="rudder")
         ax[2].set_ylabel("deflection [deg]"), ax[2].set_xlabel("t [s]"), ax[2].legend()
@@ -117,7 +162,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
                 a_.axvline(cfg.control.orbit.switch_time_s, color="0.5", ls=":")
         out.append(("Controller", _fig_to_img(fig)))
     if vis:
-        fig, ax = plt.subplots(figsize=(12, 3.5))
+        fig, ax = plt.subplots(figsize=(12, 3.5), layout="constrained")
         ax.plot(vis["t"], np.degrees(vis["tilt_error"]), label="camera AHRS tilt error")
         ax.plot(vis["t"], np.degrees(vis["roll_error"]), label="camera AHRS roll error")
         ax.plot(vis["t"], np.degrees(vis["cam_roll"]), label="camera roll (imperfect stabilisation)")

@@ -8,17 +8,6 @@ import numpy as np
 from visnav.analysis.deck_metrics import attitude_error_deg
 from visnav.geometry.rotations import euler_to_dcm
 
-PUBLISHED_SOURCE = "seed 003 (Holmes 2017)"
-PUBLISHED = {
-    "landed": "64 static-deck and 20 moving-deck landings (§5.3.3, §5.3.5)",
-    "touchdown_rel_speed_mps": "not reported (issue target <= 0.5 m/s)",
-    "touchdown_attitude_mismatch_deg": "not reported (issue target <= 5 deg)",
-    "touchdown_position_error_m": "touchdown errors 'on the order of a centimeter' (§6.1, estimate)",
-    "pos_error_final_approach_median_m": "generally below 10 cm (Fig. 5.20; issue target <= 5 cm)",
-    "att_error_final_approach_median_deg": "0.08-0.12 rad = 4.6-6.9 deg (Fig. 5.20; issue target <= 3 deg)",
-    "vel_error_final_approach_median_mps": "about 0.2 m/s (Fig. 5.21; issue target <= 0.1 m/s)",
-    "nees_mean": "errors inside +-2 sigma (Figs. 5.12-5.15); 95% chi2(12) band 4.40-23.34",
-}
 STATE_GROUPS = (("position", "relative position [m]", ("x", "y", "z"), 1.0),
                 ("euler", "relative attitude [deg]", ("roll", "pitch", "yaw"), np.degrees(1.0)),
                 ("velocity", "relative velocity [m/s]", ("u", "v", "w"), 1.0),
@@ -71,39 +60,47 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
         return out
     t = tr["t"]
     for key, title, names, scale in STATE_GROUPS:
-        fig, ax = plt.subplots(3, 1, figsize=(11, 6.5), sharex=True)
+        # left: estimate and truth (they overlap to the eye); right: their difference with the filter's +-2 sigma
+        fig, ax = plt.subplots(3, 2, figsize=(12, 6.5), sharex=True, layout="constrained")
         j0 = {"position": 0, "euler": 3, "velocity": 6, "deck_rates": 9}[key]
+        unit = title[title.index("[") + 1:-1]
         for i in range(3):
             sig = es["sigma"][:, j0 + i] * scale
             err = (es[key][:, i] - tr[key][:, i]) * scale
             if key == "euler":
                 err = np.degrees((np.radians(err) + np.pi) % (2 * np.pi) - np.pi)
-            ax[i].plot(t, es[key][:, i] * scale, lw=1, label="estimate")
-            ax[i].plot(t, tr[key][:, i] * scale, lw=1, label="truth")
-            ax[i].plot(t, err, lw=1, label="error")
-            ax[i].plot(t, 2 * sig, "k", lw=0.6, label="+-2 sigma")
-            ax[i].plot(t, -2 * sig, "k", lw=0.6)
-            ax[i].set_ylabel(names[i])
-        ax[0].set_title(f"Estimated {title} of the deck in the vehicle frame")
-        ax[0].legend(ncol=4, fontsize=8)
-        ax[2].set_xlabel("t [s]")
+            ax[i, 0].plot(t, tr[key][:, i] * scale, lw=1.6, color="C1", label="truth")
+            ax[i, 0].plot(t, es[key][:, i] * scale, lw=0.8, color="C0", label="estimate")
+            ax[i, 0].set_ylabel(f"{names[i]} [{unit}]")
+            ax[i, 1].plot(t, err, lw=0.8, color="C2", label="estimate - truth")
+            ax[i, 1].fill_between(t, -2 * sig, 2 * sig, color="0.85", lw=0, label="+-2 sigma (filter)")
+            ax[i, 1].set_ylabel(f"{names[i]} error [{unit}]")
+            # scale to the error and the typical band, not to the start-up sigma (which would flatten the error)
+            lim = 1.2 * max(np.nanpercentile(np.abs(err), 99), np.nanpercentile(2 * sig, 50), 1e-9)
+            ax[i, 1].set_ylim(-lim, lim)
+        ax[0, 0].set_title(f"Estimated {title} of the deck in the vehicle frame")
+        ax[0, 1].set_title("Estimate error")
+        handles = [h for a in (ax[0, 0], ax[0, 1]) for h in a.get_legend_handles_labels()[0]]
+        fig.legend(handles, [h.get_label() for h in handles], loc="outside lower center", ncol=4, fontsize=8,
+                   frameon=False)
+        ax[2, 0].set_xlabel("t [s]"), ax[2, 1].set_xlabel("t [s]")
         out.append((f"Estimate vs truth: {title}", _fig_to_img(fig)))
 
     de = distance_and_errors(log)
-    fig, ax = plt.subplots(2, 2, figsize=(11, 7))
-    for a, (k, lab) in zip(ax.ravel(), (("position", "m"), ("attitude", "rad"), ("velocity", "m/s"),
-                                        ("deck_rates", "rad/s"))):
+    fig, ax = plt.subplots(2, 2, figsize=(11, 7), layout="constrained")
+    for a, (k, lab, sc) in zip(ax.ravel(), (("position", "m", 1.0), ("attitude", "deg", np.degrees(1.0)),
+                                            ("velocity", "m/s", 1.0), ("deck_rates", "deg/s", np.degrees(1.0)))):
         m = de["approach"] if de["approach"].any() else np.ones_like(de["approach"])
-        a.plot(de["distance"][m], de[k][m], color="0.6", lw=0.8)
-        x, y = binned_mean(de["distance"][m], de[k][m])
+        a.plot(de["distance"][m], de[k][m] * sc, color="0.6", lw=0.8, label="per sample")
+        x, y = binned_mean(de["distance"][m], de[k][m] * sc)
         a.plot(x, y, "k", lw=1.2, label="mean in 1 cm bins")
         a.set_xlabel("distance to the deck [m]"), a.set_ylabel(f"|{k} error| [{lab}]")
         a.invert_xaxis()
-    ax[0, 0].legend()
+    fig.legend(*ax[0, 0].get_legend_handles_labels(), loc="outside upper center", ncol=2, fontsize=8, frameon=False)
     out.append(("Error norms against distance (final approach)", _fig_to_img(fig)))
 
     rp = relative_path(log)
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4.5))
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.5), layout="constrained")
     ax[0].plot(np.hypot(rp[:, 0], rp[:, 1]), -rp[:, 2])
     ax[0].set_xlabel("horizontal distance to the deck [m]"), ax[0].set_ylabel("height above the deck [m]")
     ax[1].plot(rp[:, 1], rp[:, 0])

@@ -349,6 +349,12 @@ class Campaign:
         summary = summarize(rows, list(self.grid), published)
         if published:
             summary["published_source"] = source
+        from visnav.io.provenance import provenance
+
+        prov = provenance()
+        prov["scenario"] = str(self.scenario)
+        prov["scenario_hash"] = self.identity()["scenario_hash"]  # the campaign's: the resolved scenario without its seed
+        summary["provenance"] = prov
         (self.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         try:
             write_campaign_report(self.out, rows, summary, list(self.grid), self.scenario)

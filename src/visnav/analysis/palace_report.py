@@ -368,10 +368,13 @@ def write_palace_report(out_html, drift_dirs=(), margins_path=None, focal_px: fl
         for alt in sorted({k[0] for k in frfs}):
             parts.append(f"<h2>Bode plots at {alt:g} m (broken loop at the actuator)</h2>")
             parts.append(_fig_to_img(bode_figure(frfs, alt)))
+    from visnav.io.provenance import provenance, provenance_html
+
     doc = ("<!doctype html><html><head><meta charset='utf-8'><title>PALACE analysis (seed 000)</title>"
            "<style>body{font-family:sans-serif;max-width:1250px;margin:auto} td,th{padding:2px 8px;"
            "border-bottom:1px solid #ddd;font-size:13px} img{max-width:100%}</style></head><body>"
-           "<h1>PALACE analysis suite (seed 000 ch. 4-5)</h1>" + "".join(parts) + "</body></html>")
+           "<h1>PALACE analysis suite (seed 000 ch. 4-5)</h1>" + "".join(parts)
+           + provenance_html(provenance()) + "</body></html>")
     out = Path(out_html)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(doc)

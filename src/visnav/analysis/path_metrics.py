@@ -12,15 +12,6 @@ import numpy as np
 from visnav.analysis.metrics import finish_metrics
 from visnav.guidance.speed_limits import descent_angle, max_descent_rate
 
-#: seed 002 figures beside ours in the report
-PUBLISHED = {
-    "cross_track_rms_m": "Table 4.1: std 0.5-1.3 m at 10 m/s in 2-4 m/s wind",
-    "cross_track_max_m": "Table 4.1: max 1.8-4.1 m (descending turns 2.8/3.5 m in 4 m/s wind)",
-    "max_roll_deg": "phi_max = 15 deg (§4.3.3)",
-    "max_descent_mps": "1.5 m/s above 30 deg descent, 3 m/s below (eq. 4.23)",
-    "real_time_factor": "target >= 30x on 2 cores",
-}
-PUBLISHED_SOURCE = "seed 002 (Conte 2009)"
 
 
 def _follow_mask(log, t: np.ndarray) -> np.ndarray:
@@ -104,7 +95,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     path = build_path(scenario.mission)
     smp = path.sample(100)
     out = []
-    fig, ax = plt.subplots(1, 2, figsize=(12, 5))
+    fig, ax = plt.subplots(1, 2, figsize=(12, 5), layout="constrained")
     ax[0].plot(smp["position"][:, 1], smp["position"][:, 0], "k--", lw=1, label="path")
     ax[0].plot(tr["position"][:, 1], tr["position"][:, 0], lw=1.2, label="flown (truth)")
     ax[0].plot(*path.start[[1, 0]], "go", label="A (start)"), ax[0].plot(*path.end[[1, 0]], "rs", label="B (end)")
@@ -119,7 +110,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
 
     if ref:
         t = ref["t"]
-        fig, ax = plt.subplots(figsize=(12, 4.5))
+        fig, ax = plt.subplots(figsize=(12, 4.5), layout="constrained")
         cap = 1.5 * float(np.nanmax(ref["v_targ1"])) + 1.0
         ax.plot(t, np.minimum(ref["v_targ1"], cap), ":", label="v_targ1 (accelerate/cruise/brake)")
         ax.plot(t, np.minimum(ref["v_targ2"], cap), ":", label="v_targ2 (turn limits, eq. 4.15)")
@@ -130,7 +121,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         ax.set_title("Speed profile")
         out.append(("Speed profile", _fig_to_img(fig)))
 
-    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True)
+    fig, ax = plt.subplots(2, 1, figsize=(12, 5.5), sharex=True, layout="constrained")
     sel = _follow_mask(log, tr["t"])
     ax[0].plot(tr["t"][sel], e["cross_track"][sel], label="distance to the path (truth)")
     if ref:
@@ -141,7 +132,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     ax[1].set_ylabel("m/s"), ax[1].set_xlabel("t [s]"), ax[1].legend()
     out.append(("Cross-track error and descent rate", _fig_to_img(fig)))
 
-    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True)
+    fig, ax = plt.subplots(2, 1, figsize=(12, 6), sharex=True, layout="constrained")
     ax[0].plot(tr["t"], np.degrees(tr["euler"][:, 0]), label="roll")
     ax[0].plot(tr["t"], np.degrees(tr["euler"][:, 1]), label="pitch")
     phi = scenario.mission.phi_max_deg
@@ -155,7 +146,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
             if sat.any():
                 ax[1].plot(cmd["t"][sat], cmd[k][sat], "x", color=line.get_color(), ms=5)
         ax[1].axhline(500, color="k", lw=0.5), ax[1].axhline(-500, color="k", lw=0.5)
-    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend()
+    ax[1].set_ylabel("YACS units"), ax[1].set_xlabel("t [s]"), ax[1].legend(ncol=4, loc="best")
     ax[1].set_title("YACS inputs (x: saturated, at ±500 or at the command limit)")
     out.append(("Attitude and YACS inputs", _fig_to_img(fig)))
     return out

@@ -74,7 +74,10 @@ def _frame_from_header(path: Path) -> str:
             if not line.startswith("#"):
                 break
             text = line.lstrip("#").strip()
-            if "frame" in text.lower() or "(" in text:
+            low = text.lower()
+            if "frame:" in low:
+                return text[low.index("frame:") + 6:].strip()
+            if "(" in text:
                 return text
     return ""
 

@@ -12,18 +12,10 @@ import numpy as np
 
 from visnav.analysis.metrics import finish_metrics, interp_rows
 
-PUBLISHED = {
-    "pmf_error_max_m": "Fig. 5.18: PMF error below 8 m throughout the 1 km loop at 60 m",
-    "pmf_error_rms_m": "Fig. 5.18 (no RMS given; the curve stays mostly below 5 m)",
-    "odometry_drift_pct": "Fig. 5.18: odometry 25 m in ~1 km (2.5 %)",
-    "ins_only_error_final_m": "Fig. 5.18: stand-alone INS drifts far off (hundreds of m)",
-    "velocity_error_rms_mps": "Fig. 5.18: horizontal velocity error mostly below 1 m/s",
-    "heading_error_final_deg": "Fig. 5.19: heading drifts without a compass (weakly observable)",
-    "path_length_m": "closed loop of about 1 km at 60 m AGL",
-    "returned_home": "the helicopter closes the loop at home (point 5)",
-    "real_time_factor": "target >= 10x",
-}
-PUBLISHED_SOURCE = "seed 002 (Conte 2009)"
+
+
+#: track colours that read on the grey map and on a white legend (white and yellow did not)
+ODO_COLOR, INS_COLOR = "#d95f02", "darkviolet"
 
 
 def _wrap(a):
@@ -101,7 +93,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     if not tr:
         return []
     out = []
-    fig, axs = plt.subplots(1, 2, figsize=(14, 7))
+    fig, axs = plt.subplots(1, 2, figsize=(14, 7), layout="constrained")
     try:
         from visnav.mission.witas import make_ground
 
@@ -120,12 +112,12 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     if pmf:
         ax.plot(pmf["position"][:, 1], pmf["position"][:, 0], "r", lw=1, label="PMF")
     if odo:
-        ax.plot(odo["position"][:, 1], odo["position"][:, 0], "w--", lw=1, label="odometry only")
+        ax.plot(odo["position"][:, 1], odo["position"][:, 0], "--", color=ODO_COLOR, lw=1.2, label="odometry only")
     if ins:
-        ax.plot(ins["position"][:, 1], ins["position"][:, 0], "y:", lw=1, label="INS only")
+        ax.plot(ins["position"][:, 1], ins["position"][:, 0], ":", color=INS_COLOR, lw=1.2, label="INS only")
     ax.plot(tp[0, 1], tp[0, 0], "go", label="home")
     ax.set_xlim(*lim_e), ax.set_ylim(*lim_n), ax.set_xlabel("east [m]"), ax.set_ylabel("north [m]")
-    ax.legend(loc="lower left", fontsize=8), ax.set_title("Tracks (Fig. 5.17 top)")
+    ax.legend(loc="best", fontsize=8), ax.set_title("Tracks (Fig. 5.17 top)")
     ax = axs[1]
     ax.plot(tp[:, 1], tp[:, 0], "b", lw=0.8)
     if pmf:
@@ -139,7 +131,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     ax.set_title("PMF with 3-sigma north/east ellipses (Fig. 5.17 bottom)")
     out.append(("Map, tracks and PMF uncertainty", _fig_to_img(fig)))
 
-    fig, ax = plt.subplots(2, 2, figsize=(14, 7), sharex=True)
+    fig, ax = plt.subplots(2, 2, figsize=(14, 7), sharex=True, layout="constrained")
     tt = tr["t"]
 
     def herr(s):
@@ -150,9 +142,9 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         sig = np.sqrt(np.max(np.linalg.eigvalsh(pmf["cov"]), axis=1))
         ax[1, 0].plot(pmf["t"], 3 * sig, "r:", lw=0.8, label="PMF 3 sigma (max axis)")
     if odo:
-        ax[1, 0].plot(odo["t"], herr(odo), "k--", label="odometry")
+        ax[1, 0].plot(odo["t"], herr(odo), "--", color=ODO_COLOR, label="odometry")
     if ins:
-        ax[1, 0].plot(ins["t"], herr(ins), "y", label="INS only")
+        ax[1, 0].plot(ins["t"], herr(ins), color=INS_COLOR, label="INS only")
     ax[1, 0].set_yscale("log"), ax[1, 0].set_ylim(0.05, None)
     ax[1, 0].set_ylabel("m (log)"), ax[1, 0].set_title("Horizontal position error"), ax[1, 0].legend(fontsize=8)
     if est:
@@ -167,7 +159,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     out.append(("Position and velocity errors (Fig. 5.18)", _fig_to_img(fig)))
 
     if est:
-        fig, ax = plt.subplots(3, 2, figsize=(14, 7.5), sharex=True)
+        fig, ax = plt.subplots(3, 2, figsize=(14, 7.5), sharex=True, layout="constrained")
         te = interp_rows(est["t"], tt, np.unwrap(tr["euler"], axis=0))
         for j, name in enumerate(("roll", "pitch", "heading")):
             ax[j, 0].plot(tt, np.degrees(np.unwrap(tr["euler"][:, j])), "b", label="truth")
@@ -178,7 +170,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         ax[0, 0].legend(fontsize=8), ax[2, 0].set_xlabel("t [s]"), ax[2, 1].set_xlabel("t [s]")
         out.append(("Attitude and attitude errors (Fig. 5.19)", _fig_to_img(fig)))
     if odo:
-        fig, ax = plt.subplots(figsize=(14, 4))
+        fig, ax = plt.subplots(figsize=(14, 4), layout="constrained")
         ax.plot(odo["t"], odo["n_tracked"], label="features tracked")
         ax.plot(odo["t"], odo["n_outliers"], label="RANSAC outliers")
         bad = ~np.asarray(odo["ok"], bool)

@@ -66,6 +66,18 @@ from visnav.control.rmax import CLIMB_GAIN, PITCH_DC, ROLL_DC, YAW_RATE_DC, desi
 from visnav.control.rmax_roll import ROLL_COMPENSATOR, RollCompensator, check_gains, roll_loop
 from visnav.guidance.pfcm import PathReference, heading_rotation
 from visnav.measurements import NavEstimate, YacsCommand
+from visnav.sim.log import register_stream
+
+register_stream("pfcm_control", phi_c=("rad", "", "roll command"), theta_c=("rad", "", "pitch command"),
+                climb_c=("m/s", "up", "climb-rate command"), yaw_rate_c=("rad/s", "", "yaw-rate command"),
+                **{k: ("YACS unit (+-500 = full stick)", "", f"{k} input to the YACS")
+                   for k in ("ail", "ele", "rud", "thr")},
+                dp=("m", "heading frame (x forward, y right, z down)", "control point minus position"),
+                dv=("m/s", "heading frame (x forward, y right, z down)", "reference minus velocity"),
+                i_x=("m", "heading x", "longitudinal integrator (of dv_x)"),
+                i_y=("m s", "heading y", "lateral integrator (of dp_y)"),
+                phi_ff=("rad", "", "feed-forward roll"),
+                **{f"sat_{k}": ("bool", "", f"{k} saturated") for k in ("ail", "ele", "rud", "thr")})
 
 G = 9.81
 

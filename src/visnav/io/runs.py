@@ -76,18 +76,22 @@ def _jsonable(x):
 def write_run(result, out_dir: Path, report: bool = True) -> Path:
     """Write everything a run produced; each piece is written even if a later one fails. An
     interrupted run (Ctrl-C) is written as far as it got, ``"interrupted": true`` in metrics.json."""
+    from visnav.io.provenance import provenance
+
     sc, log = result.scenario, result.log
+    prov = provenance(sc)
     (out_dir / "scenario.toml").write_text(to_toml(sc))
     metrics = dict(result.metrics)
     if getattr(result, "interrupted", False):
         metrics["interrupted"] = True
-    (out_dir / "metrics.json").write_text(json.dumps(_jsonable(metrics), indent=2) + "\n")
-    log.to_hdf5(out_dir / "log.h5", attrs={"scenario": sc.run.name, "seed": sc.run.seed})
+    (out_dir / "metrics.json").write_text(json.dumps(_jsonable({**metrics, "provenance": prov}), indent=2) + "\n")
+    log.to_hdf5(out_dir / "log.h5", attrs={"seed": sc.run.seed,
+                                           **{k: "" if v is None else v for k, v in prov.items()}})
     frame = tum_frame(sc)
     if frame is not None:
         write_run_tum(out_dir, log, frame)
     if report:
         from visnav.analysis.report import write_report
 
-        write_report(result, out_dir / "report.html")
+        write_report(result, out_dir / "report.html", provenance=prov)
     return out_dir

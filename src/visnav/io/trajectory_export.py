@@ -10,12 +10,12 @@ import numpy as np
 
 from visnav.analysis.trajectory_eval import Trajectory
 from visnav.geometry.frames import LocalTangentPlane
+from visnav.io.tum import write_tum_quat
 
 
 def write_tum_file(path: str | Path, traj: Trajectory, frame: str = "NED world, body FRD") -> Path:
     """TUM (``timestamp tx ty tz qx qy qz qw``), 9 decimals, the frame named in the header."""
-    data = np.column_stack([traj.t, traj.p, traj.q])
-    np.savetxt(path, data, fmt="%.9f", header=f"timestamp tx ty tz qx qy qz qw (frame: {frame})")
+    write_tum_quat(path, traj.t, traj.p, traj.q, frame, decimals=9)
     return Path(path)
 
 

@@ -33,8 +33,14 @@ def write_tum(path: str | Path, t, position, euler, frame: str = NED_FRAME) -> N
     p = np.asarray(position, float).reshape(-1, 3)
     e = np.asarray(euler, float).reshape(-1, 3)
     q = Rotation.from_euler("ZYX", e[:, ::-1]).as_quat() if len(e) else np.zeros((0, 4))  # x, y, z, w
-    data = np.column_stack([t, p, q])
-    np.savetxt(path, data, fmt="%.6f", header=f"timestamp tx ty tz qx qy qz qw; frame: {frame}")
+    write_tum_quat(path, t, p, q, frame)
+
+
+def write_tum_quat(path: str | Path, t, position, quat_xyzw, frame: str = NED_FRAME, decimals: int = 6) -> None:
+    """Write a trajectory from unit quaternions (x, y, z, w); the header line names the frame."""
+    data = np.column_stack([np.asarray(t, float), np.asarray(position, float).reshape(-1, 3),
+                            np.asarray(quat_xyzw, float).reshape(-1, 4)])
+    np.savetxt(path, data, fmt=f"%.{decimals}f", header=f"timestamp tx ty tz qx qy qz qw; frame: {frame}")
 
 
 def valid_pairs(truth: dict, estimate: dict) -> tuple[np.ndarray, np.ndarray]:

@@ -16,6 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
+from visnav.sim.log import register_stream
+
+register_stream("reinit", x=("px", "image, OpenCV (x right)", "new point tracked after a re-initialisation"),
+                y=("px", "image, OpenCV (y down)", "new point tracked after a re-initialisation"))
+register_stream("reacquire")  # a time only: the tracker was re-acquired
+register_stream("mpe_end")  # a time only: MPE stopped (below 1 m)
 
 
 class PalaceMission:

@@ -17,6 +17,18 @@ import numpy as np
 from visnav.guidance.hermite import HermitePath, helix_waypoints
 from visnav.guidance.pfcm import PfcmGuidance, PfcmLimits, PointHold
 from visnav.measurements import Health, NavEstimate
+from visnav.sim.log import register_stream
+
+register_stream("pfcm", **{k: ("m/s", "", d) for k, d in (
+    ("v_target", "speed target v_targ = min of the three"), ("v_targ1", "accelerate / cruise / brake profile"),
+    ("v_targ2", "turn limit (eq. 4.15)"), ("v_targ3", "vortex-ring descent limit (eq. 4.23)"),
+    ("speed", "navigation speed"))},
+    phase=("text", "", "accelerate, cruise, brake or end"), segment=("1", "", "Hermite segment index"),
+    s=("1", "", "parameter on the segment (0..1)"), arc_position=("m", "", "distance along the path"),
+    distance_to_end=("m", "", "distance left along the path"), phi_ff=("rad", "", "feed-forward roll"),
+    r_ff=("rad/s", "", "feed-forward yaw rate"), heading_error=("rad", "", "heading minus the path tangent"),
+    control_point=("m", "NED world (origin at the scenario's home)", "the path's control point (ch. 4)"),
+    nav_cross_track=("m", "", "navigation position to the control point"))
 
 
 def spiral_waypoints(cfg) -> tuple[np.ndarray, np.ndarray]:

@@ -14,6 +14,14 @@ import math
 import numpy as np
 
 from visnav.guidance.hermite import HermitePath
+from visnav.sim.log import register_stream
+
+register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),
+                waypoints=("m", "NED world (origin at the scenario's home)", "loop waypoints"),
+                loop_length=("m", "", "length of the loop path"),
+                home=("m", "NED world (origin at the scenario's home)", "home (the first waypoint)"),
+                map_extent=("m", "NED: north min, north max, east min, east max", "extent of the ground map"),
+                reference_resolution=("m/px", "", "resolution of the degraded reference map"))
 
 
 def loop_waypoints(size_north: float, size_east: float, radius: float, altitude: float,

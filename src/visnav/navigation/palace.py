@@ -34,6 +34,26 @@ from visnav.measurements import (
 )
 from visnav.vision.correlation import PnccTracker
 from visnav.vision.interest import forstner
+from visnav.sim.log import register_stream
+
+_NED = "NED world (origin at the scenario's home)"
+register_stream("attitude_samples", euler=("rad", "3-2-1 Euler angles (roll, pitch, yaw) of body FRD relative to NED",
+                                           "IMU attitude solution as stamped (delay identification)"))
+register_stream("laser", range=("m", "along the beam", "laser range (NaN: no return)"),
+                beam_offset=("rad", "from the camera axis, towards image-down", "angle of the beam that returned"))
+register_stream("tracker", x=("px", "image, OpenCV (x right)", "tracked point"),
+                y=("px", "image, OpenCV (y down)", "tracked point"),
+                coherence=("1", "", "coherence of the match, eq. 2.3 of seed 000 (0..1)"),
+                ok=("bool", "", "the match was accepted"))
+register_stream("track_init", x=("px", "image, OpenCV (x right)", "point the track started on"),
+                y=("px", "image, OpenCV (y down)", "point the track started on"),
+                init_position=("m", _NED, "vehicle position the ground reference was initialised with"),
+                kind=("1", "", "0: from GPS at the start of tracking, 1: re-based on MPE's own estimate"))
+register_stream("mpe", position=("m", _NED, "MPE position fix of the vehicle (Alg. 3/4, eq. 2.5)"),
+                camera_position=("m", _NED, "camera position of the fix"),
+                range=("m", "along the beam", "laser range used"),
+                sigma=("m", "horizontal", "pixel-quantisation noise of the fix, R/(f sqrt 12) (eq. 3.3)"),
+                jump=("bool", "", "the fix jumped (not fed to the filter)"))
 
 Recorder = Callable[..., None]
 

@@ -38,6 +38,25 @@ from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, H
 from visnav.navigation.palace import _AttitudeHistory
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
+from visnav.sim.log import register_stream
+
+_NED = "NED world (origin at the scenario's home)"
+register_stream("vision_engaged", position=("m", _NED, "filter position when GPS was lost"),
+                velocity=("m/s", _NED, "filter velocity when GPS was lost"),
+                euler=("rad", "3-2-1 Euler angles (roll, pitch, yaw) of body FRD relative to NED",
+                       "filter attitude when GPS was lost"))
+register_stream("ins_only", position=("m", _NED, "stand-alone INS track (comparison, not used)"))
+register_stream("odometry", ok=("bool", "", "the odometry step was used"),
+                n_tracked=("1", "", "KLT features tracked"), n_inliers=("1", "", "RANSAC inliers"),
+                n_outliers=("1", "", "RANSAC outliers"),
+                displacement=("m", "NED north, east", "camera displacement of the step (eq. 5.5-5.10)"),
+                position=("m", _NED, "odometry-only track (steps summed from the engagement)"),
+                height=("m", "", "height above ground that scaled the step"))
+register_stream("pmf", position=("m", "NED north, east", "point-mass filter mean (eq. 5.24-5.31)"),
+                cov=("m^2", "NED north, east", "point-mass filter covariance"),
+                registered=("bool", "", "a map registration was used (eq. 5.14-5.15)"),
+                ncc_peak=("1", "", "NCC peak of the registration (NaN: none)"),
+                window_m=("m", "", "side of the registration search window (NaN: none)"))
 
 Recorder = Callable[..., None]
 

@@ -20,6 +20,7 @@ from visnav.guidance.orbit import OrbitGains, OrbitGuidance, RadiusFilter
 from visnav.sensors.condor_camera import TargetCamera, condor_camera, target_outline
 from visnav.sensors.gimbal import (Barometer, CameraAhrs, Gimbal, PanPotentiometer, TelemetryLink, centred_coords)
 from visnav.sim.log import FlightLog
+from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
 from visnav.vehicles.fixedwing import FixedWingModel, FixedWingParams, trim
 from visnav.vision.blob_tracker import BlobTracker
 from visnav.vision.condor_pipeline import VisionRange
@@ -31,7 +32,7 @@ class CondorSimulation:
     def __init__(self, scenario) -> None:
         self.sc = sc = scenario
         self.cfg = cfg = sc.mission
-        self.log = FlightLog()
+        self.log = FlightLog(schema=CONDOR_GROUND_STREAMS if cfg.experiment == "ground_test" else CONDOR_STREAMS)
         self.mission = SimpleNamespace(mode="init")
         self.dt = sc.run.dt_s
         self.rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(10)]

@@ -42,6 +42,7 @@ from visnav.guidance.deck_approach import StraightApproach, TauGapApproach, pred
 from visnav.navigation.deck import DeckNavigator
 from visnav.sensors.led_camera import LedCamera
 from visnav.sim.log import FlightLog
+from visnav.sim.streams import DECK_STREAMS
 from visnav.sim.loop import RunResult
 from visnav.vehicles.multirotor import AttitudeThrustCommand, Multirotor, MultirotorParams
 from visnav.vision.blobs import BearingTracker, find_blobs
@@ -76,7 +77,7 @@ class DeckSimulation:
         self.sc = sc = scenario
         cfg = self.cfg = sc.mission
         self.dt = sc.run.dt_s
-        self.log = FlightLog()
+        self.log = FlightLog(schema=DECK_STREAMS)
         rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(8)]
         self.rng = rng
         d = cfg.deck

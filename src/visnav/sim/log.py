@@ -1,17 +1,60 @@
-"""FlightLog: every stream of a run (truth, measurements, estimates, commands, modes), one HDF5 group each."""
+"""FlightLog: every stream of a run (truth, measurements, estimates, commands, modes), one HDF5 group each.
+
+Every field of a stream is documented by a ``Field(unit, frame, description)``, written as the ``units``,
+``frame`` and ``description`` attributes of its HDF5 dataset (layout: ``docs/log-format.md``). A
+simulation passes the streams it records itself as ``FlightLog(schema=...)`` (the same stream name can
+mean another frame in another simulation: ``truth`` is the relative deck state in a deck run); a
+component that records through a recorder callback (navigator, mission manager, controller) registers its
+streams once with ``register_stream`` next to its record calls. A field documented nowhere gets units "".
+Units: SI; "1" for dimensionless numbers and counts, "bool" for flags, "text" for strings.
+"""
 
 from __future__ import annotations
 
 from collections import defaultdict
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 
+class Field(NamedTuple):
+    unit: str
+    frame: str = ""
+    description: str = ""
+
+
+#: stream -> field -> Field, from the components that record through a recorder (``register_stream``)
+STREAMS: dict[str, dict[str, Field]] = {}
+#: every stream's ``t`` (DESIGN §3: the instant a row describes)
+T_FIELD = Field("s", "simulation time", "the instant the row describes")
+UNDOCUMENTED = Field("", "", "")
+
+
+def register_stream(stream: str, **fields) -> None:
+    """Document the fields of a stream recorded through a recorder callback: ``name=(unit, frame, description)``."""
+    STREAMS.setdefault(stream, {}).update({k: Field(*v) for k, v in fields.items()})
+
+
+register_stream("mode", mode=("text", "", "mission mode entered at t"), previous=("text", "", "the mode it left"),
+                reason=("text", "", "why"))
+register_stream("error", message=("text", "", "what stopped the run early"))
+
+
 class FlightLog:
-    def __init__(self) -> None:
+    def __init__(self, schema: dict[str, dict[str, tuple]] | None = None) -> None:
         self._streams: dict[str, dict[str, list]] = defaultdict(lambda: defaultdict(list))
         self._cache: dict[str, dict[str, np.ndarray]] = {}
+        #: this log's own stream -> field -> Field (before the registered ``STREAMS``)
+        self.schema: dict[str, dict[str, Field]] = {
+            s: {k: Field(*v) for k, v in f.items()} for s, f in (schema or {}).items()}
+
+    def field(self, stream: str, name: str) -> Field:
+        """Unit, frame and description of one field (``UNDOCUMENTED``: units "" when nobody documented it)."""
+        own = self.schema.get(stream, {}).get(name) or STREAMS.get(stream, {}).get(name)
+        if own is not None:
+            return own
+        return T_FIELD if name == "t" else UNDOCUMENTED
 
     def record(self, stream: str, t: float, **fields) -> None:
         s = self._streams[stream]
@@ -48,9 +91,11 @@ class FlightLog:
                 g = f.create_group(name)
                 for k, v in self.get(name).items():
                     if v.dtype == object:
-                        g.create_dataset(k, data=np.array([str(x) for x in v], dtype=h5py.string_dtype()))
+                        d = g.create_dataset(k, data=np.array([str(x) for x in v], dtype=h5py.string_dtype()))
                     else:
-                        g.create_dataset(k, data=v, compression="gzip" if v.size > 1000 else None)
+                        d = g.create_dataset(k, data=v, compression="gzip" if v.size > 1000 else None)
+                    unit, frame, desc = self.field(name, k)
+                    d.attrs["units"], d.attrs["frame"], d.attrs["description"] = unit, frame, desc
             for k, v in (attrs or {}).items():
                 f.attrs[k] = v
 
@@ -63,6 +108,9 @@ class FlightLog:
             for name, g in f.items():
                 s = log._streams[name]
                 for k, d in g.items():
+                    if "units" in d.attrs:
+                        log.schema.setdefault(name, {})[k] = Field(*(str(d.attrs.get(a, "")) for a in (
+                            "units", "frame", "description")))
                     data = d[()]
                     if d.dtype.kind in "OS":
                         data = [x.decode() if isinstance(x, bytes) else str(x) for x in data]

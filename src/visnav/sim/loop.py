@@ -28,6 +28,7 @@ from visnav.sensors.gps import Gps
 from visnav.sensors.imu import Imu
 from visnav.sensors.rangefinder import LaserRangeFinder, Sonar
 from visnav.sim.log import FlightLog
+from visnav.sim.streams import RMAX_STREAMS
 from visnav.sim.missions import build as build_mission
 from visnav.vehicles.rmax import RmaxModel
 from visnav.world.scene import build_world
@@ -61,7 +62,7 @@ class Simulation:
         self.sc = sc = scenario
         wrap = navigator_wrapper or (lambda nav: nav)
         self.dt = sc.run.dt_s
-        self.log = FlightLog()
+        self.log = FlightLog(schema=RMAX_STREAMS)
         seeds = np.random.SeedSequence(sc.run.seed).spawn(8)
         rng = [np.random.default_rng(s) for s in seeds]
         self.yaw = np.deg2rad(sc.vehicle.yaw_deg)

@@ -1,0 +1,154 @@
+"""Live frame sources for the bridge: anything ``cv2.VideoCapture`` opens, a folder of images, or a callable.
+
+Every frame is stamped in our monotonic clock at capture: ``t = monotonic() + time_offset_s`` (the
+camera.yaml ``time_offset_s`` of the recorded-flight format: t_imu = t_camera + time_offset_s; a
+negative value says the frame describes an instant before it reached us). ``capture_t`` (the instant
+the frame reached us) is kept separately: the latency budget is measured from it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm")
+
+
+class CameraSourceError(RuntimeError):
+    """A camera that cannot be opened; one line naming it."""
+
+
+@dataclass(frozen=True)
+class Captured:
+    image: np.ndarray  # uint8 HxW
+    t: float  # the instant the frame describes (exposure), our clock [s]
+    capture_t: float  # when it reached us [s]
+    index: int
+
+
+def read_time_offset(camera_yaml: str | Path | None) -> float:
+    """``time_offset_s`` of a camera.yaml (recorded-flight format); 0 without a file.
+    (Only the time offset is used live: the navigator's camera model comes from its scenario.)"""
+    if camera_yaml is None:
+        return 0.0
+    import yaml
+
+    p = Path(camera_yaml)
+    if not p.is_file():
+        raise CameraSourceError(f"{p}: camera.yaml not found")
+    try:
+        doc = yaml.safe_load(p.read_text()) or {}
+        off = float(doc.get("time_offset_s", 0.0)) if isinstance(doc, dict) else float("nan")
+    except (yaml.YAMLError, TypeError, ValueError):
+        raise CameraSourceError(f"{p}: not a camera.yaml mapping with a numeric time_offset_s") from None
+    if not math.isfinite(off):
+        raise CameraSourceError(f"{p}: time_offset_s must be a finite number of seconds")
+    return off
+
+
+def _gray(img: np.ndarray) -> np.ndarray:
+    import cv2
+
+    if img.ndim == 3:
+        img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+    return img.astype(np.uint8, copy=False)
+
+
+class FrameSource:
+    """Base: ``read()`` blocks until the next frame and returns a Captured, or None at the end."""
+
+    def __init__(self, time_offset_s: float = 0.0, clock: Callable[[], float] = time.monotonic):
+        self.time_offset_s, self.clock, self.index = float(time_offset_s), clock, 0
+
+    def _stamp(self, image: np.ndarray, exposed: float | None = None) -> Captured:
+        now = self.clock()
+        c = Captured(_gray(image), (now if exposed is None else exposed) + self.time_offset_s, now, self.index)
+        self.index += 1
+        return c
+
+    def read(self) -> Captured | None:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+
+class VideoSource(FrameSource):
+    """``cv2.VideoCapture(source)``: a device index ("0"), a file, an RTSP or GStreamer URL."""
+
+    def __init__(self, source: str, **kw):
+        super().__init__(**kw)
+        import cv2
+
+        self.cap = cv2.VideoCapture(int(source) if source.isdigit() else source)
+        if not self.cap.isOpened():
+            raise CameraSourceError(f"camera {source!r}: cv2.VideoCapture cannot open it")
+
+    def read(self) -> Captured | None:
+        ok, img = self.cap.read()
+        return self._stamp(img) if ok else None
+
+    def close(self) -> None:
+        self.cap.release()
+
+
+class FolderSource(FrameSource):
+    """Images of a folder in name order, paced at ``fps`` (a camera stand-in for bench tests)."""
+
+    def __init__(self, folder: str | Path, fps: float = 10.0, **kw):
+        super().__init__(**kw)
+        import cv2
+
+        self.files = sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_EXT)
+        if not self.files:
+            raise CameraSourceError(f"camera folder {folder}: no images ({', '.join(IMAGE_EXT)})")
+        self._imread = cv2.imread
+        self.period = 1.0 / fps
+        self._next = None
+
+    def read(self) -> Captured | None:
+        if self.index >= len(self.files):
+            return None
+        now = self.clock()
+        self._next = now if self._next is None else self._next
+        if self._next > now:
+            time.sleep(self._next - now)
+        self._next += self.period
+        img = self._imread(str(self.files[self.index]), 0)
+        if img is None:
+            raise CameraSourceError(f"{self.files[self.index]}: not a readable image")
+        return self._stamp(img)
+
+
+class CallableSource(FrameSource):
+    """Frames from ``make(index, t) -> image or None`` showing our instant ``t`` (the exposure), paced at
+    ``fps`` (the SIL camera renders the scene at ``t``; the frame arrives when the rendering is done)."""
+
+    def __init__(self, make: Callable[[int], np.ndarray | None], fps: float = 20.0, **kw):
+        super().__init__(**kw)
+        self.make, self.period, self._next = make, 1.0 / fps, None
+
+    def read(self) -> Captured | None:
+        now = self.clock()
+        self._next = now if self._next is None else self._next
+        if self._next > now:
+            time.sleep(self._next - now)
+        self._next = max(self._next + self.period, self.clock() - self.period)
+        exposed = self.clock()
+        img = self.make(self.index, exposed)
+        return None if img is None else self._stamp(img, exposed)
+
+
+def open_source(spec: str, fps: float = 10.0, time_offset_s: float = 0.0) -> FrameSource:
+    """A folder -> FolderSource, anything else -> VideoSource."""
+    p = Path(spec)
+    if p.is_dir():
+        return FolderSource(p, fps=fps, time_offset_s=time_offset_s)
+    if not spec.isdigit() and "://" not in spec and "!" not in spec and not p.exists():
+        raise CameraSourceError(f"camera {spec!r}: no such file, folder or device index")
+    return VideoSource(spec, time_offset_s=time_offset_s)

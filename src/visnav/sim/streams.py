@@ -1,0 +1,125 @@
+"""Units, frames and descriptions of the streams each simulation records itself (``FlightLog(schema=...)``).
+
+Streams recorded by components through a recorder (navigators, mission managers, the PFCM controller)
+are registered next to their record calls with ``log.register_stream``. Layout: ``docs/log-format.md``.
+Euler angles are 3-2-1 (yaw, pitch, roll applied in that order) and stored as (roll, pitch, yaw).
+"""
+
+from __future__ import annotations
+
+NED = "NED world (origin at the scenario's home)"
+EULER = ("rad", "3-2-1 Euler angles (roll, pitch, yaw) of body FRD relative to NED world", "attitude")
+YACS = "YACS unit (+-500 = full stick)"
+
+#: the R-MAX loop (sim/loop.py): palace, hover, pfcm and witas-homing missions
+RMAX_STREAMS = {
+    "truth": {"position": ("m", NED, "true position of the body origin"),
+              "velocity": ("m/s", NED, "true velocity"),
+              "euler": (EULER[0], EULER[1], "true attitude"),
+              "body_rates": ("rad/s", "body FRD", "true angular rates (p, q, r)")},
+    "estimate": {"position": ("m", NED, "navigator's position estimate (meaningless where valid is false)"),
+                 "velocity": ("m/s", NED, "navigator's velocity estimate"),
+                 "euler": (EULER[0], EULER[1], "navigator's attitude estimate"),
+                 "source": ("text", "", "navigation source in use: gps, mpe, inertial or vision"),
+                 "valid": ("bool", "", "the estimate is a fix (false before the first one)")},
+    "reference": {"position": ("m", NED, "position reference given to the controller"),
+                  "velocity": ("m/s", NED, "velocity reference"),
+                  "yaw": ("rad", "heading from north, clockwise", "heading reference")},
+    "command": {k: (YACS, "", f"{n} command to the YACS") for k, n in (
+        ("ail", "lateral cyclic (aileron)"), ("ele", "longitudinal cyclic (elevator)"), ("rud", "yaw (rudder)"),
+        ("thr", "collective (throttle)"))},
+    "status": {"mode": ("text", "", "mission mode"), "source": ("text", "", "navigation source"),
+               "coherence": ("1", "", "tracker coherence, eq. 2.3 of seed 000 (0..1)"),
+               "mpe_rate_hz": ("Hz", "", "rate of MPE fixes"), "laser_ok": ("bool", "", "laser has a return"),
+               "tracking": ("bool", "", "the tracker holds a point")},
+    "actuator": {"controller": (YACS, "(ail, ele, rud, thr)", "controller output before the sweep injection"),
+                 "injection": (YACS, "(ail, ele, rud, thr)", "chirp added at the actuator (loop broken here)"),
+                 "applied": (YACS, "(ail, ele, rud, thr)", "what the vehicle received")},
+    "touchdown": {"position": ("m", NED, "true position at ground contact"),
+                  "speed": ("m/s", "", "true speed at ground contact")},
+}
+
+_DECK_STATE = {
+    "position": ("m", "vehicle body FRD", "position of the deck origin relative to the vehicle (seed 003 eq. 2.2)"),
+    "euler": ("rad", "3-2-1 Euler angles of the deck frame relative to the vehicle body frame",
+              "relative attitude (eq. 2.8-2.12)"),
+    "velocity": ("m/s", "vehicle body FRD", "rate of change of position as seen from the vehicle (eq. 2.5-2.6)"),
+    "deck_rates": ("rad/s", "deck frame", "the deck's body rates (p_d, q_d, r_d)"),
+}
+_DECK_ORDER = "state order: position (m), euler (rad), velocity (m/s), deck_rates (rad/s)"
+
+#: the deck landing (sim/deck_loop.py)
+DECK_STREAMS = {
+    "truth": {k: (u, f, "true " + d) for k, (u, f, d) in _DECK_STATE.items()},
+    "estimate": {**{k: (u, f, "UKF estimate of the " + d) for k, (u, f, d) in _DECK_STATE.items()},
+                 "sigma": ("mixed", _DECK_ORDER, "UKF 1-sigma of the 12 states"),
+                 "nees": ("1", "", "normalised estimation error squared of the 12 states"),
+                 "mode": ("text", "", "mission mode")},
+    "vehicle": {"position": ("m", NED, "true vehicle position"), "velocity": ("m/s", NED, "true vehicle velocity"),
+                "euler": (EULER[0], EULER[1], "true vehicle attitude"),
+                "gear_height": ("m", "along the deck normal", "height of the landing gear above the deck plane")},
+    "deck": {"position": ("m", NED, "true deck origin"),
+             "euler": ("rad", "3-2-1 Euler angles of the deck frame relative to NED world", "true deck attitude")},
+    "command": {"roll": ("rad", "", "commanded roll"), "pitch": ("rad", "", "commanded pitch"),
+                "yaw_rate": ("rad/s", "", "commanded yaw rate"),
+                "throttle": ("1", "", "normalised throttle command (eq. 4.32-4.33)")},
+    "reference": {"position": ("m", "level-deck frame turned to north (NED axes), relative to the deck",
+                               "desired position of the tau trajectory (NaN while hovering)"),
+                  "velocity": ("m/s", "NED axes, relative to the deck", "desired velocity"),
+                  "accel": ("m/s^2", "NED axes", "commanded acceleration")},
+    "camera": {"blobs": ("1", "", "blobs found in the frame"), "lights_used": ("1", "", "lights associated and used"),
+               "nis": ("1", "", "normalised innovation squared of the update"),
+               "dof": ("1", "", "degrees of freedom of the NIS"),
+               "bearing_rms": ("rad", "camera", "RMS bearing residual of the update")},
+    "filter_init": {"x0": ("mixed", _DECK_ORDER, "UKF initial state"),
+                    "sigma": ("mixed", _DECK_ORDER, "UKF initial 1-sigma"),
+                    "source": ("text", "", "how the filter was started (or restarted)")},
+    "retarget_skipped": {"reason": ("text", "", "why the touchdown point was not re-aimed")},
+}
+
+#: the CONDOR orbit (sim/condor_loop.py)
+CONDOR_STREAMS = {
+    "truth": {**{k: v for k, v in RMAX_STREAMS["truth"].items()},
+              "airspeed": ("m/s", "", "true airspeed"), "beta": ("rad", "", "sideslip angle")},
+    "vision": {"radius": ("m", "horizontal", "vision ground range to the tent (seed 004 eq. 3.9-3.24), NaN if invalid"),
+               "true_radius": ("m", "horizontal", "true ground range to the tent"),
+               "valid": ("bool", "", "a radius was computed"), "tracked": ("bool", "", "the tent is tracked"),
+               "X": ("px", "image, centred, right", "tent column from the image centre"),
+               "Y": ("px", "image, centred, up", "tent row from the image centre"),
+               "tilt_error": ("rad", "", "camera AHRS tilt error"),
+               "roll_error": ("rad", "", "camera AHRS roll error"),
+               "cam_roll": ("rad", "", "true camera roll"), "cam_tilt": ("rad", "", "true camera tilt (down negative)"),
+               "pan_pot": ("rad", "relative to the fuselage", "pan potentiometer reading"),
+               "pan": ("rad", "relative to the fuselage", "true pan"),
+               "bearing": ("rad", "camera pan axis", "bearing of the tent from the vision solution (Psi_VB)"),
+               "reason": ("text", "", "why the radius is invalid")},
+    "control": {"R": ("m", "horizontal", "radius the outer loop used (vision, predicted across the link)"),
+                "Rdot": ("m/s", "", "radius rate"),
+                "base": ("rad/s", "", "base heading rate (eq. 5.2 / 7.1)"),
+                "err": ("rad/s", "", "heading-rate correction from the radius error (eq. 5.1)"),
+                "psidot_ref": ("rad/s", "", "heading-rate reference (eq. 5.3)"),
+                "phi_ref": ("rad", "", "bank reference (eq. 5.4)"), "psidot": ("rad/s", "", "measured heading rate"),
+                "bank_hold": ("bool", "", "bank hold engaged (eq. 5.7)"),
+                "aileron": ("rad", "", "aileron deflection"), "elevator": ("rad", "", "elevator deflection"),
+                "rudder": ("rad", "", "rudder deflection"), "throttle": ("1", "", "throttle 0..1"),
+                "mode": ("text", "", "gps_loiter or vision_orbit")},
+    "estimate": {"position": ("m", NED, "aircraft position from the vision fix (eq. 3.23-3.24), not flown on"),
+                 "euler": (EULER[0], EULER[1], "AHRS attitude"),
+                 "valid": ("bool", "", "a vision fix exists")},
+}
+
+#: the CONDOR ground test (sim/condor_ground.py): one row per table row, ``t`` is the row index
+_ROW = ("1", "", "row index over Tables 4.1-4.2 (not a time)")
+CONDOR_GROUND_STREAMS = {
+    "truth": {"t": _ROW, "position": ("m", "NED, origin under the camera", "where the tent is"),
+              "euler": ("rad", "", "zeros (a static test)")},
+    "estimate": {"t": _ROW, "position": ("m", "NED, origin under the camera", "the configured method's tent position"),
+                 "euler": ("rad", "", "zeros (a static test)")},
+    "ground_test": {"t": _ROW, "table": ("text", "", "seed 004 table (4.1 or 4.2)"), "row": ("1", "", "row index"),
+                    "true_radius": ("m", "horizontal", "true ground range"),
+                    "published_error_pct": ("%", "", "the thesis' flight-hardware error of the row"),
+                    **{f"{k}_radius": ("m", "horizontal", f"ground range, {d}") for k, d in (
+                        ("thesis", "thesis method"), ("ours", "our method"), ("configured", "configured method"))},
+                    **{f"{k}_error_pct": ("%", "", f"relative radius error, {d}") for k, d in (
+                        ("thesis", "thesis method"), ("ours", "our method"), ("configured", "configured method"))}},
+}
