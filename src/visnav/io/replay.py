@@ -19,7 +19,10 @@ from typing import Callable
 import numpy as np
 
 from visnav.io.recording import STREAM_NAMES, Recording, RecordingError
-from visnav.sim.log import FlightLog
+from visnav.sim.log import FlightLog, register_stream
+
+register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv)"),
+                args=("text", "JSON", "its arguments: {\"args\": [...], \"kwargs\": {...}}"))
 
 Builder = Callable[["Recording", "ReplayOptions", Callable], object]
 NAVIGATORS: dict[str, tuple[Builder, tuple[str, ...]]] = {}
@@ -247,7 +250,7 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                     notes.append(f"commands.csv: {meth!r} is not a {navigator} navigator request; skipped")
                     continue
                 fn(*args.get("args", []), **args.get("kwargs", {}))
-                log.record("command", t, method=meth, args=json.dumps(args))
+                log.record("nav_request", t, method=meth, args=json.dumps(args))
             if progress is not None and k % 2000 == 0:
                 progress(k, len(kinds))
     except KeyboardInterrupt:  # Ctrl-C: keep what the replay has

@@ -16,6 +16,7 @@ import numpy as np
 from visnav.guidance.hermite import HermitePath
 from visnav.sim.log import register_stream
 
+register_stream("note", message=("text", "", "how the scenario was set up (e.g. the loop shrunk to fit the map)"))
 register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),
                 waypoints=("m", "NED world (origin at the scenario's home)", "loop waypoints"),
                 loop_length=("m", "", "length of the loop path"),
