@@ -597,6 +597,101 @@ def map_quality(
     console.print("written: " + ", ".join(str(p) for p in paths.values()))
 
 
+# ------------------------------------------------------------------ record / replay (issue #14)
+@app.command("record")
+def record_(
+    scenario: str = typer.Argument(..., help="built-in scenario name or .toml (R-MAX loop: palace-landing, "
+                                   "witas-homing, ...)"),
+    out: str = typer.Option(..., help="recording folder to write (docs/recordings.md)"),
+    seed: Optional[int] = typer.Option(None, help="override run.seed"),
+    set_: List[str] = typer.Option([], "--set", help="override a key, e.g. --set run.duration_s=20"),
+    force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the recording's own files "
+                               "there are removed first)"),
+) -> None:
+    """Fly a scenario's closed loop and write what its navigator saw as a recorded flight."""
+    from visnav.io.recording import RecordingError
+    from visnav.scenarios.schema import ScenarioError, load_scenario
+    from visnav.sim.record import record
+
+    err = Console(stderr=True)
+    try:
+        sc = load_scenario(scenario, set_, seed)
+        with console.status(f"recording {sc.run.name}"):
+            res = record(sc, out, force=force)
+    except (ScenarioError, RecordingError, FileNotFoundError, ValueError) as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(2)
+    console.print(f"recorded {escape(sc.run.name)}: " + ", ".join(f"{v} {k}" for k, v in res.counts.items() if v))
+    console.print(f"recording: {res.out_dir}")
+    if getattr(res.run, "interrupted", False):
+        err.print(f"interrupted: the recording holds the flight up to the interruption ({res.out_dir})")
+        raise typer.Exit(130)
+    if res.run.error:
+        console.print(f"[red]the flight stopped early:[/red] {escape(res.run.error)} (what it had is recorded)")
+        raise typer.Exit(1)
+
+
+@app.command("replay")
+def replay_(
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
+                                    "ROS bag"),
+    navigator: str = typer.Option(..., help="navigator: palace or witas"),
+    map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas"),
+    out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
+    time_offset: Optional[str] = typer.Option(None, help="camera clock offset: 'auto' (gyro/camera "
+                                              "cross-correlation) or seconds (t_imu = t_camera + offset); "
+                                              "default camera.yaml's"),
+    rate: float = typer.Option(10.0, help="estimate rate when the recording has no recorded queries \\[Hz]"),
+    gps_until: Optional[float] = typer.Option(None, help="withhold GPS after this time \\[s] (a GPS-denied run on a "
+                                              "real flight; the fixes stay the reference when there is no truth.csv)"),
+    force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
+                               "there are removed first)"),
+) -> None:
+    """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
+    from visnav.io.logs import open_recording
+    from visnav.io.recording import RecordingError
+    from visnav.io.replay import ReplayOptions, replay, write_replay
+    from visnav.io.runs import new_run_dir
+    from visnav.scenarios.schema import ScenarioError
+
+    err = Console(stderr=True)
+    try:
+        offset = None
+        if time_offset is not None and time_offset != "auto":
+            try:
+                offset = float(time_offset)
+            except ValueError:
+                raise RecordingError(f"--time-offset must be 'auto' or seconds, got {time_offset!r}") from None
+        if not (rate > 0):
+            raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
+        rec = open_recording(recording)
+        opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
+                             time_offset="auto" if time_offset == "auto" else offset)
+        with console.status(f"replaying {escape(recording)} on {navigator}"):
+            res = replay(rec, navigator, opts)
+        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out, force),
+                               title=f"replay of {recording} on {navigator}")
+    except (RecordingError, ScenarioError, ValueError) as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(2)
+    except OSError as exc:
+        err.print(f"[red]error:[/red] cannot write {escape(str(out))}: {escape(exc.strerror or str(exc))}")
+        raise typer.Exit(2)
+    table = Table(title=f"replay of {escape(recording)} on {navigator}")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for k, v in res.metrics.items():
+        table.add_row(k, _fmt(v))
+    console.print(table)
+    for n in res.notes:
+        console.print(f"[yellow]note:[/yellow] {escape(n)}")
+    console.print(f"run directory: {out_dir}")
+    if res.metrics.get("interrupted"):
+        raise typer.Exit(130)
+    if "error" in res.metrics:
+        raise typer.Exit(1)
+
+
 def main() -> None:  # pragma: no cover
     app()
 

@@ -16,6 +16,7 @@ import numpy as np
 from visnav.guidance.hermite import HermitePath
 from visnav.sim.log import register_stream
 
+register_stream("note", message=("text", "", "how the scenario was set up (e.g. the loop shrunk to fit the map)"))
 register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),
                 waypoints=("m", "NED world (origin at the scenario's home)", "loop waypoints"),
                 loop_length=("m", "", "length of the loop path"),
@@ -89,6 +90,21 @@ def make_ground(cfg, seed: int):
     return rural_map(size, mc.resolution_m, rng, pond_ne=pond), (sn, se, r, (0.0, 0.0))
 
 
+def mission_rngs(seed: int) -> list[np.random.Generator]:
+    """The mission's generators (ground, camera, baro, compass, navigator, spare) from the run seed; the
+    replay rebuilds the navigator's (index 4) from the recorded scenario."""
+    return [np.random.default_rng(s) for s in np.random.SeedSequence([seed, 5]).spawn(6)]
+
+
+def reference_map(cfg, ground):
+    """The navigator's degraded reference map of the world raster ``ground`` (``mission.map`` keys)."""
+    from visnav.world.maps import degrade_reference
+
+    mc = cfg.map
+    return degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
+                             mc.reference_gamma, mc.reference_blur_m)
+
+
 def build(sim):
     from visnav.analysis.witas_metrics import witas_metrics
     from visnav.control.rmax_path import PathFollowingController
@@ -100,17 +116,14 @@ def build(sim):
     from visnav.sensors.baro import Baro, Compass
     from visnav.sensors.camera import Camera
     from visnav.sim.missions import MissionParts
-    from visnav.world.maps import degrade_reference
     from visnav.world.scene import World
 
     cfg = sim.sc.mission
     pc, cc, mc = cfg.path, cfg.camera, cfg.map
-    seeds = np.random.SeedSequence([sim.sc.run.seed, 5]).spawn(6)
-    rng = [np.random.default_rng(s) for s in seeds]
+    rng = mission_rngs(sim.sc.run.seed)
     ground, (sn, se, r, centre) = make_ground(cfg, sim.sc.run.seed)
     sim.world = World(ground=ground, surface="grass", wind=sim.world.wind, detail=None)
-    reference = degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
-                                  mc.reference_gamma, mc.reference_blur_m)
+    reference = reference_map(cfg, ground)
     P, T = loop_waypoints(sn, se, r, pc.altitude_m, centre, pc.direction)
     path = HermitePath.from_waypoints(P, T, scale="arc")
     if (sn, se) != (pc.size_north_m, pc.size_east_m):  # the map is smaller than the loop asked for: say so

@@ -27,6 +27,7 @@ from visnav.sensors.gimbal import PitchRollGimbal
 from visnav.sensors.telemetry import AutopilotTelemetry
 from visnav.sim.fixedwing_common import air_data, scenario_wind, trimmed_aircraft
 from visnav.sim.log import FlightLog
+from visnav.sim.streams import GEOLOC_STREAMS
 from visnav.vehicles.fixedwing import micro_params, trim
 from visnav.world.maps import GeoImage, degrade_reference
 from visnav.world.scene import World
@@ -58,7 +59,7 @@ class GeolocationSimulation:
     def __init__(self, scenario) -> None:
         self.sc = sc = scenario
         self.cfg = cfg = sc.mission
-        self.log = FlightLog()
+        self.log = FlightLog(schema=GEOLOC_STREAMS)
         self.dt = sc.run.dt_s
         self.rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(8)]
         rng = self.rng

@@ -56,8 +56,11 @@ class RunResult:
 
 
 class Simulation:
-    def __init__(self, scenario: Scenario):
+    def __init__(self, scenario: Scenario, navigator_wrapper=None):
+        """``navigator_wrapper(nav) -> nav``, when given, wraps every navigator the loop and the mission
+        talk to (``visnav record`` puts a recording proxy there)."""
         self.sc = sc = scenario
+        wrap = navigator_wrapper or (lambda nav: nav)
         self.dt = sc.run.dt_s
         self.log = FlightLog(schema=RMAX_STREAMS)
         seeds = np.random.SeedSequence(sc.run.seed).spawn(8)
@@ -77,11 +80,11 @@ class Simulation:
                              process_hz=sc.navigation.mpe.rate_hz, noise_sigma=c.noise_sigma, latency_s=c.latency_s,
                              delay_s=c.delay_s)
 
-        self.nav = PalaceNavigator(sc.navigation, self.camera_model, self.mount, recorder=self.log.record)
+        self.nav = wrap(PalaceNavigator(sc.navigation, self.camera_model, self.mount, recorder=self.log.record))
         parts = build_mission(self)
         self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
         if parts.navigator is not None:
-            self.nav = parts.navigator
+            self.nav = wrap(parts.navigator)
         self._extra_sensors = tuple(parts.sensors)
         self.uses_camera = parts.uses_camera
         init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),

@@ -123,3 +123,44 @@ CONDOR_GROUND_STREAMS = {
                     **{f"{k}_error_pct": ("%", "", f"relative radius error, {d}") for k, d in (
                         ("thesis", "thesis method"), ("ours", "our method"), ("configured", "configured method"))}},
 }
+
+_NE = "north, east of the NED world"
+
+#: the MAV target geo-location (sim/geoloc_loop.py, seed 002 ch. 7)
+GEOLOC_STREAMS = {
+    "truth": {**{k: v for k, v in RMAX_STREAMS["truth"].items() if k != "body_rates"},
+              "airspeed": ("m/s", "", "true airspeed")},
+    "telemetry": {"position": ("m", NED, "GPS position in the telemetry (noise + bias)"),
+                  "heading": ("rad", "from north, clockwise", "GPS-derived heading (course over ground) in the telemetry"),
+                  "height": ("m", "above the take-off ground", "barometric height in the telemetry"),
+                  "ground_speed": ("m/s", "", "GPS ground speed in the telemetry"),
+                  "true_yaw": ("rad", "from north, clockwise", "true yaw of the airframe"),
+                  "true_course": ("rad", "from north, clockwise", "true course over ground")},
+    "control": {"mode": ("text", "", "mission mode"),
+                "psidot_ref": ("rad/s", "", "heading-rate reference of the figure-eight guidance"),
+                "phi_ref": ("rad", "", "bank reference"),
+                "cross_track": ("m", "horizontal", "cross-track error from the figure-eight path")},
+    "frame": {"visible": ("bool", "", "the target is inside the frame (40 px margin)"),
+              "true_pixel": ("px", "image (u right, v down)", "true image position of the target"),
+              "cam_roll_error": ("rad", "", "gimbal residual roll from nadir"),
+              "cam_pitch_error": ("rad", "", "gimbal residual pitch from nadir"),
+              "position": ("m", NED, "true aircraft position at the frame"),
+              "yaw": ("rad", "from north, clockwise", "true yaw at the frame")},
+    "click": {"pixel": ("px", "image (u right, v down)", "the operator's click on the target"),
+              "true_pixel": ("px", "image (u right, v down)", "true image position of the target")},
+    "target": {"position": ("m", _NE, "true target position")},
+    "sample": {"reg": ("m", _NE, "target position from registration (NaN when it failed)"),
+               "map": ("m", _NE, "target position from the map-based ray to flat ground"),
+               "est_reg": ("m", _NE, "RLS estimate from the registration samples so far"),
+               "est_map": ("m", _NE, "RLS estimate from the map-based samples so far"),
+               "ok": ("bool", "", "the registration succeeded"),
+               "reg_used": ("bool", "", "the RLS took the registration sample (quality and chi-square gate)"),
+               "quality": ("1", "", "match quality of the registration (peak sharpness and ambiguity)"),
+               "peak": ("1", "", "correlation peak"),
+               "hough": ("bool", "", "Algorithm 1's Hough rotation was applied"),
+               "heading_tel": ("rad", "from north, clockwise", "telemetry heading"),
+               "heading_used": ("rad", "from north, clockwise", "heading used after the alignment"),
+               "height_used": ("m", "above ground", "height used to scale the frame"),
+               "gps": ("m", _NE, "telemetry GPS position"),
+               "uv": ("px", "image (u right, v down)", "tracked target pixel")},
+}

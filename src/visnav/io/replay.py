@@ -1,0 +1,335 @@
+"""``visnav replay``: run a navigator on a recorded flight and write the usual run directory.
+
+The measurements of a ``Recording`` go to the navigator in delivery order; the recorded mission
+requests (``commands.csv``) are replayed at their place in that order, and the estimate is asked at the
+recorded times (a simulated recording) or at a fixed output rate (a recording without ``estimate``
+rows). A navigator is a registered builder (``@register_navigator``): adding the deck or CONDOR
+navigator later is one function that takes the recording and returns an object with ``update``,
+``estimate`` and ``health``.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from visnav.io.recording import STREAM_NAMES, Recording, RecordingError
+from visnav.sim.log import FlightLog, register_stream
+
+register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv)"),
+                args=("text", "JSON", "its arguments: {\"args\": [...], \"kwargs\": {...}}"))
+
+Builder = Callable[["Recording", "ReplayOptions", Callable], object]
+NAVIGATORS: dict[str, tuple[Builder, tuple[str, ...]]] = {}
+
+
+def register_navigator(name: str, needs: tuple[str, ...]):
+    """Register ``builder(recording, options, recorder) -> navigator``; ``needs`` are the streams it needs."""
+
+    def deco(fn: Builder) -> Builder:
+        NAVIGATORS[name] = (fn, needs)
+        return fn
+
+    return deco
+
+
+@dataclass
+class ReplayOptions:
+    map_path: str | None = None  # reference map (GeoImage: PNG/JPEG + world file) where the navigator needs one
+    output_rate_hz: float = 10.0  # estimate rate when the recording has no recorded estimate queries
+    time_offset: str | float | None = None  # None: camera.yaml's; "auto": gyro/camera cross-correlation; seconds
+    scenario_overrides: list[str] = field(default_factory=list)
+    gps_until_s: float | None = None  # GPS samples describing later instants are withheld from the navigator
+    gps_reference: bool = True  # without truth.csv, score against the GPS fixes
+
+
+@dataclass
+class ReplayResult:
+    log: FlightLog
+    metrics: dict
+    scenario: object
+    notes: list[str]
+    frame: str = "NED world, body FRD"
+
+
+def scenario_of(rec: Recording, default: str, overrides=()):
+    """The recording's resolved scenario (``scenario.toml``), else the built-in ``default`` one."""
+    import tomllib
+
+    from visnav.scenarios.schema import apply_overrides, load_scenario, validate
+
+    if rec.scenario_toml is None:
+        return load_scenario(default, list(overrides))
+    try:
+        data = tomllib.loads(rec.scenario_toml)
+    except tomllib.TOMLDecodeError as exc:
+        raise RecordingError(f"{rec.path / 'scenario.toml'}: not valid TOML ({exc})") from None
+    return validate(apply_overrides(data, list(overrides)))
+
+
+# ------------------------------------------------------------------------------------ navigators
+@register_navigator("palace", needs=("imu", "attitude", "gps"))
+def _palace(rec: Recording, opts: ReplayOptions, recorder):
+    from visnav.navigation.palace import PalaceNavigator
+
+    sc = scenario_of(rec, "palace-landing", opts.scenario_overrides)
+    if rec.camera is not None:
+        camera, mount = rec.camera.camera, rec.camera.mount
+    else:  # no frames and no camera.yaml: GPS / inertial only; the scenario's camera stands in for MPE's
+        from visnav.geometry.camera import PinholeCamera
+        from visnav.geometry.mounts import FixedMount
+
+        c = sc.sensors.camera
+        camera = PinholeCamera.ideal(c.width, c.height, c.focal_px)
+        mount = FixedMount.depressed(c.depression_deg, lever_arm=tuple(c.lever_arm_m))
+        rec.notes.append("no camera.yaml and no frames: PALACE runs on GPS / inertial only")
+    return PalaceNavigator(sc.navigation, camera, mount, recorder=recorder), sc
+
+
+@register_navigator("witas", needs=("imu", "attitude", "gps", "baro", "frames"))
+def _witas(rec: Recording, opts: ReplayOptions, recorder):
+    from visnav.mission.witas import make_ground, mission_rngs, reference_map
+    from visnav.navigation.witas import WitasNavigator
+
+    sc = scenario_of(rec, "witas-homing", opts.scenario_overrides)
+    cfg = sc.mission
+    if opts.map_path:
+        from visnav.world.maps import GeoImage
+
+        try:
+            reference = GeoImage.load(opts.map_path)
+        except (OSError, ValueError) as exc:
+            raise RecordingError(f"{opts.map_path}: cannot load the reference map ({exc})") from None
+    elif rec.scenario_toml is not None:  # a simulated recording: the same degraded map as the closed loop
+        reference = reference_map(cfg, make_ground(cfg, sc.run.seed)[0])
+    else:
+        raise RecordingError(f"{rec.path}: the witas navigator needs a reference map: give --map MAP "
+                             "(PNG/JPEG + world file)")
+    nav = WitasNavigator(cfg.filter, rec.camera.camera.K, rec.camera.mount, reference, recorder=recorder,
+                         rng=mission_rngs(sc.run.seed)[4])
+    return nav, sc
+
+
+def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
+    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``): gyro of ``imu.csv`` against
+    the frames' rotation; the ground is assumed below the body (the camera's view of body down)."""
+    from visnav.estimation.timesync import estimate_offset, frame_rotation_angles
+
+    rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
+    s = rec.streams["imu"]
+    gyro = np.column_stack([s["gx_radps"], s["gy_radps"], s["gz_radps"]])
+    decoded = [(float(t), rec.image(i)[0]) for i, t in enumerate(rec.streams["frames"]["t_s"])]
+    decoded = [(t, im) for t, im in decoded if im is not None]
+    cam = rec.camera
+    down = cam.mount.R_cam_to_body.T @ np.array([0.0, 0.0, 1.0])
+    pairs, ang = frame_rotation_angles([t for t, _ in decoded], (im for _, im in decoded), cam.camera.K, down)
+    try:
+        return estimate_offset(s["t_s"], gyro, pairs, ang, max_offset_s=max_offset_s)
+    except ValueError as exc:
+        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {exc}") from None
+
+
+# ------------------------------------------------------------------------------------ the replay
+def _events(rec: Recording, out_rate: float):
+    """Measurements and commands merged in delivery order: arrays (kind, a, b, time) with kind 0 =
+    measurement (a = stream index, b = row), 1 = recorded command (b = row), 2 = estimate at ``time``."""
+    tr, sq, si, ri = rec.delivery()
+    kinds, a, b, times, seqs = [np.zeros(len(tr), int)], [si], [ri], [tr], [sq]
+    c = rec.commands
+    has_estimates = c is not None and np.any(c["method"] == "estimate")
+    if c is not None and len(c["t_s"]):
+        n = len(c["t_s"])
+        kinds.append(np.ones(n, int))
+        a.append(np.zeros(n, int))
+        b.append(np.arange(n))
+        times.append(c["t_s"])
+        seqs.append(c["seq"] if "seq" in c else np.full(n, np.inf))
+    if not has_estimates and len(tr):
+        q = np.arange(np.ceil(tr[0] * out_rate), np.floor(tr[-1] * out_rate) + 1) / out_rate
+        kinds.append(np.full(len(q), 2))
+        a.append(np.zeros(len(q), int))
+        b.append(np.arange(len(q)))
+        times.append(q)
+        seqs.append(np.full(len(q), np.inf))  # after the samples delivered at the same instant
+    kinds, a, b, times, seqs = (np.concatenate(x) for x in (kinds, a, b, times, seqs))
+    o = np.lexsort((np.arange(len(times)), seqs, times))
+    return kinds[o], a[o], b[o], times[o]
+
+
+def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, progress=None) -> ReplayResult:
+    """Run ``navigator`` on ``rec``; an error inside the replay stops it and keeps what it has
+    (``metrics["error"]``)."""
+    opts = opts or ReplayOptions()
+    if navigator not in NAVIGATORS:
+        raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))} "
+                             "(deck and CONDOR follow issue #13)")
+    builder, needs = NAVIGATORS[navigator]
+    rec.require(needs, navigator)
+    notes: list[str] = []
+    metrics: dict = {}
+    if opts.time_offset == "auto":
+        est = offset_from_recording(rec)
+        rec.time_offset_s = est.offset_s
+        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
+        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
+                     f"cross-correlation, peak {est.peak:.2f})")
+    elif opts.time_offset is not None:
+        rec.time_offset_s = float(opts.time_offset)
+        metrics["time_offset_s"] = rec.time_offset_s
+    log = FlightLog()
+    nav, sc = builder(rec, opts, log.record)
+    kinds, a, b, times = _events(rec, opts.output_rate_hz)
+    wall0 = time.perf_counter()
+    counts, error = _feed(rec, nav, navigator, log, notes, (kinds, a, b, times), opts, progress)
+    wall = time.perf_counter() - wall0
+    reference = _log_reference(rec, log, opts)
+    h = nav.health(None)
+    dur = float(times[-1] - times[0]) if len(times) else 0.0
+    metrics |= {"frames_used": counts["frames"], "frames_dropped": int(rec.skipped.get("frames", 0)),
+                "frames_in_recording": rec.count("frames"), "imu_samples": counts["imu"],
+                "samples_rejected": int(getattr(h, "rejected_samples", 0))}
+    if opts.gps_until_s is not None:
+        metrics["gps_withheld"] = counts["gps_withheld"]
+    if reference:
+        metrics["reference"] = reference
+        metrics |= _accuracy(log, True)
+    metrics |= {"replay_wall_s": wall, "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
+                "flight_duration_s": dur}
+    if counts.get("interrupted"):
+        metrics["interrupted"] = True
+        notes.append("interrupted (Ctrl-C): the run directory holds the replay up to there")
+    if error:
+        metrics["error"] = error
+        notes.append(f"the replay stopped early: {error} (what it had is kept)")
+    notes += rec.notes
+    if rec.skipped:
+        notes.append(f"skipped during the replay: {', '.join(f'{v} {k}' for k, v in rec.skipped.items())}")
+    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes)
+
+
+def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict, str | None]:
+    """The replay loop: samples to ``update``, recorded requests to their methods, estimates to the log."""
+    kinds, a, b, times = events
+    c = rec.commands
+    counts = {"frames": 0, "imu": 0, "gps_withheld": 0}
+    by_index = {STREAM_NAMES.index(s): s for s in rec.streams}
+    cut = opts.gps_until_s if opts.gps_until_s is not None else np.inf
+    k, t = 0, float("nan")
+    try:
+        for k in range(len(kinds)):
+            t = float(times[k])
+            if kinds[k] == 0:
+                name = by_index[a[k]]
+                m = rec.sample(name, int(b[k]))
+                if m is None:
+                    continue
+                if name == "gps" and m.t > cut:
+                    counts["gps_withheld"] += 1
+                    continue
+                if name in ("frames", "imu"):
+                    counts[name] += 1
+                nav.update(m)
+            elif kinds[k] == 2 or c["method"][b[k]] == "estimate":
+                e = nav.estimate(t)
+                log.record("estimate", t, position=e.position, velocity=e.velocity, euler=e.attitude,
+                           source=e.source, valid=e.valid)
+            elif c["method"][b[k]] == "health":
+                h = nav.health(t)
+                log.record("status", t, source=h.source, coherence=h.coherence, tracking=h.tracking,
+                           mpe_rate_hz=h.mpe_rate_hz, laser_ok=h.laser_ok)
+            else:
+                meth = str(c["method"][b[k]])
+                args = json.loads(c["args"][b[k]]) if "args" in c and c["args"][b[k]] else {}
+                fn = getattr(nav, meth, None)
+                if fn is None:
+                    notes.append(f"commands.csv: {meth!r} is not a {navigator} navigator request; skipped")
+                    continue
+                fn(*args.get("args", []), **args.get("kwargs", {}))
+                log.record("nav_request", t, method=meth, args=json.dumps(args))
+            if progress is not None and k % 2000 == 0:
+                progress(k, len(kinds))
+    except KeyboardInterrupt:  # Ctrl-C: keep what the replay has
+        counts["interrupted"] = True
+    except Exception as exc:  # keep what the replay has
+        return counts, f"{type(exc).__name__} at t={t:.3f} s (event {k} of {len(kinds)}): {exc}"
+    return counts, None
+
+
+def _log_reference(rec: Recording, log: FlightLog, opts: ReplayOptions) -> str | None:
+    """truth.csv into the log's ``truth`` stream; without one, the GPS fixes (all of them, also those
+    withheld from the navigator by ``gps_until_s``) serve as the reference. Returns its name."""
+    tr, name = rec.truth, "truth.csv"
+    if tr is None and "gps" in rec.streams and opts.gps_reference:
+        tr, name = rec.streams["gps"], "gps.csv"
+    if tr is None:
+        return None
+    n = len(tr["t_s"])
+    col = lambda keys, fill: np.column_stack([tr[k] if k in tr else np.full(n, fill) for k in keys])  # noqa: E731
+    p, v, e = col(("n_m", "e_m", "d_m"), np.nan), col(("vn_mps", "ve_mps", "vd_mps"), np.nan), \
+        col(("roll_rad", "pitch_rad", "yaw_rad"), 0.0)
+    for i, t in enumerate(tr["t_s"]):
+        log.record("truth", t, position=p[i], velocity=v[i], euler=e[i])
+    return name
+
+
+def trajectories(log: FlightLog, frame: str = "NED world, body FRD"):
+    """(valid estimates, truth) as ``Trajectory`` (truth None when the recording has none)."""
+    from scipy.spatial.transform import Rotation
+
+    from visnav.analysis.trajectory_eval import Trajectory
+
+    def traj(s, name, mask=None):
+        e = np.asarray(s["euler"], float).reshape(-1, 3)
+        p = np.asarray(s["position"], float).reshape(-1, 3)
+        t = np.asarray(s["t"], float)
+        if mask is not None:
+            t, p, e = t[mask], p[mask], e[mask]
+        q = Rotation.from_euler("ZYX", e[:, ::-1]).as_quat() if len(t) else np.zeros((0, 4))
+        return Trajectory(t, p, q, name, frame)
+
+    es = log.get("estimate")
+    valid = np.asarray(es["valid"], bool) & np.all(np.isfinite(np.asarray(es["position"], float)), axis=1) \
+        if es else None
+    est = traj(es, "estimate", valid) if es else None
+    tr = log.get("truth")
+    return est, (traj(tr, "truth") if tr else None)
+
+
+def _accuracy(log: FlightLog, has_truth: bool) -> dict:
+    from visnav.analysis.trajectory_eval import TrajectoryError, evaluate
+
+    est, ref = trajectories(log)
+    if not has_truth or est is None or ref is None or len(est) == 0:
+        return {}
+    try:
+        s = evaluate(ref, est, alignment="none", max_diff=0.02).summary()
+    except TrajectoryError as exc:
+        return {"ate_note": str(exc)}
+    return {"ate_rmse_m": s["ate_rmse_m"], "ate_max_m": s["ate_max_m"], "rpe_rmse_m": s["rpe_rmse_m"]}
+
+
+def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title: str = "visnav replay") -> Path:
+    """log.h5, scenario.toml, estimate.tum (valid estimates only; the header names the frame), truth.tum,
+    metrics.json, report.html."""
+    from visnav.io.runs import _jsonable
+    from visnav.io.trajectory_export import write_tum_file
+    from visnav.scenarios.schema import to_toml
+
+    result.log.to_hdf5(out_dir / "log.h5", attrs={"replay": 1})
+    (out_dir / "scenario.toml").write_text(to_toml(result.scenario))
+    (out_dir / "metrics.json").write_text(json.dumps(_jsonable(result.metrics), indent=2) + "\n")
+    est, ref = trajectories(result.log, result.frame)
+    if est is not None:
+        write_tum_file(out_dir / "estimate.tum", est, result.frame)
+    if ref is not None:
+        write_tum_file(out_dir / "truth.tum", ref, result.frame)
+    if report:
+        from visnav.analysis.replay_report import write_replay_report
+
+        write_replay_report(result, out_dir / "report.html", title)
+    return out_dir

@@ -1,0 +1,41 @@
+"""Conversions of raw sensor columns into the recording's stream columns (folder CSVs and logs alike).
+
+* GPS in latitude / longitude / altitude -> local NED about the first fix (``geometry/frames.py``),
+  velocity from the receiver when given, else central differences of the positions;
+* magnetometer field vectors (body FRD, any unit) -> tilt-compensated heading with the recording's
+  attitude (the vectorised form of ``estimation/eskf.heading_from_mag``), declination added.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def headings_from_mag(mag: np.ndarray, roll, pitch, declination: float = 0.0) -> np.ndarray:
+    """Tilt-compensated heading [rad] of body-frame field vectors, vectorised ``eskf.heading_from_mag``."""
+    m = np.asarray(mag, float).reshape(-1, 3)
+    cr, sr, cp, sp = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch)
+    mx = m[:, 0] * cp + m[:, 1] * sr * sp + m[:, 2] * cr * sp
+    my = m[:, 1] * cr - m[:, 2] * sr
+    return np.angle(np.exp(1j * (np.arctan2(-my, mx) + declination)))
+
+
+def heading_stream(t, mag, att: dict, declination: float = 0.0) -> dict:
+    """``magnetometer`` columns from field vectors at ``t``, roll and pitch interpolated from ``att``."""
+    roll = np.interp(t, att["t_s"], att["roll_rad"])
+    pitch = np.interp(t, att["t_s"], att["pitch_rad"])
+    return {"t_s": np.asarray(t, float), "heading_rad": headings_from_mag(mag, roll, pitch, declination)}
+
+
+def gps_stream(t, lat, lon, alt, vel=None, origin=None) -> dict:
+    """``gps`` columns (NED about ``origin`` = (lat, lon, alt), default the first fix)."""
+    from visnav.geometry.frames import LocalTangentPlane
+
+    t = np.asarray(t, float)
+    o = origin if origin is not None else (lat[0], lon[0], alt[0])
+    ned = LocalTangentPlane(*o).geodetic_to_ned(lat, lon, alt)
+    if vel is None:  # no velocity from the receiver: central differences of the positions
+        vel = np.column_stack([np.gradient(ned[:, j], t) for j in range(3)]) if len(t) > 1 else np.zeros((len(t), 3))
+    vel = np.asarray(vel, float)
+    return {"t_s": t, "n_m": ned[:, 0], "e_m": ned[:, 1], "d_m": ned[:, 2], "vn_mps": vel[:, 0], "ve_mps": vel[:, 1],
+            "vd_mps": vel[:, 2]}

@@ -1,0 +1,124 @@
+"""``visnav record``: fly a scenario's closed loop and write what its navigator saw as a recording.
+
+The loop is not rewritten: the navigator is wrapped in ``RecordingNavigator``, a proxy that passes
+everything through and logs, with one global sequence number, every ``update(m)`` (the measurement and
+the loop time it was delivered at), every mission request (``request_tracking``, ``set_source``, ...,
+with its arguments) and every ``estimate(t)`` / ``health(t)`` query. ``io/replay.py`` feeds them back
+in the same order, which is what makes a replay reproduce the closed loop's estimates exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from visnav.io.recording import RecordingError
+from visnav.io.recording_writer import RecordingWriter
+from visnav.scenarios.schema import Scenario, to_toml
+
+#: what a mission may ask a navigator (logged with arguments and replayed); everything else passes through
+REQUESTS = frozenset({"request_tracking", "request_tracking_rebase", "set_source", "stop_tracking", "command",
+                      "initialize"})
+
+
+class RecordingNavigator:
+    """Transparent proxy around a navigator that logs its inputs into a ``RecordingWriter``."""
+
+    def __init__(self, inner, writer: RecordingWriter, clock: Callable[[], float]):
+        self._inner = inner
+        self._writer = writer
+        self._clock = clock
+        self.recording = True
+
+    @property
+    def inner(self):
+        return self._inner
+
+    def update(self, m) -> None:
+        if self.recording:
+            self._writer.add(m, self._clock(), self._writer.next_seq())
+        self._inner.update(m)
+
+    def estimate(self, t: float):
+        if self.recording:
+            self._writer.add_command(t, self._writer.next_seq(), "estimate")
+        return self._inner.estimate(t)
+
+    def health(self, t: float | None = None):
+        if self.recording and t is not None:
+            self._writer.add_command(t, self._writer.next_seq(), "health")
+        return self._inner.health(t)
+
+    def __getattr__(self, name):
+        attr = getattr(self._inner, name)
+        if name not in REQUESTS or not callable(attr):
+            return attr
+
+        def call(*args, **kwargs):
+            if self.recording:
+                self._writer.add_command(self._clock(), self._writer.next_seq(), name, args, kwargs)
+            return attr(*args, **kwargs)
+
+        return call
+
+
+@dataclass
+class RecordResult:
+    out_dir: Path
+    run: object  # the closed loop's RunResult (its log holds the estimates the replay must reproduce)
+    counts: dict
+
+
+def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool = False) -> RecordResult:
+    """Fly ``scenario`` in the R-MAX loop (``palace``, ``hover``, ``witas-homing``, ``pfcm``) and write
+    the recording to ``out_dir`` (refused when it holds files, unless ``force``: then the recording's own
+    files are removed first); returns the closed-loop result beside the folder. Ctrl-C stops the flight
+    and the recording keeps what it had (``result.run.interrupted``)."""
+    from visnav.io.recording import COMMANDS, STREAMS, TRUTH
+    from visnav.io.runs import OutputDirError, prepare_out_dir
+    from visnav.sim.loop import Simulation
+    from visnav.sim.missions import SIMULATIONS
+
+    kind = scenario.mission.type
+    if kind in SIMULATIONS:
+        raise RecordingError(f"visnav record flies the R-MAX loop (palace-landing, witas-homing, ...); mission.type "
+                             f"{kind!r} has a loop of its own and no navigator interface yet (issue #13)")
+    own = tuple(s.file for s in STREAMS.values()) + (TRUTH.file, COMMANDS.file, "camera.yaml", "scenario.toml")
+    try:
+        prepare_out_dir(out_dir, force=force, clear=own)
+    except OutputDirError as exc:
+        raise RecordingError(str(exc)) from None
+    if force:
+        for f in Path(out_dir, "frames").glob("*.png"):
+            f.unlink()
+    writer = RecordingWriter(out_dir)
+    proxies: list[RecordingNavigator] = []
+    holder: dict = {}
+
+    def clock() -> float:  # the loop time of the current dynamics step (t = k dt, as the loop computes it)
+        sim = holder["sim"]
+        latest = sim.history.latest
+        return 0.0 if latest is None else int(round(latest.t / sim.dt)) * sim.dt
+
+    def wrap(nav):
+        p = RecordingNavigator(nav, writer, clock)
+        proxies.append(p)
+        return p
+
+    sim = Simulation(scenario, navigator_wrapper=wrap)
+    holder["sim"] = sim
+    result = sim.run(progress=progress)
+    for p in proxies:  # the metrics' queries after the flight are not part of it
+        p.recording = False
+    tr = result.log.get("truth")
+    truth = None
+    if tr:
+        p, v, e = (np.asarray(tr[k], float).reshape(-1, 3) for k in ("position", "velocity", "euler"))
+        truth = {"t_s": tr["t"], "n_m": p[:, 0], "e_m": p[:, 1], "d_m": p[:, 2], "vn_mps": v[:, 0],
+                 "ve_mps": v[:, 1], "vd_mps": v[:, 2], "roll_rad": e[:, 0], "pitch_rad": e[:, 1], "yaw_rad": e[:, 2]}
+    writer.close(sim.camera_model, sim.mount, 0.0, truth, to_toml(scenario))
+    counts = {k: len(v) for k, v in writer.rows.items()} | {"commands": len(writer.commands)}
+    return RecordResult(Path(out_dir), result, counts)
