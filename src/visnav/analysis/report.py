@@ -104,7 +104,7 @@ def plots(log, point=None) -> list[tuple[str, str]]:
 #: ``PUBLISHED`` (metric -> seed figure) and ``PUBLISHED_SOURCE``; other missions get the PALACE plots
 MISSION_REPORTS = {"pfcm": "visnav.analysis.path_metrics", "witas-homing": "visnav.analysis.witas_metrics",
                    "condor": "visnav.analysis.condor_report",
-                   "deck": "visnav.analysis.deck_report"}
+                   "deck": "visnav.analysis.deck_report", "pad-landing": "visnav.analysis.pad_report"}
 
 
 def _report_module(sc):

@@ -23,6 +23,7 @@ from visnav.scenarios.config_deck import DeckMissionConfig
 from visnav.scenarios.base import ScenarioError, _M  # noqa: F401  (re-exported: one base for every config)
 from visnav.scenarios.config_witas import WitasMissionConfig
 from visnav.scenarios.config_condor import CondorMissionConfig
+from visnav.scenarios.config_pad import PadMissionConfig
 
 BUILTIN_DIR = Path(__file__).resolve().parent
 
@@ -278,7 +279,8 @@ class PfcmMissionConfig(_M):
 # flies another vehicle keeps its own config module (scenarios/config_<mission>.py, built on
 # scenarios/base.py) and its own simulation class (registered in sim/missions.py SIMULATIONS).
 MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig,
-                                                WitasMissionConfig, CondorMissionConfig, DeckMissionConfig)
+                                                WitasMissionConfig, CondorMissionConfig, DeckMissionConfig,
+                                                PadMissionConfig)
 MissionConfig = (
     Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]
     if len(MISSION_CONFIGS) > 1
