@@ -15,7 +15,7 @@ from visnav.scenarios.base import _M
 
 
 class PadGeometryConfig(_M):
-    legs_m: list[float] = Field(default_factory=lambda: [3.6, 1.8, 0.9, 0.45])
+    legs_m: list[float] = Field(default_factory=lambda: [4.4, 2.2, 1.1, 0.55])
     ring_ratio: list[float] = Field(default_factory=lambda: [0.20, 0.15, 0.20, 0.15])
     inner_ratio: list[float] = Field(default_factory=lambda: [0.50, 0.50, 0.65, 0.65])
     resolution_m: float = Field(0.002, ge=0.0005, le=0.05, description="board texture [m/px]")
@@ -68,7 +68,7 @@ class PadFilterConfig(_M):
     accel_hz: float = Field(66.0, ge=10, le=1000)
     output_hz: float = Field(50.0, ge=1, le=1000)
     gyro_bias_states: bool = Field(True, description="15 states (gyro biases) instead of appendix A's 12")
-    accel_noise: float = Field(0.003, ge=0, le=5, description="m/s^2/sqrt(Hz)")
+    accel_noise: float = Field(0.008, ge=0, le=5, description="m/s^2/sqrt(Hz)")
     gyro_noise: float = Field(3e-4, ge=0, le=1, description="rad/s/sqrt(Hz)")
     accel_bias_noise: float = Field(2e-4, ge=0, le=1)
     gyro_bias_noise: float = Field(1e-5, ge=0, le=1)

@@ -260,6 +260,14 @@ class PadDetector:
             return PadDetection(rings, None, "ambiguous configuration" if ambiguous else "no configuration")
         k = min(matched)
         rms, tri, perm, uv, (R, t) = matched[k]
+        pose = self.refine(k, uv, R, t)
+        if pose is None:
+            return PadDetection(rings, None, "singular pose")
+        pc = self.K @ pose.t  # image of the pad centre (X = 0)
+        return PadDetection(rings, pose, "", pc[:2] / pc[2], {kk: v[0] for kk, v in matched.items()})
+
+    def refine(self, k: int, uv: np.ndarray, R: np.ndarray, t: np.ndarray) -> PadPose | None:
+        """Gauss-Newton pose of configuration ``k`` from its 27 image points and the covariance."""
         X = self._plane[k][0]
         R, t, J, rss = refine_pose(R, t, X, uv, self.K)
         dof = max(2 * len(X) - 6, 1)
@@ -267,10 +275,13 @@ class PadDetector:
         try:
             cov6 = sigma**2 * np.linalg.inv(J.T @ J)
         except np.linalg.LinAlgError:
-            return PadDetection(rings, None, "singular pose")
+            return None
         Jc = np.hstack([-R.T @ skew(t), -R.T])
-        cov = Jc @ cov6 @ Jc.T
-        c = -R.T @ t
-        pc = self.K @ t  # image of the pad centre (X = 0)
-        pose = PadPose(c, R, t, cov, cov6, k, float(np.sqrt(rss / len(X))), float(sigma))
-        return PadDetection(rings, pose, "", pc[:2] / pc[2], {kk: v[0] for kk, v in matched.items()})
+        return PadPose(-R.T @ t, R, t, Jc @ cov6 @ Jc.T, cov6, k, float(np.sqrt(rss / len(X))), float(sigma))
+
+    def pose_from_rings(self, rings: list[Ring], k: int) -> PadPose | None:
+        """Pose from the three rings of configuration ``k`` given in the order A, B, C."""
+        X, keys = self._plane[k]
+        uv = self.image_points(rings, keys, (0, 1, 2))
+        pt = pose_from_homography(normalized_dlt(X[:, :2], uv), self.K)
+        return None if pt is None else self.refine(k, uv, *pt)
