@@ -144,7 +144,10 @@ class PadNavigator:
         e_f = look[1] if look is not None else (self.ahrs if self.ahrs is not None else dcm_to_euler(C_bn_vis))
         C_bn = euler_to_dcm(e_f)
         p_vis = pose.position - C_bn @ offset
-        R = pose.cov + np.eye(3) * self.cfg.position_floor_m**2
+        # floor: a constant plus a part proportional to the range (the 27 points share 6 ellipses,
+        # so a size error of the fits moves them together: a scale error J^T J does not see)
+        floor = self.cfg.position_floor_m + self.cfg.range_floor * float(np.linalg.norm(pose.position))
+        R = pose.cov + np.eye(3) * floor**2
         accepted, nis = False, float("nan")
         if self.kf is None:
             self._start(now if math.isfinite(now) else f.t, p_vis)
