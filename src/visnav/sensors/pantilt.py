@@ -46,15 +46,27 @@ class PanTiltUnit:
     def angles(self) -> np.ndarray:
         return np.array([self.mount.pan, self.mount.tilt])
 
+    def _axis(self, a: float, target: float, h: float) -> float:
+        """Exact servo motion over h: at the rate limit while the error exceeds max_rate / gain,
+        then an exponential approach e' = -gain e."""
+        e = target - a
+        e_lin = self.max_rate / self.gain
+        if abs(e) > e_lin:
+            t_lin = (abs(e) - e_lin) / self.max_rate
+            if h <= t_lin:
+                return a + math.copysign(self.max_rate * h, e)
+            h -= t_lin
+            e = math.copysign(e_lin, e)
+        return target - e * math.exp(-self.gain * h)
+
     def advance(self, t: float) -> None:
         """Move the servos from the last time to ``t`` (no-op for an earlier t)."""
-        step = 1e-3
-        while self.t < t - 1e-12:
-            h = min(step, t - self.t)
-            a = self.angles
-            rate = np.clip(self.gain * (self.target - a), -self.max_rate, self.max_rate)
-            self.mount.set(*(a + rate * h))
-            self.t += h
+        if t <= self.t:
+            return
+        h = t - self.t
+        a = self.angles
+        self.mount.set(self._axis(a[0], self.target[0], h), self._axis(a[1], self.target[1], h))
+        self.t = t
 
     def point_at(self, t: float, pan: float, tilt: float) -> None:
         """New servo targets from ``t`` on (clamped to the limits)."""
