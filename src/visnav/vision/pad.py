@@ -181,28 +181,35 @@ class PadDetector:
         longest side, and B, C follow from the orientation (seen from above, (B - A) x (C - A) > 0
         in image axes as in north-east axes: no mirror between them)."""
         st = self.shape_tol
+        cen = np.array([r.centre for r in rings])
+        size = np.array([r.size for r in rings])
+        ratio = np.array([r.ratio for r in rings])
         for cfg in self.configs:
-            rl = self.layout.ring_ratio[cfg.index]
-            cand = [i for i, r in enumerate(rings) if abs(r.ratio - self.layout.inner_ratio[cfg.index]) < self.ratio_tol]
-            for tri in itertools.combinations(cand, 3):
-                sizes = [rings[i].size for i in tri]
-                if max(sizes) > self.size_ratio_max * min(sizes):
-                    continue
-                m = np.array([rings[i].centre for i in tri])
-                d = np.array([np.linalg.norm(m[1] - m[2]), np.linalg.norm(m[0] - m[2]), np.linalg.norm(m[0] - m[1])])
-                a = int(np.argmax(d))  # opposite the hypotenuse: the right angle
-                legs = np.delete(d, a)
-                if not (max(legs) < st * min(legs) and np.sqrt(2) / st < d[a] / legs.mean() < np.sqrt(2) * st):
-                    continue
-                if not 1.0 / self.size_tol < np.mean(sizes) / (rl * legs.mean()) < self.size_tol:
-                    continue
-                b, c = [j for j in range(3) if j != a]
-                u, v = m[b] - m[a], m[c] - m[a]
+            cand = np.flatnonzero(np.abs(ratio - self.layout.inner_ratio[cfg.index]) < self.ratio_tol)
+            if len(cand) < 3:
+                continue
+            T = np.array(list(itertools.combinations(cand, 3)))
+            sz = size[T]
+            m = cen[T]  # (M, 3, 2)
+            d = np.stack([np.linalg.norm(m[:, 1] - m[:, 2], axis=1), np.linalg.norm(m[:, 0] - m[:, 2], axis=1),
+                          np.linalg.norm(m[:, 0] - m[:, 1], axis=1)], axis=1)
+            a = np.argmax(d, axis=1)
+            legs = np.sort(d, axis=1)[:, :2]
+            lm = legs.mean(axis=1)
+            hyp = d[np.arange(len(T)), a] / lm
+            fit = sz.mean(axis=1) / (self.layout.ring_ratio[cfg.index] * lm)
+            ok = ((sz.max(axis=1) <= self.size_ratio_max * sz.min(axis=1)) & (legs[:, 1] < st * legs[:, 0])
+                  & (hyp > np.sqrt(2) / st) & (hyp < np.sqrt(2) * st) & (fit > 1.0 / self.size_tol)
+                  & (fit < self.size_tol))
+            for n in np.flatnonzero(ok):
+                ai = int(a[n])
+                b, c = [j for j in range(3) if j != ai]
+                u, v = m[n, b] - m[n, ai], m[n, c] - m[n, ai]
                 if u[0] * v[1] - u[1] * v[0] < 0:
                     b, c = c, b
                 perm = [0, 0, 0]
-                perm[a], perm[b], perm[c] = 0, 1, 2
-                yield cfg, tri, tuple(perm)
+                perm[ai], perm[b], perm[c] = 0, 1, 2
+                yield cfg, tuple(int(i) for i in T[n]), tuple(perm)
 
     def _nested_copy(self, fits: list, rings: list[Ring]) -> bool:
         """Several triples fit one configuration; true when the largest is at least
