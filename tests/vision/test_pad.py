@@ -254,3 +254,18 @@ def test_extra_ring_gives_no_false_pose(scene, where):
         assert np.linalg.norm(d.pose.position - pos) < 0.05
         if where == "mirror":
             assert d.pose.config != 0  # the ambiguous configuration is never used
+
+
+def test_detection_under_shadow_and_dim_light(scene):
+    """A shadow edge across the pad (board at 45 % in it) and the frame at 55 % brightness."""
+    _, world, rng = scene
+    board = pad_board(LAYOUT, 0.002, np.random.default_rng(3), shadow=(30.0, 0.3, 0.45))
+    det = PadDetector(LAYOUT, K)
+    for h in (12.0, 3.0):
+        pos = np.array([0.1 * h, 0.05 * h, -h])
+        img = PadSceneRenderer(CAM, board, rng).render(pos, look_at(pos), world)
+        img = cv2.convertScaleAbs(img, alpha=0.55)
+        img = cv2.add(img, rng.normal(0.0, 2.0, img.shape).round().astype(np.int16), dtype=cv2.CV_8U)
+        d = det.detect(img)
+        assert d.pose is not None, d.reason
+        assert np.linalg.norm(d.pose.position - pos) < 0.003 * h + 0.002
