@@ -83,3 +83,24 @@ def test_mission_reference_sinks_over_the_pad():
 def test_bad_pad_config_is_one_line():
     with pytest.raises(ScenarioError, match="overlaps"):
         load_scenario("pad-landing", ["mission.pad.legs_m=[4.4, 3.0, 1.1, 0.55]"])
+
+
+def test_gate_holds_until_centred():
+    from visnav.measurements import Health, NavEstimate
+
+    cfg = PadMissionConfig(start_ne_m=[0.0, 0.0], start_height_m=2.0, settle_s=0.0, gate_height_m=1.3)
+    m = PadLandingMission(cfg)
+    h = Health(source="vision")
+    off = NavEstimate(t=0.0, position=np.array([0.3, 0.0, -1.3]), velocity=np.zeros(3), attitude=np.zeros(3))
+    on = NavEstimate(t=0.0, position=np.array([0.02, 0.0, -1.3]), velocity=np.zeros(3), attitude=np.zeros(3))
+    t = 0.0
+    for _ in range(60):  # 6 s off-centre: the reference stops at the gate height
+        ref, mode = m.step(t, off, h)
+        t += 0.1
+    assert mode == "gate" and ref.position[2] == pytest.approx(-1.3) and ref.velocity[2] == 0.0
+    for _ in range(12):  # centred for 1.2 s: the final descent starts
+        ref, mode = m.step(t, on, h)
+        t += 0.1
+    assert mode == "final-descent"
+    ref, _ = m.step(t, on, h)
+    assert ref.velocity[2] == pytest.approx(cfg.final_rate_mps)

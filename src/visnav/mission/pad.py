@@ -31,6 +31,7 @@ class PadLandingMission:
         self.ref_v = np.zeros(3)
         self._last_t: float | None = None
         self.touchdown_t: float | None = None
+        self._centred_since: float | None = None
 
     def start_position(self) -> np.ndarray:
         c = self.cfg
@@ -55,11 +56,22 @@ class PadLandingMission:
                 self.done = True
         elif self.mode == "settle" and t - self.t_mode >= c.settle_s:
             self._set("approach", t, "approach and descent over the pad")
-        elif self.mode in ("approach", "blind"):
-            if self.mode == "approach" and health.source == "inertial":
+        elif self.mode in ("approach", "blind", "gate", "final-descent"):
+            if self.mode in ("approach", "blind") and c.gate_height_m > 0 and -self.ref_p[2] <= c.gate_height_m + 1e-6:
+                self._set("gate", t, f"hold at {c.gate_height_m} m until centred")
+            elif self.mode == "approach" and health.source == "inertial":
                 self._set("blind", t, "no vision fix: dead reckoning")
             elif self.mode == "blind" and health.source == "vision":
                 self._set("approach", t, "vision fixes again")
+            elif self.mode == "gate":
+                err = float(np.hypot(*nav.position[:2]))
+                spd = float(np.hypot(*nav.velocity[:2]))
+                centred = err <= c.gate_tolerance_m and spd <= c.gate_tolerance_m
+                self._centred_since = (self._centred_since if self._centred_since is not None else t) \
+                    if centred else None
+                if (centred and t - self._centred_since >= c.gate_time_s) or t - self.t_mode >= c.gate_max_s:
+                    self._set("final-descent", t, f"centred within {err:.2f} m, {spd:.2f} m/s" if centred
+                              else "gate time out")
             if t > c.timeout_s:
                 self._set("abort", t, "timeout")
                 self.done = True
@@ -67,13 +79,18 @@ class PadLandingMission:
             ref = PositionReference(t=t, position=self.start_position(), velocity=np.zeros(3), source="vision")
             return ref, self.mode
         v = np.zeros(3)
-        if self.mode in ("approach", "blind"):
+        if self.mode in ("approach", "blind", "gate", "final-descent"):
             d = -self.ref_p[:2]
             n = float(np.hypot(*d))
             if n > 1e-9:
                 v[:2] = d / n * min(c.approach_speed_mps, n / max(dt, 1e-3))
             h_est = -float(nav.position[2])
             v[2] = c.final_rate_mps if h_est < c.slow_height_m else c.descent_rate_mps
+            if h_est < c.flare_height_m:
+                v[2] = c.flare_rate_mps
+            if self.mode != "final-descent" and c.gate_height_m > 0 and -self.ref_p[2] - v[2] * dt < c.gate_height_m:
+                v[2] = 0.0  # the reference stops at the gate height
+                self.ref_p[2] = -c.gate_height_m
             self.ref_p = self.ref_p + v * dt
             self.ref_p[2] = min(self.ref_p[2], 1.0)  # the reference keeps sinking until the skids touch
         self.ref_v = v
