@@ -67,7 +67,7 @@ class RingConfig:
 class PadLayout:
     """Nested configurations, largest first. Defaults: docs/pad.md (camera f = 640 px, 640x480)."""
 
-    legs_m: tuple[float, ...] = (4.4, 2.2, 1.2, 0.62)
+    legs_m: tuple[float, ...] = (4.4, 2.2, 1.2, 0.58)
     ring_ratio: tuple[float, ...] = (0.20, 0.15, 0.20, 0.15)
     inner_ratio: tuple[float, ...] = (0.50, 0.50, 0.65, 0.65)
     board_margin_m: float = 0.25

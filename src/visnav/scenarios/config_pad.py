@@ -15,7 +15,7 @@ from visnav.scenarios.base import _M
 
 
 class PadGeometryConfig(_M):
-    legs_m: list[float] = Field(default_factory=lambda: [4.4, 2.2, 1.2, 0.62])
+    legs_m: list[float] = Field(default_factory=lambda: [4.4, 2.2, 1.2, 0.58])
     ring_ratio: list[float] = Field(default_factory=lambda: [0.20, 0.15, 0.20, 0.15])
     inner_ratio: list[float] = Field(default_factory=lambda: [0.50, 0.50, 0.65, 0.65])
     resolution_m: float = Field(0.002, ge=0.0005, le=0.05, description="board texture [m/px]")
