@@ -91,7 +91,8 @@ def pad_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
         k = np.clip(k, 0, len(cov["t"]) - 1)
         same = np.abs(cov["t"][k] - est["t"][sel]) < 1e-6
         if same.any():
-            out["nees_mean"] = float(np.mean([d @ np.linalg.solve(c, d) for d, c in zip(dx[same], cov["cov"][k[same]])]))
+            pairs = zip(dx[same], cov["cov"][k[same]])
+            out["nees_mean"] = float(np.mean([d @ np.linalg.solve(c, d) for d, c in pairs]))
     ep = vis["position"] - interp_rows(vis["t"], ft["t"], ft["position"])
     out["vision_position_error_rms_m"] = float(np.sqrt(np.mean(np.sum(ep**2, axis=1))))
     out["vision_fixes"] = int(len(vis["t"]))

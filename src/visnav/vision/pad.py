@@ -134,8 +134,9 @@ def refine_pose(R, t, X, uv, K, iters: int = 6) -> tuple[np.ndarray, np.ndarray,
 
 class PadDetector:
     def __init__(self, layout: PadLayout, K: np.ndarray, *, ratio_tol: float = 0.09, size_ratio_max: float = 2.0,
-                 max_rms_px: float = 0.4, rel_rms: float = 0.004, sigma_floor_px: float = 0.1,
-                 cov_inflation: float = 2.0, shape_tol: float = 1.4, size_tol: float = 1.15, nested_ratio: float = 1.6, block: int = 51, offset: float = 30.0, min_radius_px: float = 4.0):
+                 max_rms_px: float = 0.4, rel_rms: float = 0.004, sigma_floor_px: float = 0.05,
+                 cov_inflation: float = 1.5, shape_tol: float = 1.4, size_tol: float = 1.15,
+                 nested_ratio: float = 1.6, block: int = 51, offset: float = 30.0, min_radius_px: float = 4.0):
         self.layout = layout
         self.configs = layout.configurations()
         self.K = np.asarray(K, float)
