@@ -187,11 +187,7 @@ def detect_rings(gray: np.ndarray, block: int = 51, offset: float = 30.0, min_ra
         a_out = cv2.contourArea(c)
         if a_out < np.pi * min_radius_px**2 or not 0.04 < area / a_out < 0.85:
             continue
-        # roundness 4 pi A / P^2 (1 for a circle, ~0.8 for a pixel-traced 2:1 ellipse) before fitting
-        if 4 * np.pi * a_out < 0.55 * cv2.arcLength(c, True) ** 2:
-            continue
-        co, ci = c.reshape(-1, 2), contours[best].reshape(-1, 2)  # (the first fit only seeds the refinement:
-        eo, ei = _fit(co[::max(1, len(co) // 64)]), _fit(ci[::max(1, len(ci) // 64)])  # 64 points are plenty)
+        eo, ei = _fit(c.reshape(-1, 2)), _fit(contours[best].reshape(-1, 2))
         if not (_is_ellipse(c, eo) and _is_ellipse(contours[best], ei)):
             continue
         if min(ei[2], ei[3]) < min_inner_px:
