@@ -86,6 +86,15 @@ class Frame:
 
 
 @dataclass(frozen=True)
+class PanTiltFrame(Frame):
+    """A frame from a camera on a pan-tilt unit, with the encoder angles at ``t`` [rad]
+    (pan about body z, tilt = depression below the body x-y plane; ``geometry/mounts.PanTiltMount``)."""
+
+    pan: float = 0.0
+    tilt: float = 0.0
+
+
+@dataclass(frozen=True)
 class NavEstimate:
     t: float
     position: np.ndarray

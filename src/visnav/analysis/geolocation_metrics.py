@@ -8,17 +8,6 @@ import numpy as np
 
 from visnav.analysis.metrics import finish_metrics
 
-PUBLISHED = {
-    "target_error_m": "2.3 m, RLS of the registration samples after 20-30 samples (Fig. 7.9)",
-    "map_based_error_m": "about 22 m, RLS of the map-based samples, same data (Fig. 7.11)",
-    "samples": "figure-eight at 70 m, frames with the truck saved at about 5 Hz (Figs. 7.8-7.9)",
-    "false_match_rate": "sporadic false matches on the repetitive road system (Fig. 7.8); Algorithm 1 gives "
-                        "up to 3x fewer than the telemetry heading alone (§7.3.3)",
-    "samples_to_3m": "the RLS error stabilises after 20-30 samples (Fig. 7.9)",
-    "single_frame_error_median_m": "competition flight (MAV07): one noisy frame, 4 m (§7.5)",
-    "real_time_factor": "no target in seed 002",
-}
-PUBLISHED_SOURCE = "seed 002 ch. 7 (Conte 2009)"
 
 
 def _stays_below(err: np.ndarray, limit: float) -> float:

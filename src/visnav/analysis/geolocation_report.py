@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from visnav.analysis.geolocation_metrics import PUBLISHED, PUBLISHED_SOURCE  # noqa: F401  (report interface)
 
 
 def plots(log, scenario=None) -> list[tuple[str, str]]:

@@ -159,6 +159,31 @@ CONDOR_ORBIT = [
 ]
 
 
+# ------------------------------------------------------------------------------------------- seed 002 ch. 6-7
+PAD = [
+    Published("landed", "§6.3: autonomous landings from about 20 m completed, GPS not used", limit=1, better="higher"),
+    Published("vision_lost_height_m", "Fig. 6.11: the pattern left the view at about 0.6 m; the filter carried the "
+                                      "landing (0.4-1.0 m counts as 'about')", band=(0.4, 1.0)),
+    Published("vision_velocity_error_rms_mps", "Figs. 6.6-6.8: velocity from differentiated vision noisy, most at "
+                                               "~15 m (no number)"),
+    Published("velocity_error_rms_mps", "Figs. 6.6-6.8: filter velocity low-noise and low-latency (no number)"),
+    Published("vision_attitude_error_rms_deg", "Figs. 6.9-6.10: vision roll/pitch biased by the camera platform "
+                                               "misalignment (no number)"),
+    Published("attitude_error_rms_deg", "Figs. 6.9-6.10: filter roll/pitch free of the mount bias (no number)"),
+    Published("touchdown_error_m", "not given in the thesis"),
+    Published("touchdown_speed_mps", "not given in the thesis"),
+]
+
+GEOLOCATION = [
+    Published("target_error_m", "2.3 m: RLS of the registration samples after 20-30 samples (Fig. 7.9)", limit=2.3),
+    Published("map_based_error_m", "about 22 m: RLS of the map-based samples on the same data (Fig. 7.11); "
+                                   "depends on the attitude errors of that airframe (no verdict)"),
+    Published("false_match_rate", "sporadic false matches on the repetitive road system (Fig. 7.8; no number)"),
+    Published("samples_to_3m", "the RLS error settles after 20-30 samples (Fig. 7.9)", limit=30),
+    Published("single_frame_error_median_m", "competition flight (MAV07): one noisy frame, 4 m (§7.5)", limit=4.0),
+]
+
+
 def published(sc) -> tuple[list[Published], str]:
     """The published figures for a scenario's mission, and which thesis they come from."""
     kind = getattr(sc.mission, "type", "")
@@ -172,6 +197,10 @@ def published(sc) -> tuple[list[Published], str]:
         return WITAS, SOURCES["002"]
     if kind == "deck":
         return DECK, SOURCES["003"]
+    if kind == "pad-landing":
+        return PAD, SOURCES["002"] + " ch. 6"
+    if kind == "mav-geolocation":
+        return GEOLOCATION, SOURCES["002"] + " ch. 7"
     if kind == "condor":
         return (CONDOR_GROUND if sc.mission.experiment == "ground_test" else CONDOR_ORBIT), SOURCES["004"]
     return [], ""

@@ -123,7 +123,7 @@ def plots(log, point=None) -> list[tuple[str, str]]:
 MISSION_REPORTS = {"pfcm": "visnav.analysis.path_metrics", "witas-homing": "visnav.analysis.witas_metrics",
                    "condor": "visnav.analysis.condor_report",
                    "deck": "visnav.analysis.deck_report",
-                   "mav-geolocation": "visnav.analysis.geolocation_report"}
+                   "mav-geolocation": "visnav.analysis.geolocation_report", "pad-landing": "visnav.analysis.pad_report"}
 
 
 def _report_module(sc):

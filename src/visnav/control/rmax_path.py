@@ -66,7 +66,7 @@ from visnav.control.rmax import CLIMB_GAIN, PITCH_DC, ROLL_DC, YAW_RATE_DC, desi
 from visnav.control.rmax_roll import ROLL_COMPENSATOR, RollCompensator, check_gains, roll_loop
 from visnav.guidance.pfcm import PathReference, heading_rotation
 from visnav.measurements import NavEstimate, YacsCommand
-from visnav.sim.log import register_stream
+from visnav.log_schema import register_stream
 
 register_stream("pfcm_control", phi_c=("rad", "", "roll command"), theta_c=("rad", "", "pitch command"),
                 climb_c=("m/s", "up", "climb-rate command"), yaw_rate_c=("rad/s", "", "yaw-rate command"),

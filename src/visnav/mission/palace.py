@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
-from visnav.sim.log import register_stream
+from visnav.log_schema import register_stream
 
 register_stream("reinit", x=("px", "image, OpenCV (x right)", "new point tracked after a re-initialisation"),
                 y=("px", "image, OpenCV (y down)", "new point tracked after a re-initialisation"))

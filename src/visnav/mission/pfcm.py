@@ -17,7 +17,7 @@ import numpy as np
 from visnav.guidance.hermite import HermitePath, helix_waypoints
 from visnav.guidance.pfcm import PfcmGuidance, PfcmLimits, PointHold
 from visnav.measurements import Health, NavEstimate
-from visnav.sim.log import register_stream
+from visnav.log_schema import register_stream
 
 register_stream("pfcm", **{k: ("m/s", "", d) for k, d in (
     ("v_target", "speed target v_targ = min of the three"), ("v_targ1", "accelerate / cruise / brake profile"),

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from visnav.guidance.hermite import HermitePath
-from visnav.sim.log import register_stream
+from visnav.log_schema import register_stream
 
 register_stream("note", message=("text", "", "how the scenario was set up (e.g. the loop shrunk to fit the map)"))
 register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),

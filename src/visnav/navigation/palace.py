@@ -34,7 +34,7 @@ from visnav.measurements import (
 )
 from visnav.vision.correlation import PnccTracker
 from visnav.vision.interest import forstner
-from visnav.sim.log import register_stream
+from visnav.log_schema import register_stream
 
 _NED = "NED world (origin at the scenario's home)"
 register_stream("attitude_samples", euler=("rad", "3-2-1 Euler angles (roll, pitch, yaw) of body FRD relative to NED",

@@ -38,7 +38,7 @@ from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, H
 from visnav.navigation.palace import _AttitudeHistory
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
-from visnav.sim.log import register_stream
+from visnav.log_schema import register_stream
 
 _NED = "NED world (origin at the scenario's home)"
 register_stream("vision_engaged", position=("m", _NED, "filter position when GPS was lost"),

@@ -24,6 +24,7 @@ from visnav.scenarios.base import ScenarioError, _M  # noqa: F401  (re-exported:
 from visnav.scenarios.config_witas import WitasMissionConfig
 from visnav.scenarios.config_condor import CondorMissionConfig
 from visnav.scenarios.config_geolocation import GeolocationMissionConfig
+from visnav.scenarios.config_pad import PadMissionConfig
 
 BUILTIN_DIR = Path(__file__).resolve().parent
 
@@ -280,7 +281,7 @@ class PfcmMissionConfig(_M):
 # scenarios/base.py) and its own simulation class (registered in sim/missions.py SIMULATIONS).
 MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig,
                                                 WitasMissionConfig, CondorMissionConfig, DeckMissionConfig,
-                                                GeolocationMissionConfig)
+                                                GeolocationMissionConfig, PadMissionConfig)
 MissionConfig = (
     Annotated[Union[MISSION_CONFIGS], Field(discriminator="type")]  # type: ignore[valid-type]
     if len(MISSION_CONFIGS) > 1

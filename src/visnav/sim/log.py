@@ -13,32 +13,11 @@ from __future__ import annotations
 
 from collections import defaultdict
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 
 
-class Field(NamedTuple):
-    unit: str
-    frame: str = ""
-    description: str = ""
-
-
-#: stream -> field -> Field, from the components that record through a recorder (``register_stream``)
-STREAMS: dict[str, dict[str, Field]] = {}
-#: every stream's ``t`` (DESIGN §3: the instant a row describes)
-T_FIELD = Field("s", "simulation time", "the instant the row describes")
-UNDOCUMENTED = Field("", "", "")
-
-
-def register_stream(stream: str, **fields) -> None:
-    """Document the fields of a stream recorded through a recorder callback: ``name=(unit, frame, description)``."""
-    STREAMS.setdefault(stream, {}).update({k: Field(*v) for k, v in fields.items()})
-
-
-register_stream("mode", mode=("text", "", "mission mode entered at t"), previous=("text", "", "the mode it left"),
-                reason=("text", "", "why"))
-register_stream("error", message=("text", "", "what stopped the run early"))
+from visnav.log_schema import STREAMS, T_FIELD, UNDOCUMENTED, Field, register_stream  # noqa: F401  (re-exported)
 
 
 class FlightLog:

@@ -114,3 +114,10 @@ def _witas(sim) -> MissionParts:
     from visnav.mission.witas import build as build_witas
 
     return build_witas(sim)
+
+
+@register("pad-landing")
+def _pad(sim) -> MissionParts:
+    from visnav.mission.pad import build as build_pad
+
+    return build_pad(sim)

@@ -1,0 +1,153 @@
+"""WITAS vision landing on the three-circle pad (seed 002 ch. 6): GPS-free from 20 m to touch-down.
+
+The R-MAX starts hovering at ``start_height_m`` beside the pad with the camera looking down. At the
+first vision fix the navigator (``navigation/pad.py``) starts its filter; after ``settle_s`` the
+reference (a "white rabbit" for the PALACE position loop of ``control/rmax.py``) moves over the pad
+centre at ``approach_speed_mps`` while sinking at ``descent_rate_mps``, and at ``final_rate_mps``
+below ``slow_height_m`` (heights of the *estimate*), until the skids touch. Nothing switches when
+the pattern leaves the view near the ground: the fixes stop, the filter dead-reckons and the same
+reference carries on (mode ``blind`` only labels the log).
+
+``build(sim)`` is the mission builder registered as ``pad-landing`` in ``sim/missions.py``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from visnav.measurements import Health, NavEstimate, PositionReference
+
+from visnav.log_schema import register_stream
+
+register_stream("nav_cov", cov=("mixed", "position (m, NED), velocity (m/s, NED)", "navigator covariance of the "
+                                "logged estimate (NEES in the metrics)"))
+
+
+
+class PadLandingMission:
+    def __init__(self, cfg, recorder=None):
+        self.cfg = cfg
+        self.record = recorder or (lambda *a, **k: None)
+        self.mode = "wait"
+        self.done = False
+        self.t_mode = 0.0
+        self.ref_p: np.ndarray | None = None
+        self.ref_v = np.zeros(3)
+        self._last_t: float | None = None
+        self.touchdown_t: float | None = None
+        self._centred_since: float | None = None
+
+    def start_position(self) -> np.ndarray:
+        c = self.cfg
+        return np.array([c.start_ne_m[0], c.start_ne_m[1], -c.start_height_m])
+
+    def _set(self, mode: str, t: float, why: str) -> None:
+        self.record("mode", t, mode=mode, previous=self.mode, reason=why)
+        self.mode, self.t_mode = mode, t
+
+    def step(self, t: float, nav: NavEstimate, health: Health):
+        c = self.cfg
+        dt = 0.0 if self._last_t is None else t - self._last_t
+        self._last_t = t
+        if nav.valid:  # the filter's covariance beside the logged estimate (NEES in the metrics)
+            self.record("nav_cov", t, cov=np.asarray(nav.covariance, float))
+        if self.mode == "wait":
+            if nav.valid:
+                self.ref_p = np.asarray(nav.position, float).copy()
+                self._set("settle", t, "first vision fix: filter started")
+            elif t > 10.0:
+                self._set("abort", t, "no vision fix in 10 s")
+                self.done = True
+        elif self.mode == "settle" and t - self.t_mode >= c.settle_s:
+            self._set("approach", t, "approach and descent over the pad")
+        elif self.mode in ("approach", "blind", "gate", "final-descent"):
+            if self.mode in ("approach", "blind") and c.gate_height_m > 0 and -self.ref_p[2] <= c.gate_height_m + 1e-6:
+                self._set("gate", t, f"hold at {c.gate_height_m} m until centred")
+            elif self.mode == "approach" and health.source == "inertial":
+                self._set("blind", t, "no vision fix: dead reckoning")
+            elif self.mode == "blind" and health.source == "vision":
+                self._set("approach", t, "vision fixes again")
+            elif self.mode == "gate":
+                err = float(np.hypot(*nav.position[:2]))
+                spd = float(np.hypot(*nav.velocity[:2]))
+                centred = err <= c.gate_tolerance_m and spd <= c.gate_tolerance_m
+                self._centred_since = (self._centred_since if self._centred_since is not None else t) \
+                    if centred else None
+                if (centred and t - self._centred_since >= c.gate_time_s) or t - self.t_mode >= c.gate_max_s:
+                    self._set("final-descent", t, f"centred within {err:.2f} m, {spd:.2f} m/s" if centred
+                              else "gate time out")
+            if t > c.timeout_s:
+                self._set("abort", t, "timeout")
+                self.done = True
+        if self.ref_p is None:
+            ref = PositionReference(t=t, position=self.start_position(), velocity=np.zeros(3), source="vision")
+            return ref, self.mode
+        v = np.zeros(3)
+        if self.mode in ("approach", "blind", "gate", "final-descent"):
+            d = -self.ref_p[:2]
+            n = float(np.hypot(*d))
+            if n > 1e-9:
+                v[:2] = d / n * min(c.approach_speed_mps, n / max(dt, 1e-3))
+            h_est = -float(nav.position[2])
+            v[2] = c.final_rate_mps if h_est < c.slow_height_m else c.descent_rate_mps
+            if h_est < c.flare_height_m:
+                v[2] = c.flare_rate_mps
+            if self.mode != "final-descent" and c.gate_height_m > 0 and -self.ref_p[2] - v[2] * dt < c.gate_height_m:
+                v[2] = 0.0  # the reference stops at the gate height
+                self.ref_p[2] = -c.gate_height_m
+            self.ref_p = self.ref_p + v * dt
+            self.ref_p[2] = min(self.ref_p[2], 1.0)  # the reference keeps sinking until the skids touch
+        self.ref_v = v
+        return PositionReference(t=t, position=self.ref_p.copy(), velocity=v, yaw=0.0, source="vision"), self.mode
+
+    def on_touchdown(self, t: float) -> None:
+        self.touchdown_t = t
+        self._set("landed", t, "touch-down")
+        self.done = True
+
+
+def build(sim):
+    from visnav.analysis.pad_report import pad_metrics
+    from visnav.control.rmax import RmaxPositionController
+    from visnav.geometry.camera import PinholeCamera
+    from visnav.geometry.pad import PadLayout
+    from visnav.navigation.pad import PadNavigator
+    from visnav.sensors.imu import Imu
+    from visnav.sensors.pad_camera import PadCamera
+    from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
+    from visnav.sensors.split_imu import SplitRateImu
+    from visnav.sim.missions import MissionParts
+    from visnav.vision.pad import PadDetector
+    from visnav.world.pad import pad_board
+
+    cfg = sim.sc.mission
+    pc, cc, pt, pf, fc = cfg.pad, cfg.camera, cfg.pantilt, cfg.platform, cfg.filter
+    rng = [np.random.default_rng(s) for s in np.random.SeedSequence([sim.sc.run.seed, 15]).spawn(5)]
+    layout = PadLayout(tuple(pc.legs_m), tuple(pc.ring_ratio), tuple(pc.inner_ratio))
+    shadow = (pc.shadow_direction_deg, pc.shadow_offset_m, pc.shadow_gain) if pc.shadow else None
+    board = pad_board(layout, pc.resolution_m, rng[0], shadow=shadow)
+    sim.camera_model = cam = PinholeCamera.ideal(cc.width, cc.height, cc.focal_px)
+    ptu = PanTiltUnit(pan=0.0, tilt=math.radians(pt.initial_tilt_deg),
+                      pan_limits=tuple(math.radians(a) for a in pt.pan_limits_deg),
+                      tilt_limits=tuple(math.radians(a) for a in pt.tilt_limits_deg),
+                      max_rate=math.radians(pt.max_rate_dps), servo_gain=pt.servo_gain,
+                      encoder_resolution=math.radians(pt.encoder_resolution_deg), lever_arm=tuple(cc.lever_arm_m),
+                      head_offset=tuple(cc.head_offset_m))
+    platform = SpringPlatform(pf.misalignment_deg, pf.natural_hz, pf.damping)
+    sim.camera = PadCamera(cam, board, ptu, platform, rng[1], rate_hz=cc.rate_hz, noise_sigma=cc.noise_sigma,
+                           latency_s=cc.latency_s, blackout_height_m=cfg.blackout_height_m, blackout_s=cfg.blackout_s,
+                           lighting_change_s=pc.lighting_change_s, lighting_gain=pc.lighting_gain,
+                           recorder=sim.log.record)
+    s = sim.sc.sensors.imu
+    imu = Imu(rng[2], rate_hz=fc.gyro_hz, accel_noise=s.accel_noise, gyro_noise=s.gyro_noise, accel_bias=s.accel_bias,
+              gyro_bias=s.gyro_bias, attitude_noise_deg=s.attitude_noise_deg, latency_s=s.latency_s, delay_s=s.delay_s)
+    sim.imu = SplitRateImu(imu, fc.accel_hz)
+    sim.gps.rate_hz = sim.laser.rate_hz = sim.sonar.rate_hz = 1.0  # not used: GPS-free (sampled, ignored)
+    detector = PadDetector(layout, cam.K, sigma_floor_px=fc.sigma_floor_px, cov_inflation=fc.cov_inflation)
+    nav = PadNavigator(fc, detector, ptu, recorder=sim.log.record)
+    mission = PadLandingMission(cfg, recorder=sim.log.record)
+    sim.pad_layout = layout
+    return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=pad_metrics,
+                        start_position=mission.start_position(), start_yaw=0.0, uses_camera=True, navigator=nav)

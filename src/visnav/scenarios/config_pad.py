@@ -1,0 +1,109 @@
+"""Config of the WITAS vision landing on the three-circle pad (seed 002 ch. 6): ``mission.type = "pad-landing"``.
+
+Everything specific to it nests in the mission: the pad, the camera on its pan-tilt unit and
+spring platform, the IMU rates, the filter and the options (black-out, shadow, lighting), so
+``--set mission.blackout_height_m=5`` works. Dimensions and their reasons: docs/pad.md.
+"""
+
+from __future__ import annotations
+
+from typing import Literal, Optional
+
+from pydantic import Field, model_validator
+
+from visnav.scenarios.base import _M
+
+
+class PadGeometryConfig(_M):
+    legs_m: list[float] = Field(default_factory=lambda: [4.4, 2.2, 1.2, 0.58])
+    ring_ratio: list[float] = Field(default_factory=lambda: [0.20, 0.15, 0.20, 0.15])
+    inner_ratio: list[float] = Field(default_factory=lambda: [0.50, 0.50, 0.65, 0.65])
+    resolution_m: float = Field(0.002, ge=0.0005, le=0.05, description="board texture [m/px]")
+    shadow: bool = False
+    shadow_direction_deg: float = Field(45.0, ge=-360, le=360)
+    shadow_offset_m: float = Field(0.8, ge=-10, le=10, description="shadow edge from the pad centre")
+    shadow_gain: float = Field(0.45, ge=0.05, le=1.0)
+    lighting_change_s: Optional[float] = Field(None, ge=0, description="frame grey x lighting_gain from then on")
+    lighting_gain: float = Field(0.6, ge=0.1, le=2.0)
+
+    @model_validator(mode="after")
+    def _layout(self):
+        from visnav.geometry.pad import PadLayout
+
+        PadLayout(tuple(self.legs_m), tuple(self.ring_ratio), tuple(self.inner_ratio))
+        return self
+
+
+class PadCameraConfig(_M):
+    width: int = Field(640, ge=160, le=2048)
+    height: int = Field(480, ge=120, le=2048)
+    focal_px: float = Field(640.0, gt=50, le=10000)
+    rate_hz: float = Field(20.0, ge=1, le=60, description="frames processed per second (§6.2: 20 Hz)")
+    noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
+    latency_s: float = Field(0.05, ge=0, le=1.0, description="exposure to pose (stamped correctly)")
+    lever_arm_m: list[float] = Field(default_factory=lambda: [0.3, 0.0, -0.45],
+                                     description="pan-tilt axes from the skid reference point, body FRD")
+    head_offset_m: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.05],
+                                       description="camera centre from the pan-tilt axes, camera frame")
+
+
+class PanTiltConfig(_M):
+    pan_limits_deg: list[float] = Field(default_factory=lambda: [-170.0, 170.0])
+    tilt_limits_deg: list[float] = Field(default_factory=lambda: [10.0, 125.0])
+    max_rate_dps: float = Field(90.0, gt=0, le=720)
+    servo_gain: float = Field(8.0, gt=0, le=100, description="1/s")
+    encoder_resolution_deg: float = Field(0.05, ge=0, le=2)
+    initial_tilt_deg: float = Field(90.0, ge=0, le=135)
+
+
+class PlatformConfig(_M):
+    misalignment_deg: list[float] = Field(default_factory=lambda: [1.5, -1.2, 0.0],
+                                          description="constant camera platform roll, pitch, yaw vs the body")
+    natural_hz: float = Field(6.0, gt=0.5, le=100)
+    damping: float = Field(0.2, gt=0, le=2)
+
+
+class PadFilterConfig(_M):
+    gyro_hz: float = Field(200.0, ge=20, le=1000)
+    accel_hz: float = Field(66.0, ge=10, le=1000)
+    output_hz: float = Field(50.0, ge=1, le=1000)
+    gyro_bias_states: bool = Field(True, description="15 states (gyro biases) instead of appendix A's 12")
+    accel_noise: float = Field(0.008, ge=0, le=5, description="m/s^2/sqrt(Hz)")
+    gyro_noise: float = Field(3e-4, ge=0, le=1, description="rad/s/sqrt(Hz)")
+    accel_bias_noise: float = Field(2e-4, ge=0, le=1)
+    gyro_bias_noise: float = Field(1e-5, ge=0, le=1)
+    init_position_sigma_m: float = Field(0.1, gt=0, le=100)
+    init_velocity_sigma_mps: float = Field(0.3, gt=0, le=100)
+    init_attitude_sigma_deg: float = Field(1.0, gt=0, le=30)
+    position_floor_m: float = Field(0.002, ge=0, le=1, description="added to the vision sigma")
+    range_floor: float = Field(8e-4, ge=0, le=0.1, description="vision sigma floor per m of range")
+    gate_probability: float = Field(0.9999, gt=0, le=1)
+    fix_timeout_s: float = Field(0.3, gt=0, le=10)
+    track_deadband_deg: float = Field(1.0, ge=0, le=20)
+    sigma_floor_px: float = Field(0.05, gt=0, le=5)
+    cov_inflation: float = Field(1.5, gt=0, le=20)
+
+
+class PadMissionConfig(_M):
+    type: Literal["pad-landing"] = "pad-landing"
+    start_ne_m: list[float] = Field(default_factory=lambda: [3.0, -2.0])
+    start_height_m: float = Field(20.0, ge=2, le=60)
+    settle_s: float = Field(2.0, ge=0, le=60, description="hover after the first fix before the approach")
+    approach_speed_mps: float = Field(0.8, gt=0, le=5)
+    descent_rate_mps: float = Field(0.7, gt=0, le=3)
+    slow_height_m: float = Field(3.0, ge=0, le=30, description="below it the sink rate is final_rate_mps")
+    final_rate_mps: float = Field(0.3, gt=0, le=1.5)
+    gate_height_m: float = Field(1.3, ge=0, le=10, description="hold here until centred (0: no gate)")
+    gate_tolerance_m: float = Field(0.08, gt=0, le=5, description="horizontal error and speed [m/s] to pass")
+    gate_time_s: float = Field(1.0, ge=0, le=30, description="centred this long")
+    gate_max_s: float = Field(8.0, ge=0, le=60, description="descend anyway after this long")
+    flare_height_m: float = Field(0.35, ge=0, le=5)
+    flare_rate_mps: float = Field(0.12, gt=0, le=1.5)
+    blackout_height_m: Optional[float] = Field(None, ge=0, le=60, description="vision black-out from this height")
+    blackout_s: float = Field(3.0, ge=0, le=60)
+    timeout_s: float = Field(150.0, gt=0, le=3600)
+    pad: PadGeometryConfig = PadGeometryConfig()
+    camera: PadCameraConfig = PadCameraConfig()
+    pantilt: PanTiltConfig = PanTiltConfig()
+    platform: PlatformConfig = PlatformConfig()
+    filter: PadFilterConfig = PadFilterConfig()
