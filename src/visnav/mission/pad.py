@@ -18,7 +18,6 @@ import math
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
-
 from visnav.log_schema import register_stream
 
 register_stream("nav_cov", cov=("mixed", "position (m, NED), velocity (m/s, NED)", "navigator covariance of the "

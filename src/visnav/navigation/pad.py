@@ -33,7 +33,6 @@ from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
 from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavEstimate, PanTiltFrame
 from visnav.navigation.witas import _History
 from visnav.vision.pad import PadDetector
-
 from visnav.log_schema import register_stream
 
 _NED = "NED world (origin at the scenario's home)"

@@ -21,7 +21,6 @@ from visnav.measurements import PanTiltFrame
 from visnav.sensors.base import TruthAt
 from visnav.sensors.camera import CameraRenderer, PendingFrame
 from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
-
 from visnav.log_schema import register_stream
 
 _NED = "NED world (origin at the scenario's home)"
