@@ -165,6 +165,59 @@ def derivatives(p: FixedWingParams, x: np.ndarray, u: Controls, wind_ned: np.nda
     return dx, air
 
 
+def _derivatives_fast(p: FixedWingParams, x, u: tuple, wind: tuple, gam: tuple, air: bool = False):
+    """:func:`derivatives` in scalar ``math`` on a list (the 100 Hz RK4 path), the same operations in
+    the same order; ``air`` also returns (Va, alpha, beta, specific force). Agrees with
+    :func:`derivatives` to rounding (tests/vehicles/test_fixedwing.py)."""
+    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
+    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
+    C00, C01, C02 = ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp
+    C10, C11, C12 = ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp
+    C20, C21, C22 = -st, sf * ct, cf * ct
+    wx, wy, wz = wind
+    ur = uu - (C00 * wx + C10 * wy + C20 * wz)
+    vr = vv - (C01 * wx + C11 * wy + C21 * wz)
+    wr = ww - (C02 * wx + C12 * wy + C22 * wz)
+    Va = math.sqrt(ur * ur + vr * vr + wr * wr)
+    Va_s = max(Va, 1.0)
+    alpha = math.atan2(wr, ur)
+    beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
+    qbar = 0.5 * p.rho * Va_s * Va_s * p.S
+    cl, cd = _lift_drag(p, alpha)
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    da, de, dr, dt = u
+    cx = -cd * ca + cl * sa
+    cxq = -p.C_D_q * ca + p.C_L_q * sa
+    cxde = -p.C_D_de * ca + p.C_L_de * sa
+    cz = -cd * sa - cl * ca
+    czq = -p.C_D_q * sa - p.C_L_q * ca
+    czde = -p.C_D_de * sa - p.C_L_de * ca
+    c2v, b2v = p.c / (2.0 * Va_s), p.b / (2.0 * Va_s)
+    m = p.mass
+    thrust = 0.5 * p.rho * p.S_prop * p.C_prop * ((p.k_motor * dt) ** 2 - Va * Va)
+    fx = -m * G * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+    fy = m * G * ct * sf + qbar * (p.C_Y_0 + p.C_Y_beta * beta + p.C_Y_p * b2v * P + p.C_Y_r * b2v * R
+                                   + p.C_Y_da * da + p.C_Y_dr * dr)
+    fz = m * G * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
+    l_m = qbar * p.b * (p.C_l_0 + p.C_l_beta * beta + p.C_l_p * b2v * P + p.C_l_r * b2v * R
+                        + p.C_l_da * da + p.C_l_dr * dr)
+    m_m = qbar * p.c * (p.C_m_0 + p.C_m_alpha * alpha + p.C_m_q * c2v * Q + p.C_m_de * de)
+    n_m = qbar * p.b * (p.C_n_0 + p.C_n_beta * beta + p.C_n_p * b2v * P + p.C_n_r * b2v * R
+                        + p.C_n_da * da + p.C_n_dr * dr)
+    g1, g2, g3, g4, g5, g6, g7, g8 = gam
+    tt = st / ct
+    dx = (C00 * uu + C01 * vv + C02 * ww, C10 * uu + C11 * vv + C12 * ww, C20 * uu + C21 * vv + C22 * ww,
+          R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m,
+          P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct,
+          g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,
+          g5 * P * R - g6 * (P * P - R * R) + m_m / p.Jy,
+          g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m)
+    if not air:
+        return dx
+    # C^T (0, 0, G) = G (C20, C21, C22)
+    return dx, (Va, alpha, beta, (fx / m - C20 * G, fy / m - C21 * G, fz / m - C22 * G))
+
+
 @dataclass
 class FixedWingModel:
     """RK4 integration of :func:`derivatives`; ``state`` is a :class:`VehicleState`."""
@@ -186,36 +239,52 @@ class FixedWingModel:
 
     def _clip(self, u: Controls) -> Controls:
         lim = self.params.max_deflection
-        return Controls(float(np.clip(u.aileron, -lim, lim)), float(np.clip(u.elevator, -lim, lim)),
-                        float(np.clip(u.rudder, -lim, lim)), float(np.clip(u.throttle, 0.0, 1.0)))
+        return Controls(*self._clipped(u))
+
+    def _clipped(self, u: Controls) -> tuple[float, float, float, float]:
+        lim = self.params.max_deflection
+        return (min(max(float(u.aileron), -lim), lim), min(max(float(u.elevator), -lim), lim),
+                min(max(float(u.rudder), -lim), lim), min(max(float(u.throttle), 0.0), 1.0))
 
     def step(self, u: Controls, dt: float, wind_ned) -> None:
-        u = self._clip(u)
-        w = np.asarray(wind_ned, float)
-        if not np.all(np.isfinite(w)):
-            raise ValueError(f"wind must be finite, got {w}")
-        f = lambda x: derivatives(self.params, x, u, w, self._gam)[0]  # noqa: E731
-        x = self.x
-        k1 = f(x)
-        k2 = f(x + 0.5 * dt * k1)
-        k3 = f(x + 0.5 * dt * k2)
-        k4 = f(x + dt * k3)
-        self.x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-        self.x[8] = (self.x[8] + math.pi) % (2 * math.pi) - math.pi
-        if not np.all(np.isfinite(self.x)):
+        """RK4 over ``dt`` with the controls and the wind held (``_derivatives_fast``)."""
+        uc = self._clipped(u)
+        w = tuple(np.asarray(wind_ned, float).tolist())
+        if not math.isfinite(w[0] + w[1] + w[2]):
+            raise ValueError(f"wind must be finite, got {wind_ned}")
+        p, gam, f = self.params, self._gam, _derivatives_fast
+        x = self.x.tolist()
+        h2 = 0.5 * dt
+        k1 = f(p, x, uc, w, gam)
+        k2 = f(p, [a + h2 * b for a, b in zip(x, k1)], uc, w, gam)
+        k3 = f(p, [a + h2 * b for a, b in zip(x, k2)], uc, w, gam)
+        k4 = f(p, [a + dt * b for a, b in zip(x, k3)], uc, w, gam)
+        h6 = dt / 6.0
+        x1 = [a + h6 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4)]
+        x1[8] = (x1[8] + math.pi) % (2 * math.pi) - math.pi
+        if not all(map(math.isfinite, x1)):
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
+        self.x = np.array(x1)
         self.t += dt
-        self.air = derivatives(self.params, self.x, u, w, self._gam)[1]
+        Va, alpha, beta, sf = f(p, x1, uc, w, gam, air=True)[1]
+        self.air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(sf)}
 
     def euler_rates(self) -> np.ndarray:
         return derivatives(self.params, self.x, Controls(), np.zeros(3), self._gam)[0][6:9]
 
     @property
     def state(self) -> VehicleState:
+        """Truth at ``t`` (cached until the next step or until ``x`` is replaced; change ``x`` by
+        assigning a new array, not in place, after reading ``state``)."""
         x = self.x
-        C = _dcm(x[6:9])
-        return VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
-                            body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
+        key = (x, self.t)  # the array itself (not its id, which a new array could reuse)
+        old = getattr(self, "_state_key", None)
+        if old is None or old[0] is not x or old[1] != self.t:
+            C = _dcm(x[6:9])
+            self._state = VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
+                                       body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
+            self._state_key = key
+        return self._state
 
 
 def _dcm(e) -> np.ndarray:
