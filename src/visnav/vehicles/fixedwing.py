@@ -228,7 +228,19 @@ class FixedWingModel:
 
     def __post_init__(self) -> None:
         self._gam = self.params.gammas()
-        self.air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
+        self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
+        self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
+
+    @property
+    def air(self) -> dict:
+        """Airspeed ``Va``, ``alpha``, ``beta`` and the specific force (body) after the last step;
+        evaluated when first read (a loop that reads it at its control rate skips the rest)."""
+        if self._air_at is not None:
+            x1, uc, w = self._air_at
+            Va, alpha, beta, sf = _derivatives_fast(self.params, x1, uc, w, self._gam, air=True)[1]
+            self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(sf)}
+            self._air_at = None
+        return self._air
 
     @classmethod
     def from_trim(cls, params: FixedWingParams, trim: "Trim", position_ned, heading: float) -> "FixedWingModel":
@@ -266,11 +278,15 @@ class FixedWingModel:
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
         self.x = np.array(x1)
         self.t += dt
-        Va, alpha, beta, sf = f(p, x1, uc, w, gam, air=True)[1]
-        self.air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(sf)}
+        self._air_at = (x1, uc, w)
 
     def euler_rates(self) -> np.ndarray:
         return derivatives(self.params, self.x, Controls(), np.zeros(3), self._gam)[0][6:9]
+
+    def velocity_ned(self) -> np.ndarray:
+        """NED velocity (``state.velocity`` without building the whole state)."""
+        x = self.x
+        return _dcm(x[6:9]) @ x[3:6]
 
     @property
     def state(self) -> VehicleState:
