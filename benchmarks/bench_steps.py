@@ -79,6 +79,15 @@ def measure(blocks: int) -> dict:
     return out
 
 
+def main(blocks: int = 10) -> dict:
+    """The table for ``run_all.py``: this checkout's per-call times."""
+    res = measure(blocks)
+    print("| step | us per call (min of blocks) |\n|---|---:|")
+    for k, v in res.items():
+        print(f"| {k[:-3]} | {v:.1f} |")
+    return res
+
+
 def ab(before: str, after: str, rounds: int, blocks: int) -> None:
     res: dict[str, dict[str, list[float]]] = {"before": {}, "after": {}}
     for r in range(rounds):
