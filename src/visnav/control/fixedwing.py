@@ -21,8 +21,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from visnav.vehicles.fixedwing import Controls
 
 G = 9.81
