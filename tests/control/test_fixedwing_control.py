@@ -66,3 +66,20 @@ def test_nan_input_is_refused():
     ap = FixedWingAutopilot(InnerGains(), TR.controls)
     with pytest.raises(ValueError, match="Va"):
         ap.command(0.02, AirData(0, 0, 0, 0, 0, 100, math.nan, 0), 0.1, 0.1, 17, 100, 17)
+
+
+def test_scalar_clip_equals_numpy_clip():
+    """The autopilot's and the gimbal's scalar clip gives what float(np.clip(...)) gave, NaN and
+    signed zeros included."""
+    from visnav.control.fixedwing import _clip as clip_ap
+    from visnav.sensors.gimbal import _clip as clip_gb
+
+    rng = np.random.default_rng(2)
+    xs = list(rng.normal(0.0, 2.0, 200)) + [math.nan, -0.0, 0.0, 1.0, -1.0, math.inf, -math.inf]
+    for lo, hi in ((-1.0, 1.0), (0.0, 1.0), (-0.5, 0.0)):
+        for x in xs:
+            want = float(np.clip(x, lo, hi))
+            for clip in (clip_ap, clip_gb):
+                got = clip(x, lo, hi)
+                assert (math.isnan(got) and math.isnan(want)) or (got == want and math.copysign(1, got)
+                                                                   == math.copysign(1, want))

@@ -54,3 +54,26 @@ def test_single_axis_update_and_gate():
 
 def test_accel_ned_hover_is_zero():
     np.testing.assert_allclose(accel_ned(np.eye(3), np.array([0.0, 0.0, -9.81])), 0.0, atol=1e-12)
+
+
+def test_predict_equals_the_constant_acceleration_model_in_array_form():
+    """The per-axis scalar predict against the model written with arrays (x = F x + B a, P = F P F^T + Q
+    for F = [[1, dt], [0, 1]], B = [dt^2/2, dt], Q of white acceleration): equal to the last bit."""
+    rng = np.random.default_rng(4)
+    f = PositionFilter(accel_noise=0.3, position=rng.normal(size=3), velocity=rng.normal(size=3))
+    f.predict(0.0, np.zeros(3))
+    p, v = f.p.copy(), f.v.copy()
+    P00, P01, P11, q = f.P00.copy(), f.P01.copy(), f.P11.copy(), f.q
+    t = 0.0
+    for _ in range(200):
+        t_new = t + float(rng.uniform(0.005, 0.02))
+        dt, t = t_new - t, t_new  # the filter's own interval
+        a = rng.normal(0.0, 2.0, 3)
+        f.predict(t, a)
+        p = p + (v * dt + 0.5 * a * dt * dt)
+        v = v + a * dt
+        P00, P01, P11 = (P00 + (2 * dt * P01 + dt * dt * P11 + q * dt**3 / 3), P01 + (dt * P11 + q * dt * dt / 2),
+                         P11 + q * dt)
+        np.testing.assert_array_equal(f.p, p)
+        np.testing.assert_array_equal(f.v, v)
+        np.testing.assert_array_equal(np.stack([f.P00, f.P01, f.P11]), np.stack([P00, P01, P11]))

@@ -21,11 +21,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from visnav.vehicles.fixedwing import Controls
 
 G = 9.81
+
+
+def _clip(x: float, lo: float, hi: float) -> float:
+    """``float(np.clip(x, lo, hi))`` for one number, without numpy's per-call overhead (same result, NaN too)."""
+    return float(min(max(x, lo), hi))
 
 
 @dataclass(frozen=True)
@@ -81,7 +84,7 @@ class FixedWingAutopilot:
         for k, v in vars(m).items():
             if not math.isfinite(v):
                 raise ValueError(f"autopilot input {k} is not finite ({v!r})")
-        phi_ref = float(np.clip(math.atan(v_bank * psidot_ref_ail / G), -g.bank_limit, g.bank_limit))  # eq. 5.4
+        phi_ref = _clip(math.atan(v_bank * psidot_ref_ail / G), -g.bank_limit, g.bank_limit)  # eq. 5.4
         psidot = heading_rate(m.phi, m.theta, m.q, m.r)
         if abs(m.phi) > g.bank_hold:
             self.bank_hold_active = True
@@ -94,20 +97,20 @@ class FixedWingAutopilot:
             dA = -(g.kp_phi * (phi_ref - m.phi) - g.kd_phi * m.p)  # eq. 5.5
             if psidot_ref_rud is None:  # turn coordinator
                 self.int_ay += m.ay * dt
-                self.int_ay = float(np.clip(self.int_ay, -2.0, 2.0))
+                self.int_ay = _clip(self.int_ay, -2.0, 2.0)
                 dR = -(g.kp_ay * m.ay + g.ki_ay * self.int_ay)
             else:
                 dR = g.kp_psi * (psidot_ref_rud - psidot)  # eq. 5.6
         # altitude hold eq. 5.8-5.9
         eh = h_des - m.h
-        self.int_h = float(np.clip(self.int_h + eh * dt, -g.theta_limit / max(g.ki_h, 1e-9),
-                                   g.theta_limit / max(g.ki_h, 1e-9)))
-        theta_ref = float(np.clip(g.kp_h * eh + g.ki_h * self.int_h, -g.theta_limit, g.theta_limit))
+        self.int_h = _clip(self.int_h + eh * dt, -g.theta_limit / max(g.ki_h, 1e-9),
+                           g.theta_limit / max(g.ki_h, 1e-9))
+        theta_ref = _clip(g.kp_h * eh + g.ki_h * self.int_h, -g.theta_limit, g.theta_limit)
         dE = -(g.kp_theta * (theta_ref - m.theta) - g.kd_theta * m.q)
         ev = va_des - m.Va
-        self.int_v = float(np.clip(self.int_v + ev * dt, -10.0, 10.0))
+        self.int_v = _clip(self.int_v + ev * dt, -10.0, 10.0)
         thr = self.trim.throttle + g.kp_v * ev + g.ki_v * self.int_v
         u = Controls(aileron=-dA + self.trim.aileron, elevator=dE + self.trim.elevator,
-                     rudder=-dR + self.trim.rudder, throttle=float(np.clip(thr, 0.0, 1.0)))
+                     rudder=-dR + self.trim.rudder, throttle=_clip(thr, 0.0, 1.0))
         info = {"phi_ref": phi_ref, "theta_ref": theta_ref, "psidot": psidot, "bank_hold": self.bank_hold_active}
         return u, info

@@ -153,6 +153,7 @@ class ErrorStateKF:
         self.rejected_samples = 0
         self._gates: dict[int, float] = {}
         self._I = np.eye(self.n)
+        self._F0, self._G0 = self._model_template()
         c = self.cfg
         qc = [c.accel_noise**2] * 3 + [c.gyro_noise**2] * 3 + [c.accel_bias_noise**2] * 3
         if c.gyro_bias:
@@ -166,6 +167,18 @@ class ErrorStateKF:
         return g
 
     # ------------------------------------------------------------ model
+    def _model_template(self) -> tuple[np.ndarray, np.ndarray]:
+        """The constant blocks of F and G (identities, bias time constants), copied per step."""
+        n = self.n
+        F, G = np.zeros((n, n)), np.zeros((n, 9 if n == 12 else 12))
+        F[R_, V_] = np.eye(3)
+        F[BA_, BA_] = -np.eye(3) / self.cfg.accel_bias_tau_s
+        G[BA_, 6:9] = np.eye(3)
+        if n == 15:
+            F[BG_, BG_] = -np.eye(3) / self.cfg.gyro_bias_tau_s
+            G[BG_, 9:12] = np.eye(3)
+        return F, G
+
     def error_model(self, f_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Continuous F (eq. A.4 / 5.22) and G (eq. A.2) at the current nominal state."""
         n, s = self.n, self.x
@@ -175,32 +188,26 @@ class ErrorStateKF:
         g = self.ins.gravity_at(s.position)[2]
         lat, h = self.ins.lat_h(s.position)
         rn, re = radii_of_curvature(lat)
-        F = np.zeros((n, n))
+        F = self._F0.copy()
         F[R_, R_] = -skew(w_en)
-        F[R_, V_] = np.eye(3)
         if self.cfg.gravity_mps2 is None:  # the nominal's gravity depends on height: model it
             F[5, 2] = 2.0 * g / (math.sqrt(rn * re) + h)  # vertical gravity gradient (dg/dh)
         F[V_, V_] = -skew(2.0 * w_ie + w_en)
         F[V_, E_] = -skew(f_n)
         F[V_, BA_] = -C
         F[E_, E_] = -skew(w_in)
-        F[BA_, BA_] = -np.eye(3) / self.cfg.accel_bias_tau_s
-        nu = 9 if n == 12 else 12
-        G = np.zeros((n, nu))
+        G = self._G0.copy()
         G[V_, 0:3] = -C
         G[E_, 3:6] = -C
-        G[BA_, 6:9] = np.eye(3)
         if n == 15:
             F[E_, BG_] = -C
-            F[BG_, BG_] = -np.eye(3) / self.cfg.gyro_bias_tau_s
-            G[BG_, 9:12] = np.eye(3)
         return F, G
 
     def discretize(self, F: np.ndarray, G: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """(Phi, Q_k) by eq. A.7-A.8 or by Van Loan's method, per ``config.discretization``."""
         GQG = G @ self._Qc @ G.T
         if self.cfg.discretization == "first_order":
-            Phi = np.eye(self.n) + F * dt
+            Phi = self._I + F * dt
             return Phi, Phi @ GQG @ Phi.T * dt
         n = self.n
         M = np.zeros((2 * n, 2 * n))
@@ -219,7 +226,7 @@ class ErrorStateKF:
         ``rejected_samples``); returns whether it was used."""
         a = np.asarray(imu.accel, dtype=float)
         w = np.asarray(imu.gyro, dtype=float)
-        if a.shape != (3,) or w.shape != (3,) or not (np.all(np.isfinite(a)) and np.all(np.isfinite(w))
+        if a.shape != (3,) or w.shape != (3,) or not (all(map(math.isfinite, a.tolist() + w.tolist()))
                                                       and math.isfinite(imu.t)):
             self.rejected_samples += 1
             return False
@@ -255,7 +262,7 @@ class ErrorStateKF:
         y = np.atleast_1d(np.asarray(y, dtype=float))
         R = np.atleast_2d(np.asarray(R, dtype=float))
         st = self.stats.setdefault(kind, _Stats())
-        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(R))):
+        if not (all(map(math.isfinite, y.tolist())) and all(map(math.isfinite, R.ravel().tolist()))):
             st.rejected += 1
             self.rejections.append((self.x.t, kind, math.nan))
             return UpdateResult(kind, False, math.nan, y, math.nan)
@@ -282,12 +289,12 @@ class ErrorStateKF:
         s.position = s.position + dx[R_]
         s.velocity = s.velocity + dx[V_]
         q = quat_mult(quat_from_rotvec(dx[E_]), s.quat)
-        s.quat = q / np.linalg.norm(q)
+        s.quat = q / math.sqrt(q.dot(q))  # np.linalg.norm's own formula, without its overhead
         s.accel_bias = s.accel_bias + dx[BA_]
         if self.n == 15:
             s.gyro_bias = s.gyro_bias + dx[BG_]
         # reset: eps_new = eps - eps_hat rotated; Jacobian I + [eps_hat/2 x] on the attitude block
-        Gr = np.eye(self.n)
+        Gr = self._I.copy()
         Gr[E_, E_] += 0.5 * skew(dx[E_])
         self.P = Gr @ self.P @ Gr.T
 

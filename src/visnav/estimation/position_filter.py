@@ -44,12 +44,19 @@ class PositionFilter:
             return
         self.t = t
         self.accel = accel_ned
-        self.p += self.v * dt + 0.5 * accel_ned * dt * dt
-        self.v += accel_ned * dt
-        q = self.q
-        self.P00 += 2 * dt * self.P01 + dt * dt * self.P11 + q * dt**3 / 3
-        self.P01 += dt * self.P11 + q * dt * dt / 2
-        self.P11 += q * dt
+        # the 100 Hz path, per axis in scalar math (the same operations as the array form:
+        # p += v dt + a dt^2 / 2, v += a dt, P += F P F^T - P + Q of the constant-acceleration model)
+        a, p, v = accel_ned.tolist(), self.p, self.v
+        q, dt2 = self.q, dt * dt
+        q0, q1, q2 = q * dt**3 / 3, q * dt * dt / 2, q * dt
+        P00, P01, P11 = self.P00, self.P01, self.P11
+        for i in range(3):
+            vi, pi01, pi11 = float(v[i]), float(P01[i]), float(P11[i])
+            p[i] += vi * dt + 0.5 * a[i] * dt * dt
+            v[i] = vi + a[i] * dt
+            P00[i] += 2 * dt * pi01 + dt2 * pi11 + q0
+            P01[i] = pi01 + (dt * pi11 + q1)
+            P11[i] = pi11 + q2
 
     def update_position(self, z, sigma, axes=(0, 1, 2), gate: float | None = None) -> bool:
         """Update the given axes with a position measurement; returns False if gated out."""

@@ -15,6 +15,11 @@ from visnav.geometry.rotations import euler_to_dcm
 C_CV_CB = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
 
+def _clip(x: float, lo: float, hi: float) -> float:
+    """``float(np.clip(x, lo, hi))`` for one number, without numpy's per-call overhead (same result, NaN too)."""
+    return float(min(max(x, lo), hi))
+
+
 def camera_dcm(pan: float, tilt: float, roll: float) -> np.ndarray:
     """``C_n^cv``: NED -> OpenCV camera frame for a camera at (pan, tilt, roll) [rad] in NED."""
     return C_CV_CB @ euler_to_dcm(np.array([roll, tilt, pan])).T
@@ -55,13 +60,13 @@ class Gimbal:
     def command(self, pan: float, tilt: float) -> None:
         if not (np.isfinite(pan) and np.isfinite(tilt)):
             return  # a NaN command is ignored: the gimbal keeps its last one
-        self.pan_cmd, self.tilt_cmd = float(pan), float(np.clip(tilt, -np.pi / 2, 0.0))
+        self.pan_cmd, self.tilt_cmd = float(pan), _clip(tilt, -np.pi / 2, 0.0)
 
     def step(self, dt: float) -> None:
         dp = _wrap(self.pan_cmd - self.pan)
-        self.pan = _wrap(self.pan + float(np.clip(dp, -self.pan_rate * dt, self.pan_rate * dt)))
+        self.pan = _wrap(self.pan + _clip(dp, -self.pan_rate * dt, self.pan_rate * dt))
         dtl = self.tilt_cmd - self.tilt
-        self.tilt += float(np.clip(dtl, -self.tilt_rate * dt, self.tilt_rate * dt))
+        self.tilt += _clip(dtl, -self.tilt_rate * dt, self.tilt_rate * dt)
 
     def camera_attitude(self, euler_aircraft) -> tuple[float, float, float]:
         """(pan in NED, tilt, roll) [rad] of the camera for the aircraft's (roll, pitch, yaw)."""

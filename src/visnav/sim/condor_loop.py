@@ -163,7 +163,7 @@ class CondorSimulation:
                    reason=f"GPS loiter at {o.loiter_radius_m:.0f} m, tracker started on the tent")
         wind = self.wind.velocity_ned(0.0, 0.0)
         u = self.trim_level.controls
-        v_prev = self.vehicle.state.velocity
+        v_prev = self.vehicle.velocity_ned()
         accel = np.zeros(3)
         ctrl_log: dict = {}
         h_meas = -float(x[2])
@@ -221,7 +221,7 @@ class CondorSimulation:
                 wind = self.wind.velocity_ned(t, d_wind * dt, max(-x[2], 1.0), max(self.vehicle.air["Va"], 1.0))
             self.gimbal.step(dt)
             self.vehicle.step(u, dt, wind)
-            v_new = self.vehicle.state.velocity
+            v_new = self.vehicle.velocity_ned()
             accel = (v_new - v_prev) / dt
             v_prev = v_new
             if -self.vehicle.x[2] < 5.0:

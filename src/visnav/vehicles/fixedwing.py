@@ -165,6 +165,76 @@ def derivatives(p: FixedWingParams, x: np.ndarray, u: Controls, wind_ned: np.nda
     return dx, air
 
 
+def _fast_constants(p: FixedWingParams, gam: tuple) -> tuple:
+    """The parameters ``_derivatives_fast`` reads, with the constant left prefixes of its products
+    evaluated once (0.5 rho, -m G, pi e AR, ...: the same roundings as evaluating them in place)."""
+    return (-p.M, p.M, p.alpha0, p.C_L_0, p.C_L_alpha, p.C_D_p, math.pi * p.e * p.AR, 0.5 * p.rho, p.S,
+            -p.C_D_q, p.C_L_q, -p.C_D_de, p.C_L_de, p.c, p.b, p.mass, 0.5 * p.rho * p.S_prop * p.C_prop,
+            p.k_motor, -p.mass * G, p.mass * G,
+            p.C_Y_0, p.C_Y_beta, p.C_Y_p, p.C_Y_r, p.C_Y_da, p.C_Y_dr,
+            p.C_l_0, p.C_l_beta, p.C_l_p, p.C_l_r, p.C_l_da, p.C_l_dr,
+            p.C_m_0, p.C_m_alpha, p.C_m_q, p.C_m_de,
+            p.C_n_0, p.C_n_beta, p.C_n_p, p.C_n_r, p.C_n_da, p.C_n_dr, p.Jy) + tuple(gam)
+
+
+def _derivatives_fast(k: tuple, x, u: tuple, wind: tuple, air: bool = False):
+    """:func:`derivatives` (with :func:`_lift_drag`) in scalar ``math`` on a list, for the 100 Hz
+    RK4; ``k`` from :func:`_fast_constants`. The same operations in the same order; ``air`` also
+    returns (Va, alpha, beta, specific force). Agrees with :func:`derivatives` to rounding
+    (tests/vehicles/test_fixedwing.py)."""
+    (nM, M, a0, CL0, CLa, CDp, den, hrho, S, nCDq, CLq, nCDde, CLde, c, b, m, kt, kmot, nmG, mG,
+     CY0, CYb, CYp, CYr, CYda, CYdr, Cl0, Clb, Clp, Clr, Clda, Cldr, Cm0, Cma, Cmq, Cmde,
+     Cn0, Cnb, Cnp, Cnr, Cnda, Cndr, Jy, g1, g2, g3, g4, g5, g6, g7, g8) = k
+    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
+    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
+    C00, C01, C02 = ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp
+    C10, C11, C12 = ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp
+    C20, C21, C22 = -st, sf * ct, cf * ct
+    wx, wy, wz = wind
+    ur = uu - (C00 * wx + C10 * wy + C20 * wz)
+    vr = vv - (C01 * wx + C11 * wy + C21 * wz)
+    wr = ww - (C02 * wx + C12 * wy + C22 * wz)
+    Va = math.sqrt(ur * ur + vr * vr + wr * wr)
+    Va_s = max(Va, 1.0)
+    alpha = math.atan2(wr, ur)
+    beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
+    qbar = hrho * Va_s * Va_s * S
+    # eq. 4.9-4.11 (_lift_drag)
+    ea, eb = math.exp(nM * (alpha - a0)), math.exp(M * (alpha + a0))
+    sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
+    cl_lin = CL0 + CLa * alpha
+    sa = math.sin(alpha)
+    ca = math.cos(alpha)
+    cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * math.copysign(1.0, alpha) * sa * sa * ca
+    cd = CDp + cl_lin * cl_lin / den
+    da, de, dr, dt = u
+    cx = -cd * ca + cl * sa
+    cxq = nCDq * ca + CLq * sa
+    cxde = nCDde * ca + CLde * sa
+    cz = -cd * sa - cl * ca
+    czq = nCDq * sa - CLq * ca
+    czde = nCDde * sa - CLde * ca
+    c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
+    thrust = kt * ((kmot * dt) ** 2 - Va * Va)
+    fx = nmG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+    fy = mG * ct * sf + qbar * (CY0 + CYb * beta + CYp * b2v * P + CYr * b2v * R + CYda * da + CYdr * dr)
+    fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
+    l_m = qbar * b * (Cl0 + Clb * beta + Clp * b2v * P + Clr * b2v * R + Clda * da + Cldr * dr)
+    m_m = qbar * c * (Cm0 + Cma * alpha + Cmq * c2v * Q + Cmde * de)
+    n_m = qbar * b * (Cn0 + Cnb * beta + Cnp * b2v * P + Cnr * b2v * R + Cnda * da + Cndr * dr)
+    tt = st / ct
+    dx = (C00 * uu + C01 * vv + C02 * ww, C10 * uu + C11 * vv + C12 * ww, C20 * uu + C21 * vv + C22 * ww,
+          R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m,
+          P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct,
+          g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,
+          g5 * P * R - g6 * (P * P - R * R) + m_m / Jy,
+          g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m)
+    if not air:
+        return dx
+    # C^T (0, 0, G) = G (C20, C21, C22)
+    return dx, (Va, alpha, beta, (fx / m - C20 * G, fy / m - C21 * G, fz / m - C22 * G))
+
+
 @dataclass
 class FixedWingModel:
     """RK4 integration of :func:`derivatives`; ``state`` is a :class:`VehicleState`."""
@@ -175,7 +245,20 @@ class FixedWingModel:
 
     def __post_init__(self) -> None:
         self._gam = self.params.gammas()
-        self.air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
+        self._k = _fast_constants(self.params, self._gam)
+        self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
+        self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
+
+    @property
+    def air(self) -> dict:
+        """Airspeed ``Va``, ``alpha``, ``beta`` and the specific force (body) after the last step;
+        evaluated when first read (a loop that reads it at its control rate skips the rest)."""
+        if self._air_at is not None:
+            x1, uc, w = self._air_at
+            Va, alpha, beta, sf = _derivatives_fast(self._k, x1, uc, w, air=True)[1]
+            self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(sf)}
+            self._air_at = None
+        return self._air
 
     @classmethod
     def from_trim(cls, params: FixedWingParams, trim: "Trim", position_ned, heading: float) -> "FixedWingModel":
@@ -185,37 +268,56 @@ class FixedWingModel:
         return cls(params, x)
 
     def _clip(self, u: Controls) -> Controls:
+        return Controls(*self._clipped(u))
+
+    def _clipped(self, u: Controls) -> tuple[float, float, float, float]:
         lim = self.params.max_deflection
-        return Controls(float(np.clip(u.aileron, -lim, lim)), float(np.clip(u.elevator, -lim, lim)),
-                        float(np.clip(u.rudder, -lim, lim)), float(np.clip(u.throttle, 0.0, 1.0)))
+        return (min(max(float(u.aileron), -lim), lim), min(max(float(u.elevator), -lim), lim),
+                min(max(float(u.rudder), -lim), lim), min(max(float(u.throttle), 0.0), 1.0))
 
     def step(self, u: Controls, dt: float, wind_ned) -> None:
-        u = self._clip(u)
-        w = np.asarray(wind_ned, float)
-        if not np.all(np.isfinite(w)):
-            raise ValueError(f"wind must be finite, got {w}")
-        f = lambda x: derivatives(self.params, x, u, w, self._gam)[0]  # noqa: E731
-        x = self.x
-        k1 = f(x)
-        k2 = f(x + 0.5 * dt * k1)
-        k3 = f(x + 0.5 * dt * k2)
-        k4 = f(x + dt * k3)
-        self.x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-        self.x[8] = (self.x[8] + math.pi) % (2 * math.pi) - math.pi
-        if not np.all(np.isfinite(self.x)):
+        """RK4 over ``dt`` with the controls and the wind held (``_derivatives_fast``)."""
+        uc = self._clipped(u)
+        w = tuple(np.asarray(wind_ned, float).tolist())
+        if not math.isfinite(w[0] + w[1] + w[2]):
+            raise ValueError(f"wind must be finite, got {wind_ned}")
+        k, f = self._k, _derivatives_fast
+        x = self.x.tolist()
+        h2 = 0.5 * dt
+        k1 = f(k, x, uc, w)
+        k2 = f(k, [a + h2 * b for a, b in zip(x, k1)], uc, w)
+        k3 = f(k, [a + h2 * b for a, b in zip(x, k2)], uc, w)
+        k4 = f(k, [a + dt * b for a, b in zip(x, k3)], uc, w)
+        h6 = dt / 6.0
+        x1 = [a + h6 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4)]
+        x1[8] = (x1[8] + math.pi) % (2 * math.pi) - math.pi
+        if not all(map(math.isfinite, x1)):
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
+        self.x = np.array(x1)
         self.t += dt
-        self.air = derivatives(self.params, self.x, u, w, self._gam)[1]
+        self._air_at = (x1, uc, w)
 
     def euler_rates(self) -> np.ndarray:
         return derivatives(self.params, self.x, Controls(), np.zeros(3), self._gam)[0][6:9]
 
+    def velocity_ned(self) -> np.ndarray:
+        """NED velocity (``state.velocity`` without building the whole state)."""
+        x = self.x
+        return _dcm(x[6:9]) @ x[3:6]
+
     @property
     def state(self) -> VehicleState:
+        """Truth at ``t`` (cached until the next step or until ``x`` is replaced; change ``x`` by
+        assigning a new array, not in place, after reading ``state``)."""
         x = self.x
-        C = _dcm(x[6:9])
-        return VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
-                            body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
+        key = (x, self.t)  # the array itself (not its id, which a new array could reuse)
+        old = getattr(self, "_state_key", None)
+        if old is None or old[0] is not x or old[1] != self.t:
+            C = _dcm(x[6:9])
+            self._state = VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
+                                       body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
+            self._state_key = key
+        return self._state
 
 
 def _dcm(e) -> np.ndarray:

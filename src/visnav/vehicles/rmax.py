@@ -143,6 +143,11 @@ def _dcm_bn(phi: float, theta: float, psi: float) -> tuple[tuple[float, ...], ..
             (-st, sf * ct, cf * ct))
 
 
+def _trig(att: tuple) -> tuple[float, float, float, float]:
+    """cos φ, sin φ, cos θ, sin θ of an attitude tuple."""
+    return math.cos(att[0]), math.sin(att[0]), math.cos(att[1]), math.sin(att[1])
+
+
 def _psi_rate(att: tuple) -> float:
     """ψ̇ = (q sinφ + r cosφ)/cosθ (eq. 3.7)."""
     phi, theta, _, q, r, _ = att
@@ -170,6 +175,7 @@ class RmaxModel:
         self._cache: dict[float, tuple[np.ndarray, ...]] = {}
         _, _, self._C, self._CA, _, _ = self._matrices(self.dt)
         self._CCA = np.vstack([self._C, self._CA])
+        self._X3 = np.empty((self._C.shape[1], 3))
         self._x = np.zeros(self._C.shape[1])
         if initial is not None:
             if np.any(np.abs(initial.euler[:2]) > 1e-12) or np.any(np.abs(initial.body_rates) > 1e-12):
@@ -184,12 +190,12 @@ class RmaxModel:
         cb = np.array(_dcm_bn(0.0, 0.0, yaw))
         w0 = (cb.T @ vel_ned)[2]
         # u v w N E D psi, and w_yacs: the climb velocity the YACS holds, -g * integral of aZ
-        self._y = np.concatenate([cb.T @ vel_ned, pos, [yaw, w0]])
+        self._y = np.concatenate([cb.T @ vel_ned, pos, [yaw, w0]]).tolist()
         self.last_input = np.zeros(4)
         self.t = float(t0)
         self.on_ground = bool(pos[2] == 0.0)
         if self.on_ground:
-            self._y[0:3] = 0.0
+            self._y[0:3] = [0.0, 0.0, 0.0]
         self.touchdown_speed = float("nan")
         self.state = self._make_state(np.zeros(3))
 
@@ -204,8 +210,12 @@ class RmaxModel:
 
     def _attitudes(self, *xs: np.ndarray) -> list[tuple]:
         """``_attitude`` of several TF states with one matrix product."""
-        Y = self._CCA @ np.column_stack(xs)
-        return [self._attitude_from(Y[:4, k], Y[4:, k]) for k in range(len(xs))]
+        X = self._X3 if len(xs) == 3 else np.empty((len(xs[0]), len(xs)))
+        for k, x in enumerate(xs):
+            X[:, k] = x
+        Y = (self._CCA @ X).tolist()  # rows: φ θ r aZ, then their rates; one column per state
+        return [self._attitude_from((Y[0][k], Y[1][k], Y[2][k], Y[3][k]), (Y[4][k], Y[5][k]))
+                for k in range(len(xs))]
 
     def _attitude(self, x: np.ndarray) -> tuple[float, float, float, float, float, float]:
         """φ, θ [rad], p, q, r [rad/s] and ΔaZ [g] from the TF state (eq. 3.4, 3.7)."""
@@ -230,8 +240,8 @@ class RmaxModel:
 
     # -- translational part ----------------------------------------------------------------------
     def _deriv(self, y: np.ndarray, att: tuple, wind_ned: np.ndarray) -> tuple[np.ndarray, tuple]:
-        """Eq. 3.9 with T = −g(1 + ΔaZ) (eq. 3.10); returns d/dt of (u v w N E D ψ) and the
-        air-relative drag+thrust part (the specific force)."""
+        """Eq. 3.9 with T = −g(1 + ΔaZ) (eq. 3.10); returns d/dt of (u v w N E D ψ w_yacs) and the
+        air-relative drag+thrust part (the specific force). The reference form of ``_deriv_fast``."""
         P = self.params
         phi, theta, p, q, r, az = att
         u, v, w, psi = y[0], y[1], y[2], y[6]
@@ -262,14 +272,43 @@ class RmaxModel:
         lim, trim = self.params.input_limit, self.params.trim
         return np.array([min(max(tr + r, -lim), lim) - tr for r, tr in zip(raw, trim)])
 
+    def _deriv_fast(self, y, trig: tuple, att: tuple, wind: tuple) -> tuple:
+        """``_deriv`` in scalar ``math`` on tuples (the 100 Hz path: 4 calls per step); the same
+        operations in the same order, so the two agree to the last bit (tests/vehicles)."""
+        P = self.params
+        cf, sf, ct, st = trig
+        _, _, p, q, r, az = att
+        u, v, w, psi = y[0], y[1], y[2], y[6]
+        cp, sp = math.cos(psi), math.sin(psi)
+        R00, R01, R02 = ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp
+        R10, R11, R12 = ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp
+        R20, R21, R22 = -st, sf * ct, cf * ct
+        wx, wy, wz = wind
+        ub = R00 * wx + R10 * wy + R20 * wz
+        vb = R01 * wx + R11 * wy + R21 * wz
+        wb = R02 * wx + R12 * wy + R22 * wz
+        fx, fy = P.Xu * (u - ub), P.Yv * (v - vb)
+        w_hold = y[7] if P.heave_damping == "yacs" else 0.0
+        g = P.g
+        fz = P.Zw * (w - w_hold - wb) - g * (1.0 + az)
+        return ((fx - q * w + r * v - g * st, fy - r * u + p * w + g * ct * sf, fz - p * v + q * u + g * ct * cf,
+                 R00 * u + R01 * v + R02 * w, R10 * u + R11 * v + R12 * w, R20 * u + R21 * v + R22 * w,
+                 (q * sf + r * cf) / ct, -g * az), (fx, fy, fz))
+
     def step(self, command: YacsCommand, dt: float | None = None,
              wind_ned: ArrayLike | None = None) -> VehicleState:
-        """Advance by ``dt`` (default: the model's dt) under a held command and a steady wind."""
+        """Advance by ``dt`` (default: the model's dt) under a held command and a steady wind.
+
+        The eq. 3.4 states move by their exact ZOH discretisation; the translational states by
+        RK4 on ``_deriv`` (written out in scalar ``math`` as ``_deriv_fast``)."""
         dt = self.dt if dt is None else float(dt)
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
-        wind = np.zeros(3) if wind_ned is None else np.asarray(wind_ned, dtype=float)
-        if wind.shape != (3,) or not math.isfinite(wind[0] + wind[1] + wind[2]):
+        w = np.zeros(3) if wind_ned is None else np.asarray(wind_ned, dtype=float)
+        if w.shape != (3,):
+            raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
+        wind = tuple(w.tolist())
+        if not math.isfinite(wind[0] + wind[1] + wind[2]):
             raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
         Ad, Bd, _, _, Ah, Bh = self._matrices(dt)
         u = self._saturate(command)
@@ -277,26 +316,25 @@ class RmaxModel:
         xh, x1 = Ah @ x0 + Bh @ u, Ad @ x0 + Bd @ u  # exact TF states at t, t + dt/2, t + dt
         a0, ah, a1 = self._attitudes(x0, xh, x1)
         y = self._y
-        if self.on_ground and self._down_accel(y, a0, wind) < 0.0:  # net upward force: lift off
+        if self.on_ground and self._down_accel(y, a0, np.array(wind)) < 0.0:  # net upward force: lift off
             self.on_ground = False
         if self.on_ground:  # skids hold the position; attitude still follows eq. 3.4
-            y1 = y.copy()
+            y1 = list(y)
             y1[6] += dt * (_psi_rate(a0) + 4 * _psi_rate(ah) + _psi_rate(a1)) / 6.0
         else:
-            k1, _ = self._deriv(y, a0, wind)
-            k2, _ = self._deriv(y + 0.5 * dt * k1, ah, wind)
-            k3, _ = self._deriv(y + 0.5 * dt * k2, ah, wind)
-            k4, _ = self._deriv(y + dt * k3, a1, wind)
-            y1 = y + dt * (k1 + 2 * k2 + 2 * k3 + k4) / 6.0
+            d, h2, th = self._deriv_fast, 0.5 * dt, _trig(ah)
+            k1, _ = d(y, _trig(a0), a0, wind)
+            k2, _ = d([a + h2 * b for a, b in zip(y, k1)], th, ah, wind)
+            k3, _ = d([a + h2 * b for a, b in zip(y, k2)], th, ah, wind)
+            k4, _ = d([a + dt * b for a, b in zip(y, k3)], _trig(a1), a1, wind)
+            y1 = [a + dt * (b1 + 2 * b2 + 2 * b3 + b4) / 6.0 for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]
             row = _dcm_bn(a1[0], a1[1], y1[6])[2]
             vd = row[0] * y1[0] + row[1] * y1[1] + row[2] * y1[2]
             if y1[5] >= 0.0 and vd > 0.0:  # touchdown
                 self.touchdown_speed = float(vd)
                 self.on_ground = True
         if self.on_ground:
-            y1[0:3] = 0.0
-            y1[5] = 0.0
-            y1[7] = 0.0
+            y1[0] = y1[1] = y1[2] = y1[5] = y1[7] = 0.0
         self._x, self._y, self.last_input = x1, y1, u
         self.t = round(self.t + dt, 12)  # no float drift over long runs
         self.state = self._make_state(wind, a1)
@@ -304,23 +342,25 @@ class RmaxModel:
 
     def _down_accel(self, y: np.ndarray, att: tuple, wind: np.ndarray) -> float:
         """NED down component of the acceleration the vehicle would have at rest."""
-        y0 = y.copy()
+        y0 = np.array(y, dtype=float)
         y0[0:3] = 0.0
         d, _ = self._deriv(y0, att, wind)
         row = _dcm_bn(att[0], att[1], y[6])[2]
         return row[0] * d[0] + row[1] * d[1] + row[2] * d[2]
 
-    def _make_state(self, wind: np.ndarray, att: tuple | None = None) -> VehicleState:
+    def _make_state(self, wind, att: tuple | None = None) -> VehicleState:
         if att is None:
             att = self._attitude(self._x)
         phi, theta, p, q, r, _ = att
         y = self._y
-        R = np.array(_dcm_bn(phi, theta, y[6]))
-        if self.on_ground:  # the ground carries the weight
-            f = -R.T @ np.array([0.0, 0.0, self.params.g])
+        R = _dcm_bn(phi, theta, y[6])
+        if self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
+            g = self.params.g
+            f = [-(R[2][0] * g), -(R[2][1] * g), -(R[2][2] * g)]
         else:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
-            f = np.array(self._deriv(y, att, wind)[1])
+            f = self._deriv_fast(y, _trig(att), att, tuple(wind))[1]
         psi = (y[6] + math.pi) % (2 * math.pi) - math.pi
-        return VehicleState(t=self.t, position=y[3:6].copy(), velocity=R @ y[0:3],
+        # numpy's product (not a scalar sum) keeps the truth velocity bit-identical to before
+        return VehicleState(t=self.t, position=np.array(y[3:6]), velocity=np.array(R) @ np.array(y[0:3]),
                             euler=np.array([phi, theta, psi]), body_rates=np.array([p, q, r]),
-                            specific_force=f, on_ground=self.on_ground)
+                            specific_force=np.array(f), on_ground=self.on_ground)

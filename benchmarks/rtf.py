@@ -1,0 +1,76 @@
+"""Real-time factor of one closed-loop scenario; optionally dump its metrics and log for diffing.
+
+    PYTHONPATH=src python benchmarks/rtf.py SCENARIO [--seed N] [--dump FILE.npz] [--profile]
+
+Prints one JSON line: simulated time, wall and CPU time of ``run()`` (process CPU, so the render
+thread counts), main-thread CPU and the real-time factors. Run it with another checkout's
+``PYTHONPATH`` to compare commits (``benchmarks/compare.py`` interleaves two).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+
+def run(name: str, seed: int = 1, dump: str | None = None, profile: bool = False) -> dict:
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.missions import make_simulation
+
+    from visnav.sensors import camera
+
+    sc = load_scenario(name, seed=seed)
+    sim = make_simulation(sc)
+    waited = [0.0, 0]
+    result = camera.PendingFrame.result
+
+    def timed_result(self):  # what the loop still waits on the render thread
+        w = time.perf_counter()
+        out = result(self)
+        waited[0] += time.perf_counter() - w
+        waited[1] += 1
+        return out
+
+    camera.PendingFrame.result = timed_result
+    prof = None
+    if profile:
+        from pyinstrument import Profiler
+
+        prof = Profiler(interval=0.0005)
+        prof.start()
+    w0, c0, m0 = time.perf_counter(), time.process_time(), time.thread_time()
+    res = sim.run()
+    wall, cpu, main = time.perf_counter() - w0, time.process_time() - c0, time.thread_time() - m0
+    camera.PendingFrame.result = result
+    if prof is not None:
+        prof.stop()
+        print(prof.output_text(unicode=False, color=False, show_all=False))
+    m = res.metrics
+    sim_t = float(m.get("sim_time_s", np.nan))
+    out = {"scenario": name, "seed": seed, "sim_s": sim_t, "wall_s": wall, "cpu_s": cpu, "main_cpu_s": main,
+           "rtf_wall": sim_t / wall, "rtf_cpu": sim_t / cpu, "render_wait_s": waited[0], "frames_waited_on": waited[1],
+           "load": os.getloadavg()[0], "error": res.error}
+    if dump:
+        arrays = {}
+        for s in res.log.streams():
+            for k, v in res.log.get(s).items():
+                if v.dtype != object:
+                    arrays[f"{s}/{k}"] = v
+        metrics = {k: v for k, v in m.items() if k not in ("wall_time_s", "real_time_factor")}
+        arrays["__metrics__"] = np.array(json.dumps(metrics, default=str, sort_keys=True))
+        np.savez(dump, **arrays)
+    return out
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("scenario")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--dump")
+    ap.add_argument("--profile", action="store_true")
+    a = ap.parse_args()
+    print(json.dumps(run(a.scenario, a.seed, a.dump, a.profile)))
