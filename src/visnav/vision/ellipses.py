@@ -52,16 +52,41 @@ def ellipse_from_conic(Q: np.ndarray) -> tuple[float, float, float, float, float
 
 def concentric_centre(Q_out: np.ndarray, Q_in: np.ndarray) -> tuple[np.ndarray, float]:
     """(image of the common centre (2,), (r_in / r_out)^2) from the conics of two concentric circles."""
+    m, r2 = concentric_centres(np.asarray(Q_out)[None], np.asarray(Q_in)[None])
+    return m[0], float(r2[0])
+
+
+def concentric_centres(Q_out: np.ndarray, Q_in: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``concentric_centre`` of K pairs at once: (K, 2) centres and (K,) squared radius ratios. The
+    pencil Q_out^-1 Q_in of two concentric circles' images has a double eigenvalue and a distinct one
+    whose eigenvector is the image of the centre; the distinct one over the double one is (r_in/r_out)^2."""
     M = np.linalg.solve(Q_out, Q_in)
     w, V = np.linalg.eig(M)
     w, V = w.real, V.real
     # the distinct eigenvalue: farthest from the mean of the other two
-    d = [abs(w[i] - 0.5 * (w[(i + 1) % 3] + w[(i + 2) % 3])) for i in range(3)]
-    i = int(np.argmax(d))
-    v = V[:, i]
-    others = [w[j] for j in range(3) if j != i]
-    ratio2 = float(w[i] / (0.5 * (others[0] + others[1])))
-    return v[:2] / v[2], ratio2
+    d = np.abs(w - 0.5 * (np.roll(w, -1, axis=1) + np.roll(w, -2, axis=1)))
+    i = np.argmax(d, axis=1)
+    k = np.arange(len(w))
+    v = V[k, :, i]
+    others = (w.sum(axis=1) - w[k, i]) * 0.5
+    return v[:, :2] / v[:, 2:3], w[k, i] / others
+
+
+def conics_from_ellipses(E: np.ndarray) -> np.ndarray:
+    """``conic_from_ellipse`` of K ellipses (K, 5) at once: (K, 3, 3)."""
+    cx, cy, a, b, th = (np.asarray(E, float)[:, j] for j in range(5))
+    c, s = np.cos(th), np.sin(th)
+    tx, ty = -(c * cx + s * cy), s * cx - c * cy
+    ia, ib = 1.0 / a**2, 1.0 / b**2
+    # T^T diag(1/a^2, 1/b^2, -1) T with T = [[c, s, tx], [-s, c, ty], [0, 0, 1]]
+    Q = np.empty((len(cx), 3, 3))
+    Q[:, 0, 0] = c * c * ia + s * s * ib
+    Q[:, 0, 1] = Q[:, 1, 0] = c * s * ia - s * c * ib
+    Q[:, 1, 1] = s * s * ia + c * c * ib
+    Q[:, 0, 2] = Q[:, 2, 0] = c * tx * ia - s * ty * ib
+    Q[:, 1, 2] = Q[:, 2, 1] = s * tx * ia + c * ty * ib
+    Q[:, 2, 2] = tx * tx * ia + ty * ty * ib - 1.0
+    return Q / np.linalg.norm(Q, axis=(1, 2))[:, None, None]
 
 
 def line_conic_intersections(m0: np.ndarray, m1: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -196,18 +221,23 @@ def detect_rings(gray: np.ndarray, block: int = 51, offset: float = 30.0, min_ra
     if not pairs:
         return []
     ref = _refine(gray, [p[0] for p in pairs] + [p[1] for p in pairs], n_normals)
-    rings = []
     k = len(pairs)
-    for i in range(k):
-        eo, ei = ref[i], ref[k + i]
-        if eo is None or ei is None:
-            continue
-        Qo, Qi = conic_from_ellipse(*eo), conic_from_ellipse(*ei)
-        try:
-            m, r2 = concentric_centre(Qo, Qi)
-        except np.linalg.LinAlgError:
-            continue
+    keep = [i for i in range(k) if ref[i] is not None and ref[k + i] is not None]
+    if not keep:
+        return []
+    Qo = conics_from_ellipses(np.array([ref[i] for i in keep]))
+    Qi = conics_from_ellipses(np.array([ref[k + i] for i in keep]))
+    try:
+        M, R2 = concentric_centres(Qo, Qi)
+    except np.linalg.LinAlgError:  # a singular pair among them: one at a time
+        pairs_out = [concentric_centre(a, b) if np.linalg.cond(a) < 1e12 else (np.full(2, np.nan), np.nan)
+                     for a, b in zip(Qo, Qi)]
+        M = np.array([p[0] for p in pairs_out])
+        R2 = np.array([p[1] for p in pairs_out])
+    rings = []
+    for n, i in enumerate(keep):
+        eo, ei, m, r2 = ref[i], ref[k + i], M[n], float(R2[n])
         if not (np.all(np.isfinite(m)) and 0.0 < r2 < 1.0) or np.hypot(*(m - eo[:2])) > 0.5 * min(eo[2], eo[3]):
             continue
-        rings.append(Ring(eo, ei, Qo, Qi, m, float(np.sqrt(r2)), float(np.sqrt(eo[2] * eo[3]))))
+        rings.append(Ring(eo, ei, Qo[n], Qi[n], m, float(np.sqrt(r2)), float(np.sqrt(eo[2] * eo[3]))))
     return rings
