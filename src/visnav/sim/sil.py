@@ -76,6 +76,7 @@ class SilLink:
         self._odo: list = []  # (t_sim, position, velocity_ned, euler, covariance 6x6, reset_counter)
         self.received: dict[str, int] = {}
         self.sent = 0
+        self.frames_dropped = 0  # frames the bridge's camera queue had no room for (it fell behind)
         self.h = Health(source="bridge")
         self._lock = threading.Lock()
 
@@ -122,7 +123,7 @@ class SilLink:
             try:
                 self.camera.q.put_nowait(Captured(m.image, self.wall0 + m.t, now, m.index))
             except queue.Full:
-                pass
+                self.frames_dropped += 1
             return
         else:
             return
@@ -253,6 +254,7 @@ def run_sil(sc, progress=None, notify=None, sim=None):
         "reset_counter": m["reset_counter"],
         "sil_stamp_error_ms_max": float(np.max(np.abs(stamps)) / 1000.0) if len(stamps) else float("nan"),
         "sil_odometry_received": proxy.received.get("ODOMETRY", 0), "sil_messages_sent": proxy.sent,
+        "sil_frames_dropped": proxy.frames_dropped,
     })
     result.metrics["sil_notes"] = notes[:20]
     return result
