@@ -191,3 +191,13 @@ class TargetEstimate:
     samples: int
     valid: bool
     method: str = "registration"  # registration | map_based
+
+
+@dataclass
+class Controls:
+    """Control surface deflections [rad] and throttle (0..1) of the fixed wing (seed 004's autopilot output)."""
+
+    aileron: float = 0.0
+    elevator: float = 0.0
+    rudder: float = 0.0
+    throttle: float = 0.5

@@ -95,7 +95,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     out = []
     fig, axs = plt.subplots(1, 2, figsize=(14, 7), layout="constrained")
     try:
-        from visnav.mission.witas import make_ground
+        from visnav.sim.witas_parts import make_ground
 
         ground, _ = make_ground(scenario.mission, scenario.run.seed)
         n0, n1, e0, e1 = ground.extent_ned()

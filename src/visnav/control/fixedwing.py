@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from visnav.vehicles.fixedwing import Controls
+from visnav.measurements import Controls
 
 G = 9.81
 

@@ -111,13 +111,13 @@ def _pfcm(sim) -> MissionParts:
 
 @register("witas-homing")
 def _witas(sim) -> MissionParts:
-    from visnav.mission.witas import build as build_witas
+    from visnav.sim.witas_parts import build as build_witas
 
     return build_witas(sim)
 
 
 @register("pad-landing")
 def _pad(sim) -> MissionParts:
-    from visnav.mission.pad import build as build_pad
+    from visnav.sim.pad_parts import build as build_pad
 
     return build_pad(sim)

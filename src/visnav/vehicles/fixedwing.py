@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from visnav.measurements import VehicleState
+from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
 G = 9.81
 
@@ -92,14 +92,6 @@ class FixedWingParams:
         g = Jx * Jz - Jxz * Jxz
         return (Jxz * (Jx - Jy + Jz) / g, (Jz * (Jz - Jy) + Jxz * Jxz) / g, Jz / g, Jxz / g,
                 (Jz - Jx) / Jy, Jxz / Jy, ((Jx - Jy) * Jx + Jxz * Jxz) / g, Jx / g)
-
-
-@dataclass
-class Controls:
-    aileron: float = 0.0
-    elevator: float = 0.0
-    rudder: float = 0.0
-    throttle: float = 0.5
 
 
 def _lift_drag(p: FixedWingParams, alpha: float) -> tuple[float, float]:
