@@ -10,17 +10,19 @@ from visnav.sim.sil import run_sil
 
 def test_palace_sil_short_flies_on_the_bridge_output():
     r = run_sil(load_scenario("palace-landing", ["run.duration_s=6"]))
-    assert r.error is None
+    assert r.error is None, r.error
     m = r.metrics
-    assert m["link_ok"] and m["sil_odometry_received"] > 5  # ~55 on a quiet machine
-    assert m["sil_stamp_error_ms_max"] < 2.0  # ODOMETRY time_usec vs the instant it describes
+    diag = {k: m.get(k) for k in ("link_ok", "sil_odometry_received", "sil_stamp_error_ms_max", "sil_frames_dropped",
+                                  "timesync_rtt_ms", "latency_capture_to_send_ms", "sil_notes")}
+    assert m["link_ok"] and m["sil_odometry_received"] > 5, diag  # ~55 on a quiet machine
+    assert m["sil_stamp_error_ms_max"] < 2.0, diag  # ODOMETRY time_usec vs the instant it describes
     assert set(m["latency_capture_to_send_ms"]) == {"median", "p95", "n"}
     # the estimate the controller flew on (what came back over MAVLink) against truth
     tr, est = r.log.get("truth"), r.log.get("estimate")
     sel = est["t"] > 2.0
     truth = np.array([np.interp(est["t"][sel], tr["t"], tr["position"][:, i]) for i in range(3)]).T
     err = np.linalg.norm(est["position"][sel] - truth, axis=1)
-    assert np.median(err) < 0.5, np.median(err)
+    assert np.median(err) < 0.5, (np.median(err), diag)
 
 
 @pytest.mark.slow
