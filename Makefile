@@ -19,11 +19,14 @@ install: $(STAMP)
 run: $(STAMP)
 	$(BIN)/visnav run $(SCENARIO) $(ARGS)
 
+# the wall-clock-paced tests (MAVLink bridge, SIL, signals) run after the parallel suite, alone
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q
+	$(BIN)/python -m pytest -n 2 -q -m "not slow and not realtime"
+	$(BIN)/python -m pytest -q -m "realtime and not slow"
 
 test-all: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q -m ""
+	$(BIN)/python -m pytest -n 2 -q -m "not realtime"
+	$(BIN)/python -m pytest -q -m "realtime"
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run_all.py

@@ -130,6 +130,7 @@ def test_ctrl_c_during_a_run_writes_what_it_has_and_exits_130(tmp_path, monkeypa
     assert (out / "scenario.toml").exists() and (out / "estimate.tum").exists()
 
 
+@pytest.mark.realtime  # a signal at a wall-clock instant: run apart from the CPU-heavy suite
 def test_sigint_to_a_running_visnav_run(tmp_path):
     out = tmp_path / "r"
     env = dict(os.environ, PYTHONPATH=SRC)

@@ -5,11 +5,14 @@ import json
 
 import cv2
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from tests.io.mavlink_helpers import free_udp_port
 from visnav.cli import app
 from visnav.io.mavlink_sil import SilAutopilot
+
+pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
 
 
 def _lines(out: str) -> list[str]:

@@ -16,6 +16,8 @@ from visnav.io.camera_source import CallableSource, Captured, FrameSource
 from visnav.io.mavlink_link import MavlinkLink, MavlinkLinkError
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
 
+pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
+
 
 def _img(i, t=None):
     return np.full((48, 64), i % 256, np.uint8)

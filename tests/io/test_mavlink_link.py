@@ -3,9 +3,13 @@ SET_MESSAGE_INTERVAL after the autopilot appears, a GCS not taken for the autopi
 
 import time
 
+import pytest
+
 from tests.io.mavlink_helpers import free_udp_port, receive
 from visnav.io.mavlink_link import MavlinkLink, mavutil
 from visnav.io.mavlink_messages import mavlink
+
+pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
 
 
 def test_link_identity_timesync_answer_and_intervals():

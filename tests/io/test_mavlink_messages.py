@@ -14,6 +14,8 @@ from visnav.io.mavlink_link import mavutil
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import NavEstimate
 
+pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
+
 ORIGIN = LocalTangentPlane(58.3950, 15.5750, 95.0)
 
 

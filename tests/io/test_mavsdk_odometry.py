@@ -14,6 +14,8 @@ from visnav.io import mavlink_messages as mm
 from visnav.io.mavlink_link import mavutil
 from visnav.measurements import NavEstimate
 
+pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
+
 mavsdk = pytest.importorskip("mavsdk", reason="the mavsdk wheel is not installed (pip install 'mavsdk>=4.1')")
 if not hasattr(mavsdk, "Mavsdk"):
     pytest.skip("mavsdk < 4 (the gRPC mavsdk_server API) is installed; this test uses the 4.x C library API",

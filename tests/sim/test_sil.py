@@ -7,6 +7,8 @@ import pytest
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.sil import run_sil
 
+pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
+
 
 def test_palace_sil_short_flies_on_the_bridge_output():
     r = run_sil(load_scenario("palace-landing", ["run.duration_s=6"]))

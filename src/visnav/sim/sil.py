@@ -227,11 +227,14 @@ def run_sil(sc, progress=None, notify=None, sim=None):
     say = notify or notes.append
     link = MavlinkLink(f"udpin:127.0.0.1:{port}", notify=say)
     cam = QueueSource()
-    proxy = SilLink(f"udpout:127.0.0.1:{port}", cam, LocalTangentPlane(58.395, 15.575, 0.0))
+    origin = LocalTangentPlane(58.395, 15.575, 0.0)
+    proxy = SilLink(f"udpout:127.0.0.1:{port}", cam, origin)
     sim.nav = proxy
     if hasattr(built.navigator, "recorder"):  # its diagnostics into the flying log, on the simulation's clock
         built.navigator.recorder = lambda name, t, *a, **kw: sim.log.record(name, t - proxy.wall0, *a, **kw)
-    bridge = Bridge(link, cam, built.navigator, BridgeConfig(), notify=say)
+    # the origin given, as `visnav bridge --origin` does: otherwise a GPS_GLOBAL_ORIGIN answer that comes later
+    # than BridgeConfig.origin_wait_s (a loaded machine) makes the bridge take the first fix as its origin
+    bridge = Bridge(link, cam, built.navigator, BridgeConfig(origin=origin), notify=say)
     proxy.attach(built.navigator, bridge.nav_lock)
     if hasattr(sim.mission, "nav"):  # the mission talks to the navigator behind the bridge
         sim.mission.nav = proxy
