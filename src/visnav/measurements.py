@@ -201,3 +201,33 @@ class Controls:
     elevator: float = 0.0
     rudder: float = 0.0
     throttle: float = 0.5
+
+
+@dataclass(frozen=True)
+class NavInit:
+    """An explicit initialisation of a navigator (the thesis' surveyed start, a Vicon pose, an operator reset).
+
+    The only way truth-derived numbers reach a navigator in simulation; whoever sends one logs it
+    (stream ``nav_init``) so that a run says where its start came from. ``state`` holds the navigator's
+    own state vector when it has one (deck UKF: 12 relative states); ``covariance`` its uncertainty.
+    """
+
+    t: float
+    source: str  # "survey" | "truth+noise" | "operator" | "static" | ...
+    position: np.ndarray | None = None
+    velocity: np.ndarray | None = None
+    attitude: np.ndarray | None = None
+    state: np.ndarray | None = None
+    covariance: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class NavCommand:
+    """A mission manager's request to its navigator: ``name`` says what, ``args`` how (navigator-specific keys).
+
+    The navigator decides how to carry it out (``navigation/base.py``); an unknown name raises ``ValueError``.
+    """
+
+    t: float
+    name: str
+    args: dict = field(default_factory=dict)

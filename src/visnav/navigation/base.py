@@ -1,0 +1,45 @@
+"""The one interface every navigator offers (PALACE, WITAS, pad landing, ship deck, CONDOR, geo-location).
+
+A navigator takes only typed, time-stamped messages from ``measurements.py`` and never sees truth:
+
+* ``update(m)`` - one measurement (IMU, attitude, GPS, range, frame, telemetry, ...), in delivery order;
+  ``m.t`` is the instant it describes;
+* ``initialize(init: NavInit)`` - an explicit start (surveyed pose, operator reset); the caller logs it;
+* ``command(request: NavCommand)`` - what the mission manager asks for (start tracking, switch source,
+  restart the filter, ...); unknown names raise ``ValueError``;
+* ``estimate(t)`` - the navigator's estimate propagated to ``t`` (the same meaning for every navigator);
+* ``health(t)`` - ``Health``: source, tracking, counters, notes and integrity.
+
+``Navigator`` is a ``typing.Protocol``: a class conforms by offering the methods, no inheritance needed;
+``CommandDispatch`` maps ``command(NavCommand("x", {...}))`` onto a method ``_cmd_x(t, **args)``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol, runtime_checkable
+
+from visnav.measurements import Health, NavCommand, NavInit
+
+
+@runtime_checkable
+class Navigator(Protocol):
+    def update(self, m: Any) -> None: ...
+
+    def initialize(self, init: NavInit) -> None: ...
+
+    def command(self, request: NavCommand) -> None: ...
+
+    def estimate(self, t: float) -> Any: ...
+
+    def health(self, t: float) -> Health: ...
+
+
+class CommandDispatch:
+    """``command(NavCommand(t, "name", args))`` -> ``self._cmd_name(t, **args)``."""
+
+    def command(self, request: NavCommand) -> None:
+        fn = getattr(self, "_cmd_" + request.name.replace("-", "_"), None)
+        if fn is None:
+            known = sorted(k[5:] for k in dir(self) if k.startswith("_cmd_"))
+            raise ValueError(f"{type(self).__name__} has no command {request.name!r}; known: {', '.join(known)}")
+        fn(request.t, **request.args)
