@@ -120,6 +120,20 @@ class Health:
     rejected_samples: int = 0
     reinitializations: int = 0
     notes: list[str] = field(default_factory=list)
+    # integrity (estimation/integrity.py ``IntegrityMonitor.assess``): the same keys for every navigator
+    integrity: str = "ok"  # ok | degraded | unusable
+    integrity_reason: str = ""
+    hpl_m: float = float("inf")  # horizontal protection level at ``hpl_probability``
+    hpl_probability: float = 0.999
+    consistency_k2: float = 1.0
+    nis_per_dof: dict = field(default_factory=dict)  # update stream -> mean NIS / dof over the window
+    rejected_share: dict = field(default_factory=dict)  # update stream -> share gated out over the window
+
+    def set_integrity(self, assessment: dict) -> "Health":
+        """Copy ``IntegrityMonitor.assess`` output into this health record (returns self)."""
+        for k, v in assessment.items():
+            setattr(self, k, v)
+        return self
 
 
 @dataclass(frozen=True)
