@@ -27,6 +27,7 @@ from visnav.sensors.camera import Camera, PendingFrame
 from visnav.sensors.gps import Gps
 from visnav.sensors.imu import Imu
 from visnav.sensors.rangefinder import LaserRangeFinder, Sonar
+from visnav.sim.clock import rate_divisor
 from visnav.sim.log import FlightLog
 from visnav.sim.streams import RMAX_STREAMS
 from visnav.sim.missions import build as build_mission
@@ -34,8 +35,7 @@ from visnav.vehicles.rmax import RmaxModel
 from visnav.world.scene import build_world
 
 
-def _divisor(rate_hz: float, dt: float) -> int:
-    return max(1, int(round(1.0 / (rate_hz * dt))))
+_divisor = rate_divisor
 
 
 @dataclass
