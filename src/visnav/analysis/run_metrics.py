@@ -23,6 +23,7 @@ METRICS: dict[str, str] = {
     "pfcm": "visnav.analysis.path_metrics:pfcm_metrics",
     "witas-homing": "visnav.analysis.witas_metrics:witas_metrics",
     "pad-landing": "visnav.analysis.pad_report:pad_metrics",
+    "mav-geolocation": "visnav.analysis.geolocation_metrics:geolocation_metrics",
 }
 
 
