@@ -106,3 +106,22 @@ def test_visnav_metrics_on_a_missing_or_broken_directory_is_one_line(tmp_path):
     (tmp_path / "d" / "scenario.toml").write_text('[mission]\ntype = "nope"\n')
     with pytest.raises(RunDirError, match="scenario.toml"):
         from_run_dir(tmp_path / "d")
+
+
+def test_a_log_without_the_new_streams_gives_nan_not_zero():
+    """A log written before palace_progress / status counters / geoloc_result existed: unknown, not 0."""
+    from visnav.analysis.geolocation_metrics import geolocation_metrics
+    from visnav.analysis.metrics import palace_metrics
+
+    log = FlightLog()
+    for k in range(5):
+        log.record("truth", 0.1 * k, position=np.zeros(3), velocity=np.zeros(3), euler=np.zeros(3),
+                   body_rates=np.zeros(3))
+        log.record("status", 0.1 * k, mode="settle", source="gps", coherence=1.0, mpe_rate_hz=0.0, laser_ok=True,
+                   tracking=False)
+    m = palace_metrics(log, load_scenario("palace-landing"), wall_time_s=1.0)
+    for k in ("time_under_vision_s", "reinitializations", "mpe_fallbacks", "rejected_samples", "rejected_ranges"):
+        assert math.isnan(m[k]), k
+    assert m["final_mode"] == "settle" and m["sim_time_s"] == pytest.approx(0.4)
+    g = geolocation_metrics(log, load_scenario("mav-geolocation"), wall_time_s=1.0)
+    assert math.isnan(g["samples_rejected"]) and math.isnan(g["frames_tracked"]) and g["samples"] == 0

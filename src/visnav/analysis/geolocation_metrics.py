@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from visnav.analysis.metrics import finish_metrics
+from visnav.analysis.metrics import _count, finish_metrics
 
 
 
@@ -66,12 +66,12 @@ def geolocation_metrics(log, scenario, *, wall_time_s: float, error: str | None 
         "single_frame_error_median_m": float(np.median(reg_err)) if reg_err.size else math.nan,
         "map_based_sample_error_median_m": float(np.median(tab["map_err"])) if tab["map_err"].size else math.nan,
         "registration_failures": int((~ok).sum()),
-        "samples_rejected": int(last("rejected", 0)),
-        "rls_restarts": int(last("reinits", 0)),
+        "samples_rejected": _count(last("rejected")),
+        "rls_restarts": _count(last("reinits")),
         "hough_applied_rate": float(np.mean(tab["hough_applied"][ok])) if ok.any() else math.nan,
         "frames": len(frames["t"]) if frames else 0,
         "frames_target_visible": int(np.sum(np.asarray(frames["visible"], bool))) if frames else 0,
-        "frames_tracked": int(last("frames_tracked", 0)),
+        "frames_tracked": _count(last("frames_tracked")),
         "target_sigma_m": float(last("target_sigma")) if est_ok else math.nan,
     }
     yaw_err = _heading_error_deg(log)

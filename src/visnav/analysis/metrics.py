@@ -58,6 +58,12 @@ def last_row(log, stream: str, name: str, default=math.nan):
     return s[name][-1] if s and name in s else default
 
 
+def _count(x) -> int | float:
+    """An integer counter, or NaN when the log did not hold it."""
+    x = float(x)
+    return int(x) if math.isfinite(x) else math.nan
+
+
 def mpe_drift(log, horizontal: bool = True) -> tuple[float, np.ndarray]:
     """Cumulative MPE drift (seed 000 §5.4).
 
@@ -139,9 +145,10 @@ def palace_metrics(log, scenario, *, wall_time_s: float, error: str | None = Non
     mpe_t = (log.get("mpe") or {}).get("t")
     # the time the drift accumulated over (Table 5.3's "Duration": first MPE fix to the last)
     out["mpe_drift_duration_s"] = float(mpe_t[-1] - mpe_t[0]) if mpe_t is not None and len(mpe_t) else float("nan")
-    out["time_under_vision_s"] = float(last_row(log, "palace_progress", "vision_time", 0.0))
-    out["reinitializations"] = int(last_row(log, "palace_progress", "reinitializations", 0))
-    out["mpe_fallbacks"] = int(last_row(log, "palace_progress", "fallbacks", 0))
+    # NaN, not 0, from a log without the stream (a log written before it existed): unknown, not none
+    out["time_under_vision_s"] = float(last_row(log, "palace_progress", "vision_time"))
+    out["reinitializations"] = _count(last_row(log, "palace_progress", "reinitializations"))
+    out["mpe_fallbacks"] = _count(last_row(log, "palace_progress", "fallbacks"))
     # MPE accuracy while it flew the aircraft
     mpe, est = log.get("mpe"), log.get("estimate")
     if mpe and truth:
@@ -155,8 +162,8 @@ def palace_metrics(log, scenario, *, wall_time_s: float, error: str | None = Non
             e = est["position"][on_mpe, :2] - truth["position"][on_mpe, :2]
             out["nav_error_under_mpe_rms_m"] = float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
     out.update(hover_oscillation(log))
-    out["rejected_samples"] = int(last_row(log, "status", "rejected_samples", 0))
-    out["rejected_ranges"] = int(last_row(log, "status", "rejected_ranges", 0))
+    out["rejected_samples"] = _count(last_row(log, "status", "rejected_samples"))
+    out["rejected_ranges"] = _count(last_row(log, "status", "rejected_ranges"))
     out["final_mode"] = final_mode(log)
     return finish_metrics(out, sim_time, wall_time_s, error)
 
