@@ -223,7 +223,7 @@ def _overlay(reg: Registrability, geo, path: Path, marks=None) -> None:
 
 def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 15.0, gps_error_m: float = 4.0,
              fail_m: float = 5.0, seed: int = 0, hough: bool = True, unstable_m: float = 0.0,
-             quantiles: int = 4, **registration_kw) -> dict:
+             texture_keep: float = 0.5, quantiles: int = 4, **registration_kw) -> dict:
     """Register ``n`` frames rendered at random places of the scored area; failure rate by score.
 
     A failure: no match, or the frame centre registered more than ``fail_m`` from the truth. The
@@ -242,7 +242,8 @@ def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 1
     cam = PinholeCamera(720, 576, f, f, 359.5, 287.5, (-0.22, 0.06, 0, 0, 0, 0, 0, 0))
     ren = CameraRenderer(cam, 4.0, rng)
     # optionally the frames are taken on another day than the reference: fine texture does not repeat
-    flight = GeoImage(unstable_texture(geo.image, unstable_m / geo.resolution_m, np.random.default_rng(seed + 1)),
+    flight = GeoImage(unstable_texture(geo.image, unstable_m / geo.resolution_m, np.random.default_rng(seed + 1),
+                                       texture_keep),
                       geo.north0, geo.east0, geo.resolution_m, geo.name) if unstable_m > 0 else geo
     world = World(ground=flight, surface="map", wind=Wind(SteadyWind(0.0, 0.0)))
     ref = degrade_reference(geo, geo.resolution_m, 0.85, 20.0, 1.15, 0.3)

@@ -94,6 +94,10 @@ class MavRegistrationConfig(_M):
                                        "rotation refined after the match (0: none)")
     scale_search: float = Field(0.06, ge=0.0, le=0.3, description="beyond the thesis: +- relative height "
                                 "searched around the baro (0: baro scale only, as the thesis)")
+    rotation_search_deg: float = Field(45.0, ge=0.0, le=90.0, description="beyond the thesis: where Algorithm 1 "
+                                       "is not applied, correlate over headings within +- this of the telemetry "
+                                       "heading (0: keep the telemetry heading, as the thesis)")
+    rotation_search_step_deg: float = Field(7.5, gt=0.5, le=30.0)
     median_px: int = Field(5, ge=1, le=15)
     search_radius_m: float = Field(25.0, ge=5.0, le=200.0)
     min_quality: float = Field(0.05, ge=0.0, le=1.0, description="1 - second/first peak below this: no sample")

@@ -5,11 +5,11 @@ state sent at 5 Hz; the compass was not used, the heading comes from the GPS).
   state carries the last fix: up to 0.25 s old), describing the truth ``gps_delay_s`` before the fix
   (the receiver's unknown latency), plus a slowly varying bias (first-order Gauss-Markov of
   ``bias_m`` per axis, ``bias_tau_s``) and white noise (one draw per fix);
-* the whole sample is stamped where the ground station receives it: ``link_delay_s`` after the
-  autopilot formed it (868 MHz modem, the ground control computer, Ethernet to the image processing
-  computer, §7.4 Fig. 7.5); the thesis pairs frames with "corresponding telemetry" recorded at the
-  same time and names the synchronisation of video and flight data as a problem of the pose-based
-  methods (§7.1), so this offset is unknown to the ground station;
+* ``downlink()``: what the image processing computer receives, stamped on arrival ``link_delay_s``
+  after the autopilot formed it (868 MHz modem, the ground control computer, Ethernet, §7.4 Fig. 7.5);
+  the thesis pairs frames with "corresponding telemetry" recorded at the same time and names the
+  synchronisation of video and flight data as a problem of the pose-based methods (§7.1), so this
+  offset is unknown to the ground station. The autopilot itself flies on ``sample()`` (no link);
 * heading: the course over ground of the GPS velocity (velocity noise ``vel_sigma_mps`` with 1 s
   correlation), so it differs from the aircraft's yaw by the crab angle in wind and grows noisy at
   low ground speed; ``extra_heading_deg`` adds a uniform error in +-that to the downlinked heading
@@ -53,7 +53,7 @@ class AutopilotTelemetry:
         self.bias = a * self.bias + self.bias_sigma * math.sqrt(1 - a * a) * self.rng.standard_normal(2)
         b = math.exp(-dt / 1.0)
         self.vel_err = b * self.vel_err + self.vsigma * math.sqrt(1 - b * b) * self.rng.standard_normal(2)
-        ta = t - self.link  # when the autopilot formed this state
+        ta = t
         tf = math.floor(ta * self.gps_rate + 1e-9) / self.gps_rate if self.gps_rate > 0 else ta  # last GPS fix
         if self._fix is None or tf != self._fix[0]:
             s = truth_at(tf - self.delay)
@@ -69,9 +69,12 @@ class AutopilotTelemetry:
                                height=h, ground_speed=float(np.hypot(*vel)))
 
     def downlink(self, s: TelemetrySample) -> TelemetrySample:
-        """What the ground station receives: the autopilot's sample, with ``extra_heading_deg`` of
-        uniform heading error when set (the autopilot itself flies on the undisturbed one)."""
-        if self.extra <= 0:
+        """What the ground station receives: the autopilot's sample stamped on its arrival
+        (``s.t + link_delay_s``), with ``extra_heading_deg`` of uniform heading error when set (the
+        autopilot itself flies on the undisturbed one). It is handed over at once: the navigator
+        processes a frame only once a sample stamped after it is in, so only the stamp matters."""
+        h = s.heading + (self.rng.uniform(-self.extra, self.extra) if self.extra > 0 else 0.0)
+        if self.extra <= 0 and self.link <= 0:
             return s
-        h = s.heading + self.rng.uniform(-self.extra, self.extra)
-        return TelemetrySample(s.t, s.position, (h + math.pi) % (2 * math.pi) - math.pi, s.height, s.ground_speed)
+        return TelemetrySample(s.t + self.link, s.position, (h + math.pi) % (2 * math.pi) - math.pi, s.height,
+                               s.ground_speed)

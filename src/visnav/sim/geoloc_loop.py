@@ -98,7 +98,9 @@ class GeolocationSimulation:
                                         registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
                                         gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
                                         check_rotation=r.check_rotation, scale_search=r.scale_search,
-                                        rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref)
+                                        rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
+                                        rotation_search_deg=r.rotation_search_deg,
+                                        rotation_search_step_deg=r.rotation_search_step_deg)
         self.mission = GeolocationMission(cfg, self.path, recorder=self.log.record)
         self.params = micro_params(cfg.airframe.mass_kg, cfg.airframe.span_m)
         start, heading = self.path.start_pose()
