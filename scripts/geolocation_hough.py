@@ -49,7 +49,7 @@ def main() -> None:
             row[f"false_match_rate_{k}"] = float(v["failed"].mean())
             row[f"fail_rate_low_score_{k}"] = v["fail_rate_low"]
             row[f"fail_rate_high_score_{k}"] = v["fail_rate_high"]
-        row["score_median"] = res[True]["score_median"]
+        row["score_median"] = res["hough"]["score_median"]
         rows.append(row)
         print(json.dumps(row), flush=True)
         Path(a.out).write_text(json.dumps(rows, indent=1))
