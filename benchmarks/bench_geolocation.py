@@ -42,6 +42,14 @@ def main(n: int = 20) -> dict:
         reg = GeoRegistration(ref, cam, search_radius_m=25.0, **kw)
         ms = 1e3 * _per_call(lambda: reg.register(img, 72.0, 0.7 + math.radians(15), [12.0, -8.0], [300, 200]), n)
         rows[f"register one 720x576 frame at 360x288, {name}"] = ms
+    # beyond the thesis: the correlation search over headings (+-45 deg, 7.5 deg steps + 2 half steps),
+    # run only on the frames where Algorithm 1 is not applied (no corresponding lines)
+    reg = GeoRegistration(ref, cam, search_radius_m=25.0, hough=True, rotation_search_deg=45.0,
+                          rotation_search_step_deg=7.5)
+    e = reg.preprocess(img)
+    (gc, gr), = ref.ned_to_pixel(np.array([[12.0, -8.0]]))
+    rows["rotation search alone (15 matches), a frame Algorithm 1 leaves alone"] = 1e3 * _per_call(
+        lambda: reg._rotation_search(e, 72.0, 0.7 + math.radians(15), gc, gr), max(3, n // 4))
     t0 = time.perf_counter()
     rq = registrability_map(geo, 70.0)
     rows[f"registrability map, 400 x 400 m at 70 m ({rq.score.size} cells), ms"] = 1e3 * (time.perf_counter() - t0)

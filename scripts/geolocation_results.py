@@ -44,13 +44,14 @@ def main() -> None:
     if len(sys.argv) > 2:
         h = json.loads(open(sys.argv[2]).read())
         print("\n### Hough alignment vs the telemetry heading alone (heading error uniform +-30 deg)\n")
-        print("| map | frames | false matches, Hough | false matches, telemetry heading | ratio | "
-              "failures low / high score (Hough) |")
-        print("|---|---:|---:|---:|---:|---:|")
+        print("| map | frames | telemetry heading alone | Alg. 1 | ratio | Alg. 1 + rotation search | ratio | "
+              "Alg. 1 applied |")
+        print("|---|---:|---:|---:|---:|---:|---:|---:|")
         for r in h:
             a, b = r["false_match_rate_hough"], r["false_match_rate_telemetry"]
-            print(f"| {r['map']} | {r['n']} | {a:.3f} | {b:.3f} | {b / a if a > 0 else float('inf'):.1f}x | "
-                  f"{r['fail_rate_low_score_hough']:.2f} / {r['fail_rate_high_score_hough']:.2f} |")
+            c = r.get("false_match_rate_hough_search", float("nan"))
+            print(f"| {r['map']} | {r['n']} | {b:.3f} | {a:.3f} | {b / a if a > 0 else float('inf'):.1f}x | "
+                  f"{c:.3f} | {b / c if c > 0 else float('inf'):.1f}x | {r.get('hough_applied_hough', float('nan')):.2f} |")
 
 
 if __name__ == "__main__":

@@ -77,3 +77,32 @@ def test_low_scores_fail_more_often_strip_short():
     reg = registrability_map(geo, 70.0)
     v = validate(reg, geo, n=16, seed=4)
     assert v["fail_rate_low"] >= v["fail_rate_high"]
+    # the quantile rates partition the frames: their frame-weighted mean is the overall failure rate
+    q = np.clip(np.searchsorted(v["score_quantile_edges"], v["scores"], side="right") - 1, 0, 3)
+    counts = np.bincount(q, minlength=4)
+    rates = np.nan_to_num(np.array(v["fail_rate_quantile"]))
+    assert np.dot(rates, counts) / counts.sum() == pytest.approx(v["failed"].mean(), abs=1e-12)
+
+
+def test_unstable_texture_keeps_the_coarse_band_and_decorrelates_the_fine_one():
+    from visnav.analysis.registrability import unstable_texture
+
+    rng = np.random.default_rng(5)
+    img = np.clip(128 + 40 * cv2.GaussianBlur(rng.normal(0, 1, (400, 400)).astype(np.float32), (0, 0), 2.0) * 3
+                  + 30 * np.sin(np.arange(400) / 40.0)[None, :], 0, 255).astype(np.uint8)
+    f = img.astype(np.float32)
+
+    def bands(a):
+        low = cv2.GaussianBlur(a.astype(np.float32), (0, 0), 8.0)
+        return low, a.astype(np.float32) - low
+
+    lo0, b0 = bands(f)
+    assert np.array_equal(unstable_texture(img, 0.0, rng), img)
+    for keep in (0.0, 0.5):
+        out = unstable_texture(img, 8.0, np.random.default_rng(1), keep)
+        lo1, b1 = bands(out)
+        inner = (slice(40, -40), slice(40, -40))
+        assert np.abs(lo1 - lo0)[inner].mean() < 2.0  # the coarse structure is the same
+        assert b1[inner].std() == pytest.approx(b0[inner].std(), rel=0.25)  # the fine band keeps its power
+        r = np.corrcoef(b0[inner].ravel(), b1[inner].ravel())[0, 1]
+        assert r == pytest.approx(keep, abs=0.12)  # ... and only `keep` of its correlation

@@ -65,3 +65,31 @@ def test_downlink_adds_the_extra_heading_error_only():
     s = tel.sample(0.2, _truth([12.0, 0.0, 0.0], 0.0))
     d = [tel.downlink(s).heading - s.heading for _ in range(400)]
     assert max(np.abs(d)) <= math.radians(30.0) + 1e-12 and np.std(d) > math.radians(12.0)
+
+
+def test_attitude_estimate_bias_tilts_the_camera_by_the_bias():
+    # the servos counter the autopilot's estimate: a biased estimate leaves the camera tilted by -(1-leak) x bias
+    g = PitchRollGimbal(np.random.default_rng(0), lag_s=0.0, leak=0.1, bias_roll=0.0, bias_pitch=0.0, jitter=0.0,
+                        ahrs_bias_roll=0.05, ahrs_bias_pitch=-0.03)
+    e = np.array([0.2, 0.05, 0.7])
+    g.step(0.01, e)
+    np.testing.assert_allclose(g.residual(e), 0.1 * e[:2] - 0.9 * np.array([0.05, -0.03]), atol=1e-12)
+
+
+def _moving(v=(10.0, 0.0, 0.0)):
+    def at(t):
+        return VehicleState(t, np.array([v[0] * t, v[1] * t, -70.0]), np.array(v), np.zeros(3), np.zeros(3), np.zeros(3))
+    return at
+
+
+def test_gps_fixes_are_held_between_updates_and_the_link_delays_the_whole_sample():
+    tel = AutopilotTelemetry(np.random.default_rng(1), gps_sigma_m=0.0, bias_m=0.0, vel_sigma_mps=0.0,
+                             baro_bias_m=0.0, baro_noise_m=0.0, gps_delay_s=0.1, gps_rate_hz=4.0, link_delay_s=0.3)
+    truth = _moving()
+    for t in np.arange(1.0, 3.0, 0.2):
+        s = tel.sample(float(t), truth)
+        tf = np.floor(t * 4.0 + 1e-9) / 4.0  # the last 4 Hz fix
+        assert s.t == pytest.approx(t) and s.position[0] == pytest.approx(10.0 * (tf - 0.1), abs=1e-9)
+        assert 10.0 * (t - 0.1 - 0.25) - 1e-9 <= s.position[0] <= 10.0 * (t - 0.1) + 1e-9
+        d = tel.downlink(s)  # the ground station stamps it on arrival, 0.3 s later
+        assert d.t == pytest.approx(t + 0.3) and np.array_equal(d.position, s.position)

@@ -81,6 +81,25 @@ def batch_ncc(windows: np.ndarray, templates: np.ndarray) -> np.ndarray:
     return np.where(den > 1e-6 * max(float(tn.max()), 1e-12), num / np.maximum(den, 1e-12), 0.0)
 
 
+def unstable_texture(img: np.ndarray, scale_px: float, rng: np.random.Generator, keep: float = 0.0) -> np.ndarray:
+    """The image as seen on another day: structure coarser than ``scale_px`` (Gaussian sigma) kept,
+    the finer band (tree crowns and their shadows, crop texture: what sun, season and the parallax of
+    trees change between the reference and a flight) replaced by a band of the same spectrum and the
+    same local power but random phase, so it gives edges that do not correspond to the reference.
+    ``scale_px`` <= 0: the image unchanged."""
+    if scale_px <= 0:
+        return img
+    f = np.asarray(img, np.float32)
+    low = cv2.GaussianBlur(f, (0, 0), scale_px)
+    band = f - low
+    power = np.sqrt(cv2.GaussianBlur(band * band, (0, 0), 2.0 * scale_px))
+    F = np.fft.rfft2(band)
+    phase = np.exp(2j * np.pi * rng.uniform(0.0, 1.0, F.shape))
+    noise = np.fft.irfft2(np.abs(F) * phase, s=band.shape).astype(np.float32)
+    noise /= np.sqrt(cv2.GaussianBlur(noise * noise, (0, 0), 2.0 * scale_px)) + 1e-6
+    return np.clip(low + keep * band + math.sqrt(max(1.0 - keep * keep, 0.0)) * power * noise, 0, 255).astype(np.uint8)
+
+
 def _sensed_edges(img: np.ndarray, noise_sigma: float, median_px: int, rng: np.random.Generator) -> np.ndarray:
     noisy = cv2.add(img, np.clip(np.round(rng.normal(0.0, noise_sigma, img.shape)), -127, 127).astype(np.int16),
                     dtype=cv2.CV_8U) if noise_sigma > 0 else img
@@ -90,7 +109,8 @@ def _sensed_edges(img: np.ndarray, noise_sigma: float, median_px: int, rng: np.r
 def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: float = 288 / 360,
                        cell_m: float = 10.0, search_m: float = 15.0, exclusion_m: float = 4.0,
                        work_res_m: float = 0.5, noise_sigma: float = 4.0, median_px: int = 3,
-                       chunk: int = 64, seed: int = 0) -> Registrability:
+                       chunk: int = 64, seed: int = 0, unstable_m: float = 0.0,
+                       texture_keep: float = 0.5) -> Registrability:
     """The per-cell registrability of ``geo`` (a GeoImage) for frames taken at ``altitude_m``."""
     if not (np.isfinite(altitude_m) and altitude_m > 0):
         raise ValueError(f"altitude must be positive, got {altitude_m}")
@@ -99,7 +119,8 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
     img = geo.image if k == 1 else cv2.resize(geo.image, (geo.shape[1] // k, geo.shape[0] // k),
                                               interpolation=cv2.INTER_AREA)
     ref = sobel_edges(img)
-    sensed = _sensed_edges(img, noise_sigma, median_px, np.random.default_rng(seed))
+    rng = np.random.default_rng(seed)
+    sensed = _sensed_edges(unstable_texture(img, unstable_m / res, rng, texture_keep), noise_sigma, median_px, rng)
     width = 2 * altitude_m * math.tan(math.radians(hfov_deg) / 2)
     q = int(width * aspect / math.sqrt(2) / res)  # the square inside the frame at any heading
     r = int(math.ceil(search_m / res))
@@ -201,12 +222,18 @@ def _overlay(reg: Registrability, geo, path: Path, marks=None) -> None:
 
 
 def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 15.0, gps_error_m: float = 4.0,
-             fail_m: float = 5.0, seed: int = 0, hough: bool = True) -> dict:
-    """Register ``n`` frames rendered at random places of the scored area; failure rate by score."""
+             fail_m: float = 5.0, seed: int = 0, hough: bool = True, unstable_m: float = 0.0,
+             texture_keep: float = 0.5, quantiles: int = 4, **registration_kw) -> dict:
+    """Register ``n`` frames rendered at random places of the scored area; failure rate by score.
+
+    A failure: no match, or the frame centre registered more than ``fail_m`` from the truth. The
+    frames, headings and GPS errors depend on ``seed`` only (the same for any ``hough`` or
+    ``registration_kw``). Returns per-frame arrays (``error_m``, ``heading_error``, ``hough_applied``,
+    ``quality``) and the failure rate below / above the median score and per score quantile."""
     from visnav.geometry.camera import PinholeCamera
     from visnav.sensors.camera import CameraRenderer
     from visnav.vision.geolocation_registration import GeoRegistration, nadir_dcm
-    from visnav.world.maps import degrade_reference
+    from visnav.world.maps import GeoImage, degrade_reference
     from visnav.world.scene import World
     from visnav.world.wind import SteadyWind, Wind
 
@@ -214,22 +241,40 @@ def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 1
     f = 360.0 / math.tan(math.radians(26.5))
     cam = PinholeCamera(720, 576, f, f, 359.5, 287.5, (-0.22, 0.06, 0, 0, 0, 0, 0, 0))
     ren = CameraRenderer(cam, 4.0, rng)
-    world = World(ground=geo, surface="map", wind=Wind(SteadyWind(0.0, 0.0)))
+    # optionally the frames are taken on another day than the reference: fine texture does not repeat
+    flight = GeoImage(unstable_texture(geo.image, unstable_m / geo.resolution_m, np.random.default_rng(seed + 1),
+                                       texture_keep),
+                      geo.north0, geo.east0, geo.resolution_m, geo.name) if unstable_m > 0 else geo
+    world = World(ground=flight, surface="map", wind=Wind(SteadyWind(0.0, 0.0)))
     ref = degrade_reference(geo, geo.resolution_m, 0.85, 20.0, 1.15, 0.3)
-    gr = GeoRegistration(ref, cam, hough=hough, scale_search=0.06, rot_step_deg=0.75)
+    kw = {"scale_search": 0.06, "rot_step_deg": 0.75, **registration_kw}
+    gr = GeoRegistration(ref, cam, hough=hough, **kw)
     h, w = reg.score.shape
     ne = np.column_stack([reg.north0 - rng.uniform(0, h - 1, n) * reg.cell_m,
                           reg.east0 + rng.uniform(0, w - 1, n) * reg.cell_m])
     scores = reg.at(ne)
-    fails = np.zeros(n, bool)
+    err = np.full(n, np.inf)
+    dpsi = np.zeros(n)
+    applied = np.zeros(n, bool)
+    quality = np.full(n, np.nan)
     for i, p in enumerate(ne):
         psi = rng.uniform(-math.pi, math.pi)
         img = ren.render(np.array([p[0], p[1], -reg.altitude_m]), nadir_dcm(psi), world)
-        g = gr.register(img, reg.altitude_m, psi + math.radians(rng.uniform(-1, 1) * heading_error_deg),
-                        p + rng.normal(0.0, gps_error_m / math.sqrt(2), 2), [cam.cx, cam.cy])
-        fails[i] = (not g.ok) or np.linalg.norm(g.target_ne - p) > fail_m
+        dpsi[i] = math.radians(rng.uniform(-1, 1) * heading_error_deg)
+        g = gr.register(img, reg.altitude_m, psi + dpsi[i], p + rng.normal(0.0, gps_error_m / math.sqrt(2), 2),
+                        [cam.cx, cam.cy])
+        applied[i] = bool(g.alignment is not None and g.alignment.applied)
+        if g.ok:
+            err[i], quality[i] = float(np.linalg.norm(g.target_ne - p)), g.quality
+    fails = err > fail_m
     lo = scores <= np.nanmedian(scores)
-    return {"positions": ne, "scores": scores, "failed": fails,
+    edges = np.nanquantile(scores, np.linspace(0, 1, quantiles + 1))
+    qi = np.clip(np.searchsorted(edges, scores, side="right") - 1, 0, quantiles - 1)
+    return {"positions": ne, "scores": scores, "failed": fails, "error_m": err, "heading_error": dpsi,
+            "hough_applied": applied, "quality": quality,
             "fail_rate_low": float(fails[lo].mean()) if lo.any() else math.nan,
             "fail_rate_high": float(fails[~lo].mean()) if (~lo).any() else math.nan,
+            "fail_rate_quantile": [float(fails[qi == k].mean()) if (qi == k).any() else math.nan
+                                   for k in range(quantiles)],
+            "score_quantile_edges": [float(v) for v in edges],
             "score_median": float(np.nanmedian(scores))}

@@ -40,12 +40,15 @@ class GeolocationNavigator:
                  min_quality: float = 0.05, registration_sigma_m: float = 1.5, map_sigma_m: float = 10.0,
                  gate_prob: float | None = 0.999, tracker_min_score: float = 0.75,
                  process_size=(360, 288), check_rotation: bool = False,
-                 scale_search: float = 0.0, rotation_refine_deg: float = 0.0, quality_ref: float = 0.5) -> None:
+                 scale_search: float = 0.0, rotation_refine_deg: float = 0.0, quality_ref: float = 0.5,
+                 rotation_search_deg: float = 0.0, rotation_search_step_deg: float = 7.5) -> None:
         self.camera = camera
         self.registration = GeoRegistration(reference, camera, process_size=process_size, median_px=median_px,
                                             search_radius_m=search_radius_m, hough=hough,
                                             check_rotation=check_rotation, scale_search=scale_search,
-                                            rot_step_deg=rotation_refine_deg)
+                                            rot_step_deg=rotation_refine_deg,
+                                            rotation_search_deg=rotation_search_deg,
+                                            rotation_search_step_deg=rotation_search_step_deg)
         self.tracker = RotatingTemplateTracker(min_score=tracker_min_score)
         self.min_quality, self.quality_ref = float(min_quality), float(quality_ref)
         self.R_reg = registration_sigma_m ** 2 * np.eye(2)

@@ -57,6 +57,9 @@ class MavGimbalConfig(_M):
     ahrs_turn_gain: float = Field(0.3, ge=0.0, le=1.0, description="share of the bank the autopilot's AHRS "
                                   "loses in a sustained turn (the gimbal counters the estimate)")
     ahrs_tau_s: float = Field(8.0, gt=0.0, le=120.0)
+    ahrs_bias_deg: float = Field(3.0, ge=0.0, le=15.0, description="1-sigma per axis (roll, pitch) of the "
+                                 "autopilot's attitude-estimate bias, drawn once per flight (§7.2: 'biases in "
+                                 "the MAV's attitude estimation'; 3 deg: MEMS accelerometer levelling, assumed)")
 
 
 class MavTelemetryConfig(_M):
@@ -64,6 +67,11 @@ class MavTelemetryConfig(_M):
     gps_sigma_m: float = Field(0.7, ge=0.0, le=10.0)
     gps_bias_m: float = Field(3.0, ge=0.0, le=20.0, description="1-sigma per axis")
     gps_delay_s: float = Field(0.2, ge=0.0, le=1.0)
+    gps_rate_hz: float = Field(4.0, ge=0.0, le=20.0, description="GPS fixes held between updates (§7.4.2: "
+                               "4 Hz u-blox); 0: a fix at every sample")
+    link_delay_s: float = Field(0.3, ge=0.0, le=1.5, description="autopilot -> image computer transport "
+                                "(modem, ground control computer, Ethernet, Fig. 7.5), unknown to the ground "
+                                "station (§7.1: synchronising video and flight data; 0.3 s assumed)")
     vel_sigma_mps: float = Field(0.4, ge=0.0, le=3.0)
     baro_bias_m: float = Field(2.0, ge=0.0, le=20.0)
     baro_noise_m: float = Field(0.3, ge=0.0, le=5.0)
@@ -86,6 +94,10 @@ class MavRegistrationConfig(_M):
                                        "rotation refined after the match (0: none)")
     scale_search: float = Field(0.06, ge=0.0, le=0.3, description="beyond the thesis: +- relative height "
                                 "searched around the baro (0: baro scale only, as the thesis)")
+    rotation_search_deg: float = Field(45.0, ge=0.0, le=90.0, description="beyond the thesis: where Algorithm 1 "
+                                       "is not applied, correlate over headings within +- this of the telemetry "
+                                       "heading (0: keep the telemetry heading, as the thesis)")
+    rotation_search_step_deg: float = Field(7.5, gt=0.5, le=30.0)
     median_px: int = Field(5, ge=1, le=15)
     search_radius_m: float = Field(25.0, ge=5.0, le=200.0)
     min_quality: float = Field(0.05, ge=0.0, le=1.0, description="1 - second/first peak below this: no sample")

@@ -178,7 +178,9 @@ class TelemetryLink:
 class PitchRollGimbal:
     """Seed 002 §7.3 / Fig. 7.6: a pitch-roll camera unit that counteracts the aircraft's pitch and roll
     to keep a nadir camera perpendicular to the ground, on the autopilot's attitude estimate (which
-    under-reads the bank in sustained turns: ``ahrs_turn_gain``, ``ahrs_tau_s``). Its servos follow the
+    under-reads the bank in sustained turns: ``ahrs_turn_gain``, ``ahrs_tau_s``, and is biased by
+    ``ahrs_bias_roll``, ``ahrs_bias_pitch``: §7.2 names "biases in the MAV's attitude estimation" and
+    the IMU-gimbal misalignment as the systematic errors of the map-based method). Its servos follow the
     commanded angles through
     a first-order lag (``lag_s``) and compensate only ``1 - leak`` of them; the camera sits on the unit
     with a static misalignment (``bias_roll``, ``bias_pitch``) and jitters (Gauss-Markov, ``jitter``
@@ -190,7 +192,8 @@ class PitchRollGimbal:
 
     def __init__(self, rng: np.random.Generator, lag_s: float, leak: float, bias_roll: float, bias_pitch: float,
                  jitter: float, limit: float = np.radians(45.0), ahrs_turn_gain: float = 0.0,
-                 ahrs_tau_s: float = 8.0) -> None:
+                 ahrs_tau_s: float = 8.0, ahrs_bias_roll: float = 0.0, ahrs_bias_pitch: float = 0.0) -> None:
+        self.ahrs_bias = np.array([ahrs_bias_roll, ahrs_bias_pitch], float)  # the attitude estimate's bias [rad]
         self.rng, self.lag, self.leak, self.limit = rng, float(lag_s), float(leak), float(limit)
         self.turn_gain, self.ahrs_tau = float(ahrs_turn_gain), float(ahrs_tau_s)
         self.ahrs_err = 0.0  # the autopilot's bank under-read in turns [rad]
@@ -204,7 +207,7 @@ class PitchRollGimbal:
         # the servos counter the autopilot's attitude estimate; a small autopilot's AHRS levels itself on
         # the apparent gravity in a sustained turn: it under-reads the bank by up to turn_gain x bank
         self.ahrs_err += (self.turn_gain * e[0] - self.ahrs_err) * min(1.0, dt / self.ahrs_tau)
-        cmd = -(1.0 - self.leak) * (e[:2] - np.array([self.ahrs_err, 0.0]))
+        cmd = -(1.0 - self.leak) * (e[:2] - np.array([self.ahrs_err, 0.0]) + self.ahrs_bias)
         cmd = np.clip(cmd, -self.limit, self.limit)
         self.servo += (cmd - self.servo) * (min(1.0, dt / self.lag) if self.lag > 0 else 1.0)
         if self.jitter > 0:

@@ -84,18 +84,23 @@ class GeolocationSimulation:
         self.path = FigureEight(centre, ctl.half_length_m, math.radians(axis), ctl.l1_m)
         g = cfg.gimbal
         b = rng[3].normal(0.0, math.radians(g.bias_deg), 2)
+        ab = rng[7].normal(0.0, math.radians(g.ahrs_bias_deg), 2)
         self.gimbal = PitchRollGimbal(rng[3], g.lag_s, g.leak, b[0], b[1], math.radians(g.jitter_deg),
-                                      ahrs_turn_gain=g.ahrs_turn_gain, ahrs_tau_s=g.ahrs_tau_s)
+                                      ahrs_turn_gain=g.ahrs_turn_gain, ahrs_tau_s=g.ahrs_tau_s,
+                                      ahrs_bias_roll=ab[0], ahrs_bias_pitch=ab[1])
         tl = cfg.telemetry
         self.telemetry = AutopilotTelemetry(rng[4], tl.rate_hz, tl.gps_sigma_m, tl.gps_bias_m, 600.0, tl.gps_delay_s,
-                                            tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg)
+                                            tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg,
+                                            gps_rate_hz=tl.gps_rate_hz, link_delay_s=tl.link_delay_s)
         r = cfg.registration
         self.nav = GeolocationNavigator(self.reference, self.camera, hough=r.hough, median_px=r.median_px,
                                         search_radius_m=r.search_radius_m, min_quality=r.min_quality,
                                         registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
                                         gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
                                         check_rotation=r.check_rotation, scale_search=r.scale_search,
-                                        rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref)
+                                        rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
+                                        rotation_search_deg=r.rotation_search_deg,
+                                        rotation_search_step_deg=r.rotation_search_step_deg)
         self.mission = GeolocationMission(cfg, self.path, recorder=self.log.record)
         self.params = micro_params(cfg.airframe.mass_kg, cfg.airframe.span_m)
         start, heading = self.path.start_pose()
@@ -103,7 +108,7 @@ class GeolocationSimulation:
                                         self.wind)
         gains = InnerGains(bank_limit=math.radians(ctl.bank_limit_deg))
         self.autopilot = FixedWingAutopilot(gains, trim(self.params, va).controls)
-        self.truth = TruthHistory(self.dt, 2.0)
+        self.truth = TruthHistory(self.dt, 2.0 + cfg.telemetry.gps_delay_s + cfg.telemetry.link_delay_s)
         self.clicked = False
         self.frames: list = []  # (t, visible, true pixel) per frame, for the metrics
 

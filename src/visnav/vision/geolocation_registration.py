@@ -105,7 +105,8 @@ class GeoRegistration:
     def __init__(self, reference, camera: PinholeCamera, process_size=(360, 288), median_px: int = 5,
                  search_radius_m: float = 20.0, hough: bool = True, exclusion_m: float = 4.0,
                  edge_keep: float = 0.08, check_rotation: bool = False, scale_search: float = 0.0,
-                 scale_steps: int = 2, rot_step_deg: float = 0.0) -> None:
+                 scale_steps: int = 2, rot_step_deg: float = 0.0, rotation_search_deg: float = 0.0,
+                 rotation_search_step_deg: float = 5.0) -> None:
         self.ref = reference
         self.cam_full = camera
         w, h = (int(v) for v in process_size)
@@ -118,6 +119,7 @@ class GeoRegistration:
         self.exclusion_m, self.edge_keep, self.check_rotation = float(exclusion_m), float(edge_keep), check_rotation
         self.scale_search, self.scale_steps = float(scale_search), int(scale_steps)
         self.rot_step = math.radians(rot_step_deg)
+        self.rot_search, self.rot_search_step = math.radians(rotation_search_deg), math.radians(rotation_search_step_deg)
         K = self.cam.K
         dist = np.array(self.cam.dist)
         self._maps = cv2.initUndistortRectifyMap(K, dist, None, K, (w, h), cv2.CV_32FC1) \
@@ -204,7 +206,10 @@ class GeoRegistration:
                 if align.applied:
                     # content rotated by +a (counterclockwise on screen) = heading decreased by a
                     head = head - align.angle
-        best = self._match(edges, height, head, gc, gr)
+        if self.hough and self.rot_search > 0 and not (align is not None and align.applied):
+            best = self._rotation_search(edges, height, head, gc, gr)
+        else:
+            best = self._match(edges, height, head, gc, gr)
         if self.check_rotation and align is not None and align.applied:
             alt = self._match(edges, height, float(heading), gc, gr)
             if alt.ok and (not best.ok or alt.quality > best.quality + 0.05):
@@ -216,6 +221,26 @@ class GeoRegistration:
             p = self.to_processed_px(target_uv)[0]
             cr = best.A @ np.array([p[0], p[1], 1.0])
             best.target_ne = ref.pixel_to_ned(cr.reshape(1, 2))[0]
+        return best
+
+    def _rotation_search(self, edges: np.ndarray, height: float, heading: float, gc: float, gr: float) -> GeoMatch:
+        """Beyond the thesis, where Algorithm 1 has no answer (no corresponding lines: water, forest,
+        fields without straight edges; or two line families that agree equally): the correlation of
+        the thesis' final step over headings within +-``rotation_search_deg`` of the telemetry
+        heading (the thesis assumes at most 45 deg of heading error, Alg. 1 step 5) in steps of
+        ``rotation_search_step_deg``, then half steps around the best; the highest peak wins."""
+        n = int(round(self.rot_search / self.rot_search_step))
+        offs = np.arange(-n, n + 1) * self.rot_search_step
+        runs = [self._match(edges, height, heading + d, gc, gr) for d in offs]
+        pk = np.array([r.peak if r.ok else -np.inf for r in runs])
+        i = int(np.argmax(pk))
+        if not np.isfinite(pk[i]):
+            return runs[n]
+        best = runs[i]
+        for d in (-0.5 * self.rot_search_step, 0.5 * self.rot_search_step):
+            r = self._match(edges, height, heading + offs[i] + d, gc, gr)
+            if r.ok and r.peak > best.peak:
+                best = r
         return best
 
     @staticmethod

@@ -1,0 +1,120 @@
+"""Registrability map on the real maps of ../shared/data: median score by land cover (hand-drawn
+classes below), and the failure rate of full-pipeline registrations per score quantile.
+
+    VISNAV_SHARED_DATA=/path/to/shared/data PYTHONPATH=src nice -n 10 python scripts/geolocation_registrability.py \
+        --out runs/geoloc-registrability.json [--n 200] [--keep 1,0.7,0.5]
+
+Land cover: polygons drawn by eye on the maps (x = column, y = row, in pixels of the map reduced by
+``scale``: 0.5 for satellite_column, 0.4 for satellite_strip); the road class is the cells within 8 m
+of the gravel roads. Registrations: the mission's pipeline (Algorithm 1, rotation search, scale and
+rotation refinement), heading off by up to +-15 deg, GPS by 4 m. ``--keep``: the share of the fine texture (finer than 2 m) that repeats between
+the reference and the flight (``registrability.unstable_texture``; 1: the frames are drawn from the
+reference orthophoto itself, as in the closed-loop simulation).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+if not DATA.is_dir() and os.environ.get("VISNAV_SHARED_DATA"):
+    DATA = Path(os.environ["VISNAV_SHARED_DATA"])
+
+POLYGONS = {
+    "column": (0.5, {
+        "lake": [(0, 0), (398, 0), (398, 95), (0, 100)],
+        "forest": [(0, 150), (100, 160), (260, 290), (225, 380), (200, 430), (210, 580), (150, 720), (110, 800),
+                   (40, 1000), (0, 1000)],
+        "fields": [(300, 320), (398, 300), (398, 1038), (70, 1038), (125, 820), (170, 720), (225, 590), (230, 420)],
+        "shore/reed": [(0, 110), (398, 100), (398, 290), (290, 300), (100, 150)],
+    }, [((398, 492), (140, 742)), ((325, 558), (398, 660))]),
+    "strip": (0.4, {
+        "lake": [(0, 0), (954, 0), (954, 70), (800, 70), (700, 78), (560, 58), (430, 90), (330, 150), (160, 230),
+                 (60, 277), (0, 277)],
+        "forest": [(230, 277), (340, 200), (440, 120), (560, 80), (680, 100), (760, 160), (840, 240), (860, 277)],
+        "shore/reed": [(80, 277), (160, 240), (330, 160), (430, 100), (560, 68), (700, 88), (954, 80), (954, 230),
+                       (870, 240), (860, 277)],
+    }, []),
+}
+
+
+def classes(name: str, shape) -> dict:
+    scale, polys, roads = POLYGONS[name]
+    out = {}
+    for k, pts in polys.items():
+        m = np.zeros(shape, np.uint8)
+        cv2.fillPoly(m, [np.round(np.array(pts, float) / scale).astype(np.int32)], 1)
+        out[k] = m.astype(bool)
+    if roads:
+        m = np.zeros(shape, np.uint8)
+        for a, b in roads:
+            cv2.line(m, tuple(int(v / scale) for v in a), tuple(int(v / scale) for v in b), 1, int(16 / 0.25))
+        out["road"] = m.astype(bool)
+        out["fields"] &= ~out["road"]
+    if "shore/reed" in out:
+        out["shore/reed"] &= ~out["forest"]
+    return out
+
+
+def by_class(reg, geo, cl) -> dict:
+    h, w = reg.score.shape
+    ii, jj = np.mgrid[0:h, 0:w]
+    ne = np.column_stack([reg.north0 - ii.ravel() * reg.cell_m, reg.east0 + jj.ravel() * reg.cell_m])
+    px = geo.ned_to_pixel(ne)
+    c = np.clip(np.round(px[:, 0]).astype(int), 0, geo.shape[1] - 1)
+    r = np.clip(np.round(px[:, 1]).astype(int), 0, geo.shape[0] - 1)
+    out = {}
+    for k, m in cl.items():
+        sel = m[r, c]
+        if sel.any():
+            out[k] = {"cells": int(sel.sum()), "score": float(np.median(reg.score.ravel()[sel])),
+                      "peak": float(np.median(reg.peak.ravel()[sel])),
+                      "ambiguity": float(np.median(reg.ambiguity.ravel()[sel]))}
+    return out
+
+
+def main() -> None:
+    from visnav.analysis.registrability import registrability_map, validate
+    from visnav.world.maps import GeoImage
+    from visnav.world.rural import rural_map
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--n", type=int, default=200)
+    ap.add_argument("--keep", default="1,0.7,0.5")
+    ap.add_argument("--maps", default="rural,column,strip")
+    ap.add_argument("--heading-error-deg", type=float, default=15.0)
+    a = ap.parse_args()
+    rows = []
+    for name in a.maps.split(","):
+        if name == "rural":
+            geo = rural_map(400.0, 0.25, np.random.default_rng(11))
+        elif (DATA / f"satellite_{name}.png").exists():
+            geo = GeoImage.load(DATA / f"satellite_{name}.png")
+        else:
+            print(f"{name}: {DATA} not found, skipped")
+            continue
+        for keep in (float(k) for k in a.keep.split(",")):
+            um = 0.0 if keep >= 1 else 2.0
+            reg = registrability_map(geo, 70.0, unstable_m=um, texture_keep=keep)
+            row = {"map": name, "texture_keep": keep, "classes": by_class(reg, geo, classes(name, geo.shape))
+                   if name in POLYGONS else {}}
+            if a.n > 0:
+                v = validate(reg, geo, n=a.n, heading_error_deg=a.heading_error_deg, seed=11, unstable_m=um,
+                             texture_keep=keep, rotation_search_deg=45.0, rotation_search_step_deg=7.5)
+                row.update(n=a.n, fail_rate=float(v["failed"].mean()), fail_rate_quantile=v["fail_rate_quantile"],
+                           score_quantile_edges=v["score_quantile_edges"], fail_rate_low=v["fail_rate_low"],
+                           fail_rate_high=v["fail_rate_high"])
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+            Path(a.out).write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()
