@@ -77,6 +77,12 @@ class RadiusFilter:
         return self.R is None or t - self.t_last_meas > self.stale_s
 
 
+_NAN3 = np.full(3, np.nan)
+_NAN3.setflags(write=False)
+_NAN66 = np.full((6, 6), np.nan)
+_NAN66.setflags(write=False)
+
+
 def centred(camera, u: float, v: float) -> tuple[float, float]:
     """Seed 004 image coordinates (X right, Y up) [px] from the image centre of an OpenCV pixel."""
     return u - (camera.width - 1) / 2.0, (camera.height - 1) / 2.0 - v
@@ -118,6 +124,12 @@ class CondorNavigator(AutopilotNavigator):
         self.headings: deque = deque(maxlen=64)
         self.fix: tuple | None = None  # (t, R, Psi_VB, pan, heading at t)
         self.fixes = self.radius_updates = 0
+        var = self.gps_sigma ** 2 * self.gps_gain / (2.0 - self.gps_gain)  # the GPS smoother's steady variance
+        self._gps_cov = np.diag([var, var, var, np.nan, np.nan, np.nan])
+        self.health_period_s = 0.1
+        self._assess: dict | None = None
+        self._assess_key: tuple | None = None
+        self._assess_t = -math.inf
 
     # ------------------------------------------------------------------ measurements
     def update(self, m) -> None:
@@ -220,19 +232,18 @@ class CondorNavigator(AutopilotNavigator):
 
     def estimate(self, t: float) -> FixedWingEstimate:
         base = self._base(t)
-        pos, vel, R, Rdot, valid, gs = np.full(3, np.nan), np.full(3, np.nan), math.nan, 0.0, False, math.nan
-        cov = np.full((6, 6), np.nan)
+        pos, vel, R, Rdot, valid, gs = _NAN3, _NAN3, math.nan, 0.0, False, math.nan
+        cov = _NAN66
         if self.source == "gps":
             if self.gps_pos is not None:
                 pos = self.gps_pos + self.gps_vel * (t - self.gps_t)
-                vel = self.gps_vel.copy()
-                gs = float(np.hypot(vel[0], vel[1]))
-                var = self.gps_sigma ** 2 * self.gps_gain / (2.0 - self.gps_gain)  # the smoother's steady variance
-                cov = np.diag([var, var, var, np.nan, np.nan, np.nan])
+                vel = self.gps_vel
+                gs = math.hypot(vel[0], vel[1])
+                cov = self._gps_cov
                 if self.target is not None:
-                    rel = pos[:2] - self.target[:2]
-                    R = float(np.hypot(*rel))
-                    Rdot = float(rel @ vel[:2] / max(R, 1.0))
+                    rn, re = pos[0] - self.target[0], pos[1] - self.target[1]
+                    R = math.hypot(rn, re)
+                    Rdot = (rn * vel[0] + re * vel[1]) / max(R, 1.0)
                     valid = t - self.gps_t <= self.gps_stale_s
         else:
             R, Rdot = self.radius.predict(t)
@@ -252,14 +263,20 @@ class CondorNavigator(AutopilotNavigator):
                 cov = np.full((6, 6), np.nan)
                 cov[:2, :2] = P
         return FixedWingEstimate(t=t, position=pos, velocity=vel, covariance=cov,
-                                 valid=bool(np.all(np.isfinite(pos[:2]))), source=self.source, ground_speed=gs,
+                                 valid=math.isfinite(pos[0]) and math.isfinite(pos[1]), source=self.source, ground_speed=gs,
                                  radius=R, radius_rate=Rdot, radius_valid=bool(valid), **base)
 
     def health(self, t: float) -> Health:
-        e = self.estimate(t)
-        P_h = e.covariance[:2, :2]
-        h = Health(source=self.source, tracking=bool(self.last_vision and self.last_vision["tracked"]))
-        h.set_integrity(self.integrity.assess(t, P_h if np.all(np.isfinite(P_h)) else None))
-        if self.source == "vision" and not e.radius_valid:
+        """``tracking``: the vision radius is coming in (not stale); integrity of the radius filter and the
+        protection level of the position (re-assessed at most every ``health_period_s`` or on a new fix)."""
+        h = Health(source=self.source, tracking=not self.radius.stale(t))
+        key = (self.radius_updates, self.source)
+        if self._assess is None or key != self._assess_key or t - self._assess_t >= self.health_period_s:
+            P_h = self.estimate(t).covariance[:2, :2]
+            ok = math.isfinite(P_h[0, 0]) and math.isfinite(P_h[1, 1])
+            self._assess = self.integrity.assess(t, P_h if ok else None)
+            self._assess_key, self._assess_t = key, t
+        h.set_integrity(dict(self._assess))
+        if self.source == "vision" and self.radius.stale(t):
             h.notes.append("vision radius stale")
         return h
