@@ -33,7 +33,7 @@ from visnav.sensors.gimbal import CameraAhrs, Gimbal, PanPotentiometer
 from visnav.sensors.gps import Gps
 from visnav.sensors.link import Link
 from visnav.sim.clock import rate_divisor
-from visnav.sim.fixedwing_common import scenario_wind, trimmed_aircraft
+from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
 from visnav.sim.log import FlightLog
 from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
 from visnav.vehicles.base import Environment
@@ -41,16 +41,13 @@ from visnav.vehicles.fixedwing import FixedWingParams, trim
 from visnav.vision.condor_pipeline import VisionRange
 
 
-class CondorWorld:
+class CondorWorld(AircraftAir):
     """What CONDOR's sensors see besides the aircraft's state: the gimbal (its true pan, tilt and the
-    camera's attitude), the tent's outline, and the air data of the aircraft at the current step."""
+    camera's attitude), the tent's outline, and the aircraft's airspeed at the current step."""
 
     def __init__(self, gimbal: Gimbal, outline: np.ndarray, vehicle) -> None:
-        self.gimbal, self.outline, self.vehicle = gimbal, outline, vehicle
-
-    def airspeed(self, t: float) -> float:
-        """True airspeed [m/s] now (sensors sample at the current step)."""
-        return float(self.vehicle.air["Va"])
+        super().__init__(vehicle)
+        self.gimbal, self.outline = gimbal, outline
 
 
 def build_navigator(cfg, camera) -> CondorNavigator:
