@@ -52,6 +52,7 @@ class GimbalConfig(_M):
     ahrs_accel_gain: float = Field(0.2, ge=0.0, le=1.0, description="share of unexplained acceleration in the attitude")
     ahrs_tau_s: float = Field(3.0, gt=0.0, le=60.0)
     ahrs_lag_s: float = Field(0.0, ge=0.0, le=10.0, description="lag of the AHRS behind quick tilts (Fig. 4.2)")
+    ahrs_rate_hz: float = Field(50.0, gt=0.0, le=500.0, description="output rate of the camera AHRS (its filter steps at it)")
     pot_noise_deg: float = Field(1.0, ge=0.0, le=10.0)
     operator_gain_per_s: float = Field(0.6, ge=0.0, le=5.0, description="how fast the operator re-centres the tent")
 

@@ -2,8 +2,8 @@
 
 The loop is the block diagram: sensors -> latency queue -> ``CondorNavigator`` -> ``CondorMission``
 -> ``FixedWingAutopilot`` -> ``FixedWingModel``. Dynamics at ``run.dt_s`` (100 Hz); autopilot sensors
-(AHRS, gyros + accelerometers, pitot, baro) at 50 Hz, compass 10 Hz, GPS 5 Hz; the gimbal camera, its
-AHRS and the pan potentiometer at ``camera.frame_hz`` (7.5 Hz, §4); mission and autopilot at 50 Hz;
+(AHRS, gyros + accelerometers, pitot, baro) and the camera's AHRS at 50 Hz, compass 10 Hz, GPS 5 Hz; the
+gimbal camera and the pan potentiometer at ``camera.frame_hz`` (7.5 Hz, §4); mission and autopilot at 50 Hz;
 log at 10 Hz. The navigator's ground-station half turns frames into radius fixes, which cross the
 telemetry uplink (``sensors/link.Link``: latency + drops) back to its on-board half. The operator
 re-centres the tent with the gimbal from the tracked pixel. Truth reaches only the sensors, the
@@ -104,7 +104,7 @@ class CondorSimulation:
             Gps(rng[12], sn.gps.rate_hz, cfg.gps_noise_m, sn.gps.velocity_noise_mps, sn.gps.latency_s),
             CameraAhrs(rng[2], math.radians(g.ahrs_noise_deg), math.radians(g.ahrs_bias_tilt_deg),
                        math.radians(g.ahrs_bias_roll_deg), g.ahrs_accel_gain, g.ahrs_tau_s, g.ahrs_noise_tau_s,
-                       g.ahrs_lag_s, rate_hz=c.frame_hz),
+                       g.ahrs_lag_s, rate_hz=g.ahrs_rate_hz),
             PanPotentiometer(rng[3], math.radians(g.pot_noise_deg), rate_hz=c.frame_hz),
             GimbalCamera(self.renderer, c.frame_hz),
         ]
