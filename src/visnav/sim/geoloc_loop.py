@@ -130,11 +130,18 @@ class GeolocationSimulation:
             self.log.record("error", getattr(self, "_t", 0.0), message=error)
         self._log_samples()
         wall = time.perf_counter() - wall0
-        return RunResult(scenario=self.sc, log=self.log, metrics=geolocation_metrics(self, wall, error), error=error)
+        return RunResult(scenario=self.sc, log=self.log, metrics=geolocation_metrics(self.log, self.sc, wall, error), error=error)
 
     def _log_samples(self) -> None:
         """The navigator's samples and RLS estimates, beside the true target (for the report)."""
         self.log.record("target", 0.0, position=self.target.copy())
+        t_end = getattr(self, "_t", 0.0)
+        est, est_m = self.nav.estimate(t_end), self.nav.estimate(t_end, "map_based")
+        self.log.record("result", t_end, target_reg=np.asarray(est.position, float)[:2], target_reg_valid=est.valid,
+                        target_reg_sigma=float(math.sqrt(max(np.trace(est.covariance), 0.0))) if est.valid else math.nan,
+                        target_map=np.asarray(est_m.position, float)[:2], target_map_valid=est_m.valid,
+                        samples_rejected=int(self.nav.rls["registration"].rejected),
+                        rls_restarts=int(self.nav.rls["registration"].reinits), frames_tracked=int(self.nav.frames_tracked))
         for s in self.nav.samples:
             self.log.record("sample", s["t"], reg=s["reg"], map=s["map"], est_reg=s["est_reg"], est_map=s["est_map"],
                             ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],

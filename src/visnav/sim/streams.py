@@ -175,4 +175,12 @@ GEOLOC_STREAMS = {
                "height_used": ("m", "above ground", "height used to scale the frame"),
                "gps": ("m", _NE, "telemetry GPS position"),
                "uv": ("px", "image (u right, v down)", "tracked target pixel")},
+    "result": {"target_reg": ("m", _NE, "the navigator's final target estimate (registration RLS)"),
+               "target_reg_valid": ("bool", "", "the registration estimate exists"),
+               "target_reg_sigma": ("m", "horizontal", "sqrt of the trace of its covariance"),
+               "target_map": ("m", _NE, "the navigator's final map-based target estimate"),
+               "target_map_valid": ("bool", "", "the map-based estimate exists"),
+               "samples_rejected": ("1", "", "registration samples the RLS gate rejected"),
+               "rls_restarts": ("1", "", "restarts of the registration RLS"),
+               "frames_tracked": ("1", "", "frames in which the navigator tracked the target")},
 }
