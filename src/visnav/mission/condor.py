@@ -67,3 +67,19 @@ class CondorMission:
                      "psidot_ref": ref["psidot_ref_ail"]}
         return TurnReference(t, ref["psidot_ref_ail"], ref["psidot_ref_rud"], ref["v_bank"], cfg.control.altitude_m,
                              cfg.airframe.airspeed_mps), self.mode
+
+
+class GroundTestMission:
+    """The static ground test of ch. 4 (Tables 4.1-4.2): nothing flies; ``finish`` marks it done."""
+
+    def __init__(self) -> None:
+        self.mode, self.done, self.info = "ground_test", False, {}
+
+    def step(self, t: float, estimate=None, health=None) -> tuple[None, str]:
+        return None, self.mode
+
+    def on_touchdown(self, t: float) -> None:
+        """Nothing flies."""
+
+    def finish(self, t: float) -> None:
+        self.mode, self.done = "done", True

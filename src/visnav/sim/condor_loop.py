@@ -17,13 +17,11 @@ import heapq
 import itertools
 import math
 import time
-from types import SimpleNamespace
-
 import numpy as np
 
 from visnav.control.fixedwing import FixedWingAutopilot, InnerGains
 from visnav.measurements import Frame, NavInit, OperatorClick
-from visnav.mission.condor import CondorMission
+from visnav.mission.condor import CondorMission, GroundTestMission
 from visnav.navigation.condor import CondorNavigator, RadiusFilter
 from visnav.scenarios.config_fixedwing import build_autopilot_sensors
 from visnav.sensors.baro import Baro, Compass
@@ -65,7 +63,7 @@ class CondorSimulation:
         self.sc = sc = scenario
         self.cfg = cfg = sc.mission
         self.log = FlightLog(schema=CONDOR_GROUND_STREAMS if cfg.experiment == "ground_test" else CONDOR_STREAMS)
-        self.mission = SimpleNamespace(mode="init", done=False)
+        self.mission = GroundTestMission()
         self.dt = sc.run.dt_s
         self.rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(14)]
         if cfg.experiment == "orbit":
@@ -133,7 +131,7 @@ class CondorSimulation:
                 from visnav.sim.condor_ground import run_ground_test
 
                 run_ground_test(self.cfg, self.rng[6], self.log)
-                self.mission.mode = "done"
+                self.mission.finish(0.0)
             else:
                 self._run_orbit(progress)
         except Exception as exc:  # keep what we have
