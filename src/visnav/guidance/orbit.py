@@ -20,7 +20,6 @@ through the lossy, late link and its alpha-beta ``RadiusFilter`` in the orbit).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np

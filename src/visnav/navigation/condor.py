@@ -35,7 +35,7 @@ from collections import deque
 import numpy as np
 
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
-from visnav.measurements import (AttitudeSample, BaroSample, FixedWingEstimate, Frame, GpsSample, HeadingSample,
+from visnav.measurements import (AttitudeSample, FixedWingEstimate, Frame, GpsSample, HeadingSample,
                                  Health, NavInit, OperatorClick, PanSample, TargetRangeSample)
 from visnav.navigation.fixedwing import AutopilotNavigator
 from visnav.vision.blob_tracker import BlobTracker

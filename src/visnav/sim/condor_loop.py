@@ -177,7 +177,7 @@ class CondorSimulation:
                                 self.gimbal.tilt + k * math.atan(rec["Y"] / cam.fy))
 
     def _run_orbit(self, progress) -> None:
-        sc, cfg, dt, log = self.sc, self.cfg, self.dt, self.log
+        sc, dt, log = self.sc, self.dt, self.log
         n = int(round(sc.run.duration_s / dt))
         d_ctrl = rate_divisor(self.autopilot.rate_hz, dt)
         d_log = rate_divisor(10.0, dt)
