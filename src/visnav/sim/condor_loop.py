@@ -25,7 +25,6 @@ from visnav.mission.condor import CondorMission, GroundTestMission
 from visnav.navigation.condor import CondorNavigator, RadiusFilter
 from visnav.scenarios.config_fixedwing import build_autopilot_sensors
 from visnav.sensors.baro import Baro, Compass
-from visnav.sensors.base import TruthHistory
 from visnav.sensors.condor_camera import GimbalCamera, TargetCamera, condor_camera, target_outline
 from visnav.sensors.gimbal import CameraAhrs, Gimbal, PanPotentiometer
 from visnav.sensors.gps import Gps
@@ -46,6 +45,20 @@ class CondorWorld(AircraftAir):
     def __init__(self, gimbal: Gimbal, outline: np.ndarray, vehicle) -> None:
         super().__init__(vehicle)
         self.gimbal, self.outline = gimbal, outline
+
+
+class CurrentTruth:
+    """``truth_at`` for sensors that describe the current step (every CONDOR sensor: no unknown delay):
+    the vehicle's state now, built only at the steps where something samples it."""
+
+    def __init__(self, vehicle) -> None:
+        self.vehicle, self.now = vehicle, 0.0
+
+    def __call__(self, t: float):
+        if abs(t - self.now) > 1e-9:
+            raise ValueError(f"CONDOR truth is asked for t={t:.4f}s at step t={self.now:.4f}s: a sensor that "
+                             f"describes another instant needs sensors/base.TruthHistory")
+        return self.vehicle.state
 
 
 def build_navigator(cfg, camera) -> CondorNavigator:
@@ -114,7 +127,7 @@ class CondorSimulation:
                            bank_limit=math.radians(ctl.bank_limit_deg))
         self.autopilot = FixedWingAutopilot(gains, self.trim_level.controls, rate_hz=50.0)
         self.mission = CondorMission(cfg, self.nav, recorder=self.log.record)
-        self.truth = TruthHistory(self.dt, 2.0)
+        self.truth = CurrentTruth(self.vehicle)
         self._queue: list = []
         self._seq = itertools.count()
 
@@ -196,7 +209,7 @@ class CondorSimulation:
         u = self.trim_level.controls
         for k in range(n):
             t = self._t = k * dt
-            self.truth.push(self.vehicle.state)
+            self.truth.now = t
             for sensor, d in sched:
                 if k % d == 0:
                     m = sensor.sample(t, self.truth, self.world)
@@ -208,7 +221,7 @@ class CondorSimulation:
                 ref, mode = self.mission.step(t, est, self.nav.health(t))
                 u = self.autopilot.command(t, est, ref)
             if k % d_log == 0:
-                st = self.truth.latest
+                st = self.vehicle.state
                 info = self.autopilot.info
                 log.record("truth", t, position=st.position, velocity=st.velocity, euler=st.euler,
                            body_rates=st.body_rates, airspeed=self.vehicle.air["Va"], beta=self.vehicle.air["beta"])
