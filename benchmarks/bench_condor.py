@@ -8,6 +8,8 @@ import time
 
 import numpy as np
 
+from visnav.vehicles.base import Environment
+
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.missions import make_simulation
 
@@ -47,7 +49,7 @@ def main(seed: int = 1, profile: bool = False) -> dict:
     par = FixedWingParams()
     tr = trim(par, 17.0)
     fw = FixedWingModel.from_trim(par, tr, [0, 0, -100], 0.0)
-    rows["fixed-wing RK4 step [us]"] = 1e6 * _per_call(lambda: fw.step(tr.controls, 0.01, np.zeros(3)), 2000)
+    rows["fixed-wing RK4 step [us]"] = 1e6 * _per_call(lambda: fw.step(tr.controls, 0.01, Environment(np.zeros(3))), 2000)
     cam = condor_camera(640, 480, 53.0, -0.25, 0.05, 12.0, -7.0)
     tc = TargetCamera(cam, np.random.default_rng(0))
     out = target_outline([110.0, 0.0], 3.0, 2.0, 0.3)

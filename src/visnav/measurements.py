@@ -49,10 +49,14 @@ class ImuSample:
 
 @dataclass(frozen=True)
 class AttitudeSample:
-    """Attitude solution of the vehicle's AHRS / flight computer (the thesis' 'IMU attitude')."""
+    """Attitude solution of the vehicle's AHRS / flight computer (the thesis' 'IMU attitude').
+
+    ``sensor`` names the unit when a vehicle carries more than one (CONDOR: ``"ahrs"`` of the autopilot,
+    ``"camera"`` of the gimbal's mini-controller, which gives (roll, tilt, NaN): it has no heading)."""
 
     t: float
     euler: np.ndarray  # roll, pitch, yaw [rad]
+    sensor: str = "ahrs"
 
 
 @dataclass(frozen=True)
@@ -105,6 +109,22 @@ class NavEstimate:
     source: str = "gps"  # gps | mpe | inertial
 
 
+@dataclass(frozen=True)
+class FixedWingEstimate(NavEstimate):
+    """What a fixed-wing autopilot and its guidance fly on (CONDOR, geo-location MAV): the NavEstimate
+    plus body rates (gyros), specific force (accelerometers), airspeed (pitot), height (baro), and the
+    range / range rate to the target the orbit guidance needs (NaN when unknown)."""
+
+    body_rates: np.ndarray = field(default_factory=lambda: np.zeros(3))  # p, q, r [rad/s]
+    specific_force: np.ndarray = field(default_factory=lambda: np.zeros(3))  # body FRD [m/s^2]
+    airspeed: float = float("nan")  # m/s
+    height: float = float("nan")  # m above the ground
+    ground_speed: float = float("nan")  # m/s (GPS; NaN without)
+    radius: float = float("nan")  # m, horizontal range to the target
+    radius_rate: float = 0.0  # m/s
+    radius_valid: bool = False  # the range is fresh enough to fly on
+
+
 @dataclass
 class Health:
     """What a navigator reports about itself besides its estimate."""
@@ -148,6 +168,20 @@ class YacsCommand:
 
 
 @dataclass(frozen=True)
+class TurnReference:
+    """Reference of a fixed-wing autopilot (seed 004 Fig. 5.1): heading rates for the aileron (through the
+    bank reference eq. 5.4) and the rudder (eq. 5.6; None: turn coordinator), the speed the bank
+    reference uses, altitude and airspeed to hold."""
+
+    t: float
+    psidot_ail: float  # rad/s
+    psidot_rud: float | None  # rad/s, None: turn coordinator
+    v_bank: float  # m/s
+    altitude: float  # m above the ground
+    airspeed: float  # m/s
+
+
+@dataclass(frozen=True)
 class PositionReference:
     """The 'white rabbit' (seed 000 §2.1.2): where the vehicle should be now."""
 
@@ -172,6 +206,33 @@ class HeadingSample:
 
     t: float
     heading: float
+
+
+@dataclass(frozen=True)
+class AirspeedSample:
+    """Indicated airspeed of a pitot-static probe [m/s]."""
+
+    t: float
+    airspeed: float
+
+
+@dataclass(frozen=True)
+class PanSample:
+    """Gimbal pan angle relative to the airframe from its potentiometer [rad] (seed 004 Fig. 2.7)."""
+
+    t: float
+    pan: float
+
+
+@dataclass(frozen=True)
+class TargetRangeSample:
+    """A vision fix of a ground target (seed 004 eq. 3.9-3.24): ground range, the target's bearing from
+    the camera's pan axis (Psi_VB) and the pan potentiometer reading of the frame; ``t`` is the frame's instant."""
+
+    t: float
+    range: float  # m, horizontal
+    bearing: float  # rad, Psi_VB
+    pan: float  # rad, pan relative to the airframe
 
 
 @dataclass(frozen=True)

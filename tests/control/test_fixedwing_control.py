@@ -3,6 +3,8 @@
 import math
 
 import numpy as np
+
+from visnav.vehicles.base import Environment
 import pytest
 
 from visnav.control.fixedwing import AirData, FixedWingAutopilot, InnerGains, heading_rate
@@ -20,9 +22,9 @@ def _fly(psidot_ref, rud_ref, seconds=20.0, h_des=100.0, start_h=100.0):
         x = m.x
         air = AirData(x[6], x[7], x[9], x[10], x[11], -x[2], m.air["Va"] or 17.0, float(m.air["specific_force"][1]))
         rr = rud_ref if rud_ref != "same" else psidot_ref
-        u, info = ap.command(0.02, air, psidot_ref, rr, 17.0, h_des, 17.0)
+        u, info = ap.law(0.02, air, psidot_ref, rr, 17.0, h_des, 17.0)
         for _ in range(2):
-            m.step(u, 0.01, np.zeros(3))
+            m.step(u, 0.01, Environment(np.zeros(3)))
         hist.append((x[6], info["phi_ref"], -x[2], m.air["beta"], info["psidot"], m.air["Va"]))
     return np.array(hist), ap
 
@@ -56,7 +58,7 @@ def test_bank_reference_limit_and_hold():
     assert np.max(h[:, 1]) == pytest.approx(math.radians(35.0))  # phi_ref limited to 35 deg
     ap = FixedWingAutopilot(InnerGains(), TR.controls)
     air = AirData(math.radians(50), 0.0, 0.0, 0.0, 0.3, 100.0, 17.0, 0.0)
-    u, info = ap.command(0.02, air, 0.0, 0.0, 17.0, 100.0, 17.0)
+    u, info = ap.law(0.02, air, 0.0, 0.0, 17.0, 100.0, 17.0)
     assert info["bank_hold"]  # eq. 5.7: above 45 deg the bank hold takes over
     assert u.aileron < TR.controls.aileron  # rolls back toward 45 deg
     assert u.rudder - TR.controls.rudder == pytest.approx(math.radians(10.0))
@@ -65,7 +67,7 @@ def test_bank_reference_limit_and_hold():
 def test_nan_input_is_refused():
     ap = FixedWingAutopilot(InnerGains(), TR.controls)
     with pytest.raises(ValueError, match="Va"):
-        ap.command(0.02, AirData(0, 0, 0, 0, 0, 100, math.nan, 0), 0.1, 0.1, 17, 100, 17)
+        ap.law(0.02, AirData(0, 0, 0, 0, 0, 100, math.nan, 0), 0.1, 0.1, 17, 100, 17)
 
 
 def test_scalar_clip_equals_numpy_clip():

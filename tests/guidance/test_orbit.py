@@ -4,7 +4,8 @@ import math
 
 import pytest
 
-from visnav.guidance.orbit import OrbitGains, OrbitGuidance, RadiusFilter
+from visnav.guidance.orbit import OrbitGains, OrbitGuidance
+from visnav.navigation.condor import RadiusFilter
 
 G0, G1 = OrbitGains(0.001, 0.01), OrbitGains(0.015, 0.05)
 

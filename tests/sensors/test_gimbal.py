@@ -1,4 +1,4 @@
-"""CONDOR gimbal, camera AHRS, potentiometer, barometer, telemetry link, camera + tent rendering."""
+"""CONDOR gimbal, camera AHRS, potentiometer, barometer (eq. 2.1), telemetry link, camera + tent rendering."""
 
 import math
 
@@ -7,8 +7,12 @@ import pytest
 
 from visnav.geometry.camera import PinholeCamera
 from visnav.sensors.condor_camera import TargetCamera, condor_camera, target_outline
-from visnav.sensors.gimbal import (Barometer, CameraAhrs, Gimbal, PanPotentiometer, TelemetryLink, camera_dcm,
-                                   centred_coords, project_points)
+from types import SimpleNamespace
+
+from visnav.measurements import VehicleState
+from visnav.sensors.baro import Baro
+from visnav.sensors.gimbal import CameraAhrs, Gimbal, PanPotentiometer, camera_dcm, centred_coords, project_points
+from visnav.sensors.link import Link
 from visnav.vision.rectification import altimeter_correction
 
 CAM = PinholeCamera.ideal(640, 480, 600.0)
@@ -62,30 +66,37 @@ def test_ahrs_converges_to_the_acceleration_error():
     assert ahrs2.err[1] == pytest.approx(-math.atan2(3.0, 9.81) * (1 - (1 - 0.005) ** 200), rel=1e-9)
 
 
+def _truth(h=100.0):
+    s = VehicleState(0.0, np.array([0.0, 0.0, -h]), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0, 0, -9.81]))
+    return lambda t: s
+
+
 def test_pot_and_baro_noise_and_eq_2_1_inverse():
     rng = np.random.default_rng(2)
     pot = PanPotentiometer(rng, math.radians(1.0))
-    r = np.array([pot.read(0.5) for _ in range(4000)])
+    world = SimpleNamespace(gimbal=SimpleNamespace(pan=0.5))
+    r = np.array([pot.sample(k * 0.1, _truth(), world).pan for k in range(4000)])
     assert r.mean() == pytest.approx(0.5, abs=0.002) and r.std() == pytest.approx(math.radians(1), rel=0.05)
-    baro = Barometer(rng, 0.0, 25.0, 0.0004, 0.000005)
-    raw = baro.read(100.0)
+    baro = Baro(rng, sigma_m=0.0, bias_sigma_m=0.0, t_outside_c=25.0, c0=0.0004, c1=0.000005)
+    raw = baro.sample(0.0, _truth(100.0)).altitude
     assert raw > 100.0 and altimeter_correction(raw, 25.0, 0.0004, 0.000005) == pytest.approx(100.0, abs=1e-9)
+    noisy = Baro(rng, sigma_m=0.3, bias_sigma_m=0.0, t_outside_c=25.0, c0=0.0004, c1=0.000005)
+    x = np.array([noisy.sample(k * 0.02, _truth(100.0)).altitude for k in range(4000)])
+    assert x.mean() == pytest.approx(raw, abs=0.02) and x.std() == pytest.approx(0.3, rel=0.05)
 
 
 def test_link_latency_and_drops():
-    link = TelemetryLink(np.random.default_rng(3), 0.33, 0.2, 0.0, 0.0)
-    got = []
-    for k in range(3000):
-        t = k / 7.5
-        link.send(t, t, 1 / 7.5)
-        got += [(t, m) for m in link.receive(t)]
-    lat = np.array([a - b for a, b in got])
-    assert np.all(lat >= 0.33 - 1e-9) and np.all(lat < 0.33 + 1 / 7.5 + 1e-9)
+    link = Link(np.random.default_rng(3), 0.33, 0.2, 0.0, 0.0)
+    got = [(k / 7.5, link.transmit(k / 7.5)) for k in range(3000)]
+    lat = np.array([d - t for t, d in got if d is not None])
+    assert np.allclose(lat, 0.33)
     assert link.dropped / link.sent == pytest.approx(0.2, abs=0.025)
-    out = TelemetryLink(np.random.default_rng(4), 0.1, 0.0, 1.0, 2.0)  # outages ~ every second, 2 s long
+    out = Link(np.random.default_rng(4), 0.1, 0.0, 1.0, 2.0)  # outages ~ every second, 2 s long
     for k in range(100):
-        out.send(k * 0.1, k, 0.1)
+        out.transmit(k * 0.1)
     assert out.dropped > 50
+    with pytest.raises(ValueError, match="latency"):
+        Link(np.random.default_rng(0), -1.0)
 
 
 def test_tent_render_centre_and_distortion():

@@ -3,6 +3,8 @@
 import math
 
 import numpy as np
+
+from visnav.vehicles.base import Environment
 import pytest
 
 from visnav.vehicles.fixedwing import Controls, FixedWingModel, FixedWingParams, derivatives, trim
@@ -25,7 +27,7 @@ def test_level_trim(Va):
     # stays there open loop
     m = FixedWingModel.from_trim(P, tr, [0, 0, -100], 0.3)
     for _ in range(300):
-        m.step(tr.controls, 0.01, np.zeros(3))
+        m.step(tr.controls, 0.01, Environment(np.zeros(3)))
     assert m.air["Va"] == pytest.approx(Va, abs=1e-3)
     assert m.x[2] == pytest.approx(-100.0, abs=0.02)
     assert m.x[8] == pytest.approx(0.3, abs=1e-4)
@@ -39,7 +41,7 @@ def test_coordinated_turn_obeys_psidot_g_tanphi_over_V(R):
     m = FixedWingModel.from_trim(P, tr, [0, 0, -100], 0.0)
     psi, phi = [], []
     for _ in range(800):
-        m.step(tr.controls, 0.01, np.zeros(3))
+        m.step(tr.controls, 0.01, Environment(np.zeros(3)))
         psi.append(m.x[8])
         phi.append(m.x[6])
     psi = np.unwrap(psi)
@@ -56,7 +58,7 @@ def test_steady_wind_drifts_the_aircraft():
     m.x[3:6] = m.x[3:6] + wind  # heading north: body axes == NED at zero attitude (pitch small)
     m.x[4] -= 0.0
     for _ in range(200):
-        m.step(tr.controls, 0.01, wind)
+        m.step(tr.controls, 0.01, Environment(np.asarray(wind, float)))
     assert m.air["Va"] == pytest.approx(17.0, abs=0.1)
     assert m.state.velocity[1] == pytest.approx(4.0, abs=0.1)
 
@@ -64,7 +66,7 @@ def test_steady_wind_drifts_the_aircraft():
 def test_bad_input():
     m = FixedWingModel.from_trim(P, trim(P, 17.0), [0, 0, -100], 0.0)
     with pytest.raises(ValueError, match="wind"):
-        m.step(Controls(), 0.01, [np.nan, 0, 0])
+        m.step(Controls(), 0.01, Environment(np.asarray([np.nan, 0, 0], float)))
     with pytest.raises(ValueError, match="Va"):
         trim(P, 0.0)
     dx, air = derivatives(P, m.x, Controls(0.1, 0, 0, 0.5), np.zeros(3))
@@ -98,7 +100,7 @@ def test_scalar_step_equals_the_numpy_derivatives_rk4():
                      c.throttle + rng.normal(0, 0.05))
         w = rng.normal(0.0, 3.0, 3)
         want = _rk4_reference(m, u, 0.01, w)
-        m.step(u, 0.01, w)
+        m.step(u, 0.01, Environment(np.asarray(w, float)))
         np.testing.assert_allclose(m.x, want, rtol=0, atol=1e-12)
         _, air = derivatives(P, m.x, u, w)
         assert m.air["Va"] == air["Va"] and m.air["alpha"] == air["alpha"] and m.air["beta"] == air["beta"]

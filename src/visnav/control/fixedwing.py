@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from visnav.measurements import Controls
+from visnav.measurements import Controls, FixedWingEstimate, TurnReference
 
 G = 9.81
 
@@ -64,6 +64,13 @@ class AirData:
     Va: float
     ay: float
 
+    @classmethod
+    def from_estimate(cls, e: FixedWingEstimate) -> "AirData":
+        """The navigator's estimate: AHRS attitude, gyro rates, baro height, pitot airspeed, accelerometer y."""
+        a, w = e.attitude, e.body_rates
+        return cls(phi=float(a[0]), theta=float(a[1]), p=float(w[0]), q=float(w[1]), r=float(w[2]),
+                   h=float(e.height), Va=float(e.airspeed), ay=float(e.specific_force[1]))
+
 
 def heading_rate(phi: float, theta: float, q: float, r: float) -> float:
     """Inertial heading rate from body rates (eq. 5.6, second line)."""
@@ -71,13 +78,28 @@ def heading_rate(phi: float, theta: float, q: float, r: float) -> float:
 
 
 class FixedWingAutopilot:
-    def __init__(self, gains: InnerGains, trim: Controls) -> None:
+    """The autopilot (Fig. 5.1) at ``rate_hz``: ``command(t, estimate, reference)`` flies the navigator's
+    ``FixedWingEstimate`` (never truth) to a ``TurnReference``; ``info`` holds the last step's internals."""
+
+    def __init__(self, gains: InnerGains, trim: Controls, rate_hz: float = 50.0) -> None:
         self.g, self.trim = gains, trim
+        self.rate_hz = float(rate_hz)
         self.int_h = self.int_v = self.int_ay = 0.0
         self.bank_hold_active = False
+        self._t: float | None = None
+        self.info: dict = {"phi_ref": math.nan, "theta_ref": math.nan, "psidot": math.nan, "bank_hold": False}
 
-    def command(self, dt: float, m: AirData, psidot_ref_ail: float, psidot_ref_rud: float | None,
-                v_bank: float, h_des: float, va_des: float) -> tuple[Controls, dict]:
+    def command(self, t: float, estimate: FixedWingEstimate, reference: TurnReference) -> Controls:
+        """Controls at ``t``; the integrators advance by the time since the previous call (1 / rate_hz first)."""
+        dt = 1.0 / self.rate_hz if self._t is None else t - self._t
+        self._t = t
+        r = reference
+        u, self.info = self.law(dt, AirData.from_estimate(estimate), r.psidot_ail, r.psidot_rud, r.v_bank,
+                                r.altitude, r.airspeed)
+        return u
+
+    def law(self, dt: float, m: AirData, psidot_ref_ail: float, psidot_ref_rud: float | None,
+            v_bank: float, h_des: float, va_des: float) -> tuple[Controls, dict]:
         """Controls for the two heading-rate references (aileron through the bank reference eq. 5.4,
         rudder eq. 5.6; ``psidot_ref_rud`` None = turn coordinator)."""
         g = self.g

@@ -14,13 +14,12 @@ Heading-rate reference = base heading rate + heading-rate error:
 * in the modified logic the rudder keeps the original logic (§7.2.2); ``coordinated`` is the modified
   aileron logic with the rudder on a turn coordinator (the next step of §7.2.2, ch. 8).
 
-The vision radius arrives at 7.5 Hz through a lossy, late link: an alpha-beta filter gives R and
-R_dot between messages and holds them across dropouts (flagged stale after ``stale_s``).
+R and R_dot come from the navigator (``navigation/condor.py``: GPS in the loiter, the vision radius
+through the lossy, late link and its alpha-beta ``RadiusFilter`` in the orbit).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,40 +31,6 @@ LOGICS = ("original", "modified", "coordinated")
 class OrbitGains:
     kp: float  # rad/s per m of radius error
     kd: float  # rad/s per m/s of radius rate
-
-
-class RadiusFilter:
-    """Alpha-beta filter of the radius messages (value, rate); holds across dropouts."""
-
-    def __init__(self, alpha: float = 0.5, beta: float = 0.1, stale_s: float = 3.0) -> None:
-        self.alpha, self.beta, self.stale_s = alpha, beta, stale_s
-        self.R: float | None = None
-        self.Rdot = 0.0
-        self.t = -math.inf
-        self.t_last_meas = -math.inf
-
-    def update(self, t_meas: float, R: float) -> None:
-        if not math.isfinite(R) or R <= 0:
-            return  # "no estimate" never reaches the controller
-        if self.R is None:
-            self.R, self.t, self.t_last_meas = R, t_meas, t_meas
-            return
-        dt = t_meas - self.t
-        if dt <= 0:
-            return
-        pred = self.R + self.Rdot * dt
-        res = R - pred
-        self.R = pred + self.alpha * res
-        self.Rdot += self.beta * res / dt
-        self.t = self.t_last_meas = t_meas
-
-    def predict(self, t: float) -> tuple[float, float]:
-        if self.R is None:
-            return math.nan, 0.0
-        return self.R + self.Rdot * min(t - self.t, self.stale_s), self.Rdot
-
-    def stale(self, t: float) -> bool:
-        return self.R is None or t - self.t_last_meas > self.stale_s
 
 
 class OrbitGuidance:

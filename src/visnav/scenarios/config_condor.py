@@ -12,6 +12,7 @@ from typing import Literal
 from pydantic import Field
 
 from visnav.scenarios.base import _M
+from visnav.scenarios.config_fixedwing import FixedWingSensorsConfig
 
 
 class AirframeConfig(_M):
@@ -51,11 +52,13 @@ class GimbalConfig(_M):
     ahrs_accel_gain: float = Field(0.2, ge=0.0, le=1.0, description="share of unexplained acceleration in the attitude")
     ahrs_tau_s: float = Field(3.0, gt=0.0, le=60.0)
     ahrs_lag_s: float = Field(0.0, ge=0.0, le=10.0, description="lag of the AHRS behind quick tilts (Fig. 4.2)")
+    ahrs_rate_hz: float = Field(50.0, gt=0.0, le=500.0, description="output rate of the camera AHRS (its filter steps at it)")
     pot_noise_deg: float = Field(1.0, ge=0.0, le=10.0)
     operator_gain_per_s: float = Field(0.6, ge=0.0, le=5.0, description="how fast the operator re-centres the tent")
 
 
 class AltimeterConfig(_M):
+    rate_hz: float = Field(50.0, gt=0.0, le=200.0)
     noise_m: float = Field(0.3, ge=0.0, le=5.0)
     t_outside_c: float = Field(20.0, ge=-20.0, le=45.0)
     t_measured_c: float = Field(20.0, ge=-20.0, le=45.0, description="temperature the correction uses")
@@ -68,6 +71,17 @@ class LinkConfig(_M):
     drop_prob: float = Field(0.1, ge=0.0, le=0.9)
     outage_rate_hz: float = Field(0.01, ge=0.0, le=1.0)
     outage_s: float = Field(1.0, ge=0.0, le=10.0)
+
+
+class CondorNavigationConfig(_M):
+    """What the navigator assumes (``navigation/condor.py``), never taken from the world."""
+
+    gps_gain: float = Field(0.3, gt=0.0, le=1.0, description="complementary filter weight of a GPS fix")
+    radius_sigma_pct: float = Field(1.0, gt=0.0, le=20.0, description="vision radius noise the integrity test assumes")
+    heading_sigma_deg: float = Field(2.0, gt=0.0, le=30.0, description="compass error the protection level assumes")
+    radius_alpha: float = Field(0.5, gt=0.0, le=1.0, description="radius filter alpha")
+    radius_beta: float = Field(0.1, ge=0.0, le=1.0, description="radius filter beta")
+    radius_stale_s: float = Field(3.0, gt=0.0, le=30.0, description="radius held this long across dropouts")
 
 
 class VisionConfig(_M):
@@ -117,4 +131,6 @@ class CondorMissionConfig(_M):
     vision: VisionConfig = VisionConfig()
     control: ControlConfig = ControlConfig()
     ground_test: GroundTestConfig = GroundTestConfig()
-    gps_noise_m: float = Field(1.0, ge=0.0, le=10.0, description="GPS of the loiter before the switch")
+    gps_noise_m: float = Field(1.0, ge=0.0, le=10.0, description="GPS of the loiter before the switch (1 sigma, horizontal)")
+    sensors: FixedWingSensorsConfig = FixedWingSensorsConfig()
+    navigation: CondorNavigationConfig = CondorNavigationConfig()

@@ -9,6 +9,7 @@ from typing import Literal, Optional
 from pydantic import Field
 
 from visnav.scenarios.base import _M
+from visnav.scenarios.config_fixedwing import FixedWingSensorsConfig
 
 
 class MavMapConfig(_M):
@@ -119,5 +120,6 @@ class GeolocationMissionConfig(_M):
     gimbal: MavGimbalConfig = MavGimbalConfig()
     telemetry: MavTelemetryConfig = MavTelemetryConfig()
     control: MavControlConfig = MavControlConfig()
+    sensors: FixedWingSensorsConfig = FixedWingSensorsConfig()  # the autopilot's AHRS, gyros, accelerometers, pitot
     registration: MavRegistrationConfig = MavRegistrationConfig()
     max_samples: int = Field(40, ge=1, le=100000, description="stop once this many samples are in")

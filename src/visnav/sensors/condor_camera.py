@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 
 from visnav.geometry.camera import PinholeCamera
+from visnav.measurements import Frame
 from visnav.sensors.gimbal import camera_dcm
 
 FIELD_RGB = (150, 170, 70)  # yellow-green grass
@@ -62,3 +63,19 @@ class TargetCamera:
                 poly = np.round(uv * 16.0).astype(np.int32)[None]
                 cv2.fillPoly(img, poly, TARGET_RGB, lineType=cv2.LINE_AA, shift=4)
         return img
+
+
+class GimbalCamera:
+    """The camera on CONDOR's gimbal as a sensor: renders the tent (``world.outline``) from the true
+    aircraft position and the gimbal's true camera attitude (``world.gimbal``) -> ``Frame``."""
+
+    def __init__(self, renderer: TargetCamera, rate_hz: float = 7.5, latency_s: float = 0.0) -> None:
+        self.renderer, self.rate_hz, self.latency_s = renderer, float(rate_hz), float(latency_s)
+        self.index = 0
+
+    def sample(self, t: float, truth_at, world) -> Frame:
+        s = truth_at(t)
+        pan, tilt, roll = world.gimbal.camera_attitude(s.euler)
+        img = self.renderer.render(s.position, pan, tilt, roll, world.outline)
+        self.index += 1
+        return Frame(t=t, image=img, index=self.index - 1)

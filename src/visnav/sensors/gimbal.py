@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.geometry.rotations import euler_to_dcm
+from visnav.measurements import AttitudeSample, PanSample
 
 #: OpenCV camera axes (x right, y down, z optical axis) from camera-body axes (x fwd, y right, z down)
 C_CV_CB = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
@@ -86,7 +87,10 @@ class CameraAhrs:
     late: a ramp at rate w reads ``w lag_s`` behind."""
 
     def __init__(self, rng: np.random.Generator, noise: float, bias_tilt: float, bias_roll: float,
-                 accel_gain: float, tau_s: float, noise_tau_s: float = 0.0, lag_s: float = 0.0) -> None:
+                 accel_gain: float, tau_s: float, noise_tau_s: float = 0.0, lag_s: float = 0.0,
+                 rate_hz: float = 7.5, latency_s: float = 0.0) -> None:
+        self.rate_hz, self.latency_s = float(rate_hz), float(latency_s)
+        self._t: float | None = None
         self.rng, self.noise, self.noise_tau = rng, noise, noise_tau_s
         self.bias = np.array([bias_tilt, bias_roll])
         self.accel_gain, self.tau_s = accel_gain, tau_s
@@ -112,6 +116,24 @@ class CameraAhrs:
             a = np.exp(-dt / self.noise_tau)
             self.gm = a * self.gm + self.noise * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
 
+    def sample(self, t: float, truth_at, world) -> AttitudeSample:
+        """The camera's (roll, tilt, NaN) [rad] at ``t`` (``sensor="camera"``): the unit is stepped over
+        the time since its last sample with what its accelerometers feel that the airspeed-based
+        centripetal compensation does not explain (truth: ``C_bn f + g`` minus ``psi_dot Va`` across
+        the track, ``world.airspeed``), then read at the gimbal's true camera attitude."""
+        s = truth_at(t)
+        pan, tilt, roll = world.gimbal.camera_attitude(s.euler)
+        if self._t is not None and t > self._t:
+            phi, th, psi = s.euler
+            a_ned = euler_to_dcm(s.euler) @ s.specific_force + np.array([0.0, 0.0, 9.81])
+            _, q, r = s.body_rates
+            psidot = (q * np.sin(phi) + r * np.cos(phi)) / np.cos(th)
+            comp = psidot * world.airspeed(t) * np.array([-np.sin(psi), np.cos(psi), 0.0])
+            self.step(t - self._t, a_ned - comp, pan, tilt, roll)
+        self._t = t
+        tm, rm = self.read(tilt, roll)
+        return AttitudeSample(t=t, euler=np.array([rm, tm, np.nan]), sensor="camera")
+
     def read(self, tilt: float, roll: float) -> tuple[float, float]:
         if self.lag_s > 0 and self.lagged is not None:
             tilt, roll = float(self.lagged[0]), float(self.lagged[1])
@@ -123,56 +145,17 @@ class CameraAhrs:
 
 
 class PanPotentiometer:
-    """Linear potentiometer on the gimbal's yaw axis (Fig. 2.7): pan relative to the airframe plus
-    white noise (ADC and wire) and a scale error."""
+    """Linear potentiometer on the gimbal's yaw axis (Fig. 2.7): pan relative to the airframe
+    (``world.gimbal.pan``) plus white noise (ADC and wire) and a scale error."""
 
-    def __init__(self, rng: np.random.Generator, noise: float, scale_error: float = 0.0) -> None:
+    def __init__(self, rng: np.random.Generator, noise: float, scale_error: float = 0.0, rate_hz: float = 7.5,
+                 latency_s: float = 0.0) -> None:
         self.rng, self.noise, self.scale = rng, noise, 1.0 + scale_error
+        self.rate_hz, self.latency_s = float(rate_hz), float(latency_s)
 
-    def read(self, pan_rel: float) -> float:
-        return self.scale * pan_rel + (self.rng.normal(0.0, self.noise) if self.noise > 0 else 0.0)
-
-
-class Barometer:
-    """Barometric height AGL whose raw reading needs the temperature correction of eq. 2.1: the raw
-    reading is the eq. 2.1 inverse of the true height at the true outside temperature, plus noise."""
-
-    def __init__(self, rng: np.random.Generator, noise_m: float, t_outside_c: float, c0: float, c1: float) -> None:
-        self.rng, self.noise, self.t_out, self.c0, self.c1 = rng, noise_m, t_outside_c, c0, c1
-
-    def read(self, h_true: float) -> float:
-        k = self.c0 + (15.0 - self.t_out) * self.c1
-        h = max(float(h_true), 0.0)
-        disc = 1.0 - 4.0 * k * h
-        raw = h if k <= 0 else (1.0 - np.sqrt(disc)) / (2.0 * k) if disc > 0 else 1.0 / (2.0 * k)
-        return float(raw + (self.rng.normal(0.0, self.noise) if self.noise > 0 else 0.0))
-
-
-class TelemetryLink:
-    """Radio link of the vision result (§4, ch. 6): a fixed latency (0.33 s typical) and dropouts,
-    each message lost with ``drop_prob``, and outages of ``outage_s`` starting at ``outage_rate_hz``."""
-
-    def __init__(self, rng: np.random.Generator, latency_s: float, drop_prob: float, outage_rate_hz: float,
-                 outage_s: float) -> None:
-        self.rng, self.latency = rng, latency_s
-        self.drop_prob, self.outage_rate, self.outage_s = drop_prob, outage_rate_hz, outage_s
-        self._queue: list[tuple[float, object]] = []
-        self._outage_until = -1.0
-        self.sent = self.dropped = 0
-
-    def send(self, t: float, msg, dt_since_last: float) -> None:
-        self.sent += 1
-        if self.outage_rate > 0 and self.rng.random() < self.outage_rate * dt_since_last:
-            self._outage_until = t + self.outage_s
-        if t < self._outage_until or (self.drop_prob > 0 and self.rng.random() < self.drop_prob):
-            self.dropped += 1
-            return
-        self._queue.append((t + self.latency, msg))
-
-    def receive(self, t: float) -> list:
-        out = [m for ta, m in self._queue if ta <= t + 1e-9]
-        self._queue = [(ta, m) for ta, m in self._queue if ta > t + 1e-9]
-        return out
+    def sample(self, t: float, truth_at, world) -> PanSample:
+        n = self.rng.normal(0.0, self.noise) if self.noise > 0 else 0.0
+        return PanSample(t=t, pan=float(self.scale * world.gimbal.pan + n))
 
 
 class PitchRollGimbal:

@@ -1,5 +1,5 @@
 """Pieces every fixed-wing simulation needs (the CONDOR loop and the geo-location loop): wind from the
-scenario's ``[world]``, the aircraft started in trim in that wind, and the autopilot's air data."""
+scenario's ``[world]``, the aircraft started in trim in that wind, and what its air-data sensors see."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import math
 
 import numpy as np
 
-from visnav.control.fixedwing import AirData
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.vehicles.fixedwing import FixedWingModel, FixedWingParams, trim
 from visnav.world.wind import DrydenTurbulence, SteadyWind, Wind
@@ -23,13 +22,20 @@ def scenario_wind(world_cfg, rng: np.random.Generator, altitude_m: float, airspe
 def trimmed_aircraft(params: FixedWingParams, airspeed_mps: float, position_ned, heading: float,
                      wind: Wind, turn_radius: float = math.inf) -> FixedWingModel:
     """The aircraft in trim at ``airspeed_mps`` (level or turning), moving with the steady wind."""
-    model = FixedWingModel.from_trim(params, trim(params, airspeed_mps, turn_radius=turn_radius), position_ned, heading)
+    tr = trim(params, airspeed_mps, turn_radius=turn_radius)
+    model = FixedWingModel.from_trim(params, tr, position_ned, heading)
     model.x[3:6] += euler_to_dcm(model.x[6:9]).T @ wind.steady.ned
+    # air data (airspeed, specific force) of the start state, before the first step, for the sensors
+    model._air_at = (model.x.tolist(), model._clipped(tr.controls), tuple(np.asarray(wind.steady.ned, float).tolist()))
     return model
 
 
-def air_data(model: FixedWingModel, height_m: float, airspeed_mps: float) -> AirData:
-    """What the autopilot measures: AHRS attitude, gyros, the given height and airspeed, the ball."""
-    x = model.x
-    return AirData(phi=x[6], theta=x[7], p=x[9], q=x[10], r=x[11], h=float(height_m), Va=float(airspeed_mps),
-                   ay=float(model.air["specific_force"][1]))
+class AircraftAir:
+    """The ``world`` a fixed wing's air-data sensors see: the aircraft's true airspeed now (``Pitot``)."""
+
+    def __init__(self, vehicle: FixedWingModel) -> None:
+        self.vehicle = vehicle
+
+    def airspeed(self, t: float) -> float:
+        """True airspeed [m/s] at the current step (sensors sample at the current step)."""
+        return float(self.vehicle.air["Va"])

@@ -10,6 +10,8 @@ sensors (renderer, gimbal, telemetry), the operator's click and the log only.
 
 from __future__ import annotations
 
+import heapq
+import itertools
 import math
 import time
 
@@ -18,14 +20,18 @@ import numpy as np
 from visnav.control.fixedwing import FixedWingAutopilot, InnerGains
 from visnav.geometry.camera import PinholeCamera
 from visnav.guidance.figure_eight import FigureEight
-from visnav.measurements import Frame, OperatorClick
+from visnav.measurements import Frame, OperatorClick, TurnReference
+from visnav.navigation.fixedwing import AutopilotNavigator
+from visnav.scenarios.config_fixedwing import build_autopilot_sensors
+from visnav.sim.clock import rate_divisor
+from visnav.vehicles.base import Environment
 from visnav.mission.geolocation import GeolocationMission
 from visnav.navigation.geolocation import GeolocationNavigator
 from visnav.sensors.base import TruthHistory
 from visnav.sensors.camera import CameraRenderer
 from visnav.sensors.gimbal import PitchRollGimbal
 from visnav.sensors.telemetry import AutopilotTelemetry
-from visnav.sim.fixedwing_common import air_data, scenario_wind, trimmed_aircraft
+from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
 from visnav.sim.log import FlightLog
 from visnav.sim.streams import GEOLOC_STREAMS
 from visnav.vehicles.fixedwing import micro_params, trim
@@ -61,7 +67,7 @@ class GeolocationSimulation:
         self.cfg = cfg = sc.mission
         self.log = FlightLog(schema=GEOLOC_STREAMS)
         self.dt = sc.run.dt_s
-        self.rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(8)]
+        self.rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(11)]
         rng = self.rng
         geo = mission_map(cfg)
         t = cfg.target
@@ -107,7 +113,11 @@ class GeolocationSimulation:
         self.vehicle = trimmed_aircraft(self.params, va, np.array([start[0], start[1], -ctl.altitude_m]), heading,
                                         self.wind)
         gains = InnerGains(bank_limit=math.radians(ctl.bank_limit_deg))
-        self.autopilot = FixedWingAutopilot(gains, trim(self.params, va).controls)
+        self.autopilot = FixedWingAutopilot(gains, trim(self.params, va).controls, rate_hz=50.0)
+        # the autopilot flies on its own sensors (AHRS, gyros, accelerometers, pitot) and its telemetry's baro height
+        self.ap_sensors = build_autopilot_sensors(cfg.sensors, rng[8:11])
+        self.ap_nav = AutopilotNavigator()
+        self.air = AircraftAir(self.vehicle)
         self.truth = TruthHistory(self.dt, 2.0 + cfg.telemetry.gps_delay_s + cfg.telemetry.link_delay_s)
         self.clicked = False
         self.frames: list = []  # (t, visible, true pixel) per frame, for the metrics
@@ -167,13 +177,15 @@ class GeolocationSimulation:
     def _run(self, progress) -> None:
         sc, cfg, dt, log = self.sc, self.cfg, self.dt, self.log
         n = int(round(sc.run.duration_s / dt))
-        d_ctrl = max(1, int(round(1.0 / (50.0 * dt))))
-        d_tel = max(1, int(round(1.0 / (cfg.telemetry.rate_hz * dt))))
-        d_frame = max(1, int(round(1.0 / (cfg.camera.frame_hz * dt))))
+        d_ctrl = rate_divisor(self.autopilot.rate_hz, dt)
+        d_tel = rate_divisor(cfg.telemetry.rate_hz, dt)
+        d_frame = rate_divisor(cfg.camera.frame_hz, dt)
         off_frame = d_frame // 2
-        d_log = max(1, int(round(0.1 / dt)))
-        d_wind = max(1, int(round(0.05 / dt)))
-        rng = self.rng[6]
+        d_log = rate_divisor(10.0, dt)
+        d_wind = rate_divisor(20.0, dt)
+        ap_sched = [(s, rate_divisor(s.rate_hz, dt)) for s in self.ap_sensors]
+        pending: list = []  # (delivery time, seq, measurement) of the autopilot's sensors
+        seq = itertools.count()
         wind = self.wind.velocity_ned(0.0, 0.0)
         u = self.autopilot.trim
         ref = (0.0, cfg.control.altitude_m, cfg.airframe.airspeed_mps)
@@ -186,6 +198,7 @@ class GeolocationSimulation:
             if k % d_tel == 0:
                 tel = self.telemetry.sample(t, self.truth)
                 self.nav.update(self.telemetry.downlink(tel))
+                self.ap_nav.update(tel)  # the autopilot's own (undisturbed) sample: its baro height
                 st = self.truth.latest
                 log.record("telemetry", t, position=tel.position, heading=tel.heading, height=tel.height,
                            ground_speed=tel.ground_speed, true_yaw=st.euler[2],
@@ -195,10 +208,15 @@ class GeolocationSimulation:
                     break
             if k % d_frame == off_frame:
                 self._frame(t)
+            for sensor, d in ap_sched:
+                if k % d == 0:
+                    heapq.heappush(pending, (t + sensor.latency_s, next(seq), sensor.sample(t, self.truth, self.air)))
+            while pending and pending[0][0] <= t + 1e-9:
+                self.ap_nav.update(heapq.heappop(pending)[2])
             if k % d_ctrl == 0:
-                va_meas = float(self.vehicle.air["Va"] + rng.normal(0.0, 0.2)) if k else ref[2]
-                u, info = self.autopilot.command(d_ctrl * dt, air_data(self.vehicle, tel.height, va_meas), ref[0],
-                                                 None, va_meas, ref[1], ref[2])
+                est = self.ap_nav.estimate(t)
+                u = self.autopilot.command(t, est, TurnReference(t, ref[0], None, est.airspeed, ref[1], ref[2]))
+                info = self.autopilot.info
             if k % d_log == 0:
                 st = self.truth.latest
                 log.record("truth", t, position=st.position, velocity=st.velocity, euler=st.euler,
@@ -211,7 +229,7 @@ class GeolocationSimulation:
                 wind = self.wind.velocity_ned(t, d_wind * dt, max(-self.vehicle.x[2], 1.0),
                                               max(self.vehicle.air["Va"], 1.0))
             self.gimbal.step(dt, self.vehicle.x[6:9])
-            self.vehicle.step(u, dt, wind)
+            self.vehicle.step(u, dt, Environment(wind_ned=wind))
             if -self.vehicle.x[2] < 10.0:
                 raise RuntimeError(f"aircraft below 10 m AGL (h = {-self.vehicle.x[2]:.1f} m)")
         self.sim_time = self._t

@@ -95,7 +95,7 @@ CONDOR_STREAMS = {
                "pan": ("rad", "relative to the fuselage", "true pan"),
                "bearing": ("rad", "camera pan axis", "bearing of the tent from the vision solution (Psi_VB)"),
                "reason": ("text", "", "why the radius is invalid")},
-    "control": {"R": ("m", "horizontal", "radius the outer loop used (vision, predicted across the link)"),
+    "control": {"R": ("m", "horizontal", "radius the outer loop used (GPS in the loiter; vision, predicted across the link, in the orbit)"),
                 "Rdot": ("m/s", "", "radius rate"),
                 "base": ("rad/s", "", "base heading rate (eq. 5.2 / 7.1)"),
                 "err": ("rad/s", "", "heading-rate correction from the radius error (eq. 5.1)"),
@@ -105,9 +105,21 @@ CONDOR_STREAMS = {
                 "aileron": ("rad", "", "aileron deflection"), "elevator": ("rad", "", "elevator deflection"),
                 "rudder": ("rad", "", "rudder deflection"), "throttle": ("1", "", "throttle 0..1"),
                 "mode": ("text", "", "gps_loiter or vision_orbit")},
-    "estimate": {"position": ("m", NED, "aircraft position from the vision fix (eq. 3.23-3.24), not flown on"),
-                 "euler": (EULER[0], EULER[1], "AHRS attitude"),
-                 "valid": ("bool", "", "a vision fix exists")},
+    "estimate": {"position": ("m", NED, "navigator's aircraft position: smoothed GPS in the loiter, tent - range along "
+                              "compass + pan pot + vision bearing (eq. 3.23-3.24) after the switch; not flown on"),
+                 "euler": (EULER[0], EULER[1], "AHRS attitude (navigator)"),
+                 "valid": ("bool", "", "the position is a fix (GPS, or a vision fix after the switch)"),
+                 "source": ("text", "", "gps (loiter) or vision (orbit)"),
+                 "radius": ("m", "horizontal", "range to the tent the guidance flies on (GPS or vision filter)"),
+                 "radius_valid": ("bool", "", "the range is fresh enough to fly on"),
+                 "airspeed": ("m/s", "", "pitot airspeed (navigator)"),
+                 "height": ("m", "above the ground", "eq. 2.1-corrected barometric height (navigator)")},
+    "uplink": {"sent_at": ("s", "", "time the ground station sent the radius fix (t is the frame's instant)"),
+               "delivered": ("bool", "", "the fix crossed the telemetry link (false: dropped)"),
+               "radius": ("m", "horizontal", "the fix's vision range")},
+    "nav_init": {"source": ("text", "", "where the initialisation came from (survey: the tent's position)"),
+                 "position": ("m", NED, "the tent's surveyed position given to the navigator")},
+    "click": {"pixel": ("px", "image (u right, v down)", "the operator's click that starts the tracker on the tent")},
 }
 
 #: the CONDOR ground test (sim/condor_ground.py): one row per table row, ``t`` is the row index

@@ -15,7 +15,8 @@ book's signs (positive elevator = trailing edge down = nose down; positive ailer
 negative moment per C_l_delta_a > 0 convention of the book: delta_a > 0 rolls right); throttle in [0, 1].
 
 State: NED position, body velocity (u, v, w), Euler (roll, pitch, yaw), body rates (p, q, r).
-Wind is NED air velocity (steady + Dryden from ``world/wind.py``), frozen over one step.
+Wind is NED air velocity (steady + Dryden from ``world/wind.py``), frozen over one step; ``step(command,
+dt, environment)`` takes it as ``vehicles/base.Environment.wind_ned``.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from visnav.vehicles.base import Environment
 from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
 G = 9.81
@@ -267,12 +269,14 @@ class FixedWingModel:
         return (min(max(float(u.aileron), -lim), lim), min(max(float(u.elevator), -lim), lim),
                 min(max(float(u.rudder), -lim), lim), min(max(float(u.throttle), 0.0), 1.0))
 
-    def step(self, u: Controls, dt: float, wind_ned) -> None:
-        """RK4 over ``dt`` with the controls and the wind held (``_derivatives_fast``)."""
+    def step(self, u: Controls, dt: float, environment: Environment) -> None:
+        """RK4 over ``dt`` with the controls and the environment's wind held (``_derivatives_fast``)."""
         uc = self._clipped(u)
-        w = tuple(np.asarray(wind_ned, float).tolist())
+        if not isinstance(environment, Environment):
+            raise TypeError(f"FixedWingModel.step takes a vehicles.base.Environment, got {type(environment).__name__}")
+        w = tuple(np.asarray(environment.wind_ned, float).tolist())
         if not math.isfinite(w[0] + w[1] + w[2]):
-            raise ValueError(f"wind must be finite, got {wind_ned}")
+            raise ValueError(f"wind must be finite, got {environment.wind_ned}")
         k, f = self._k, _derivatives_fast
         x = self.x.tolist()
         h2 = 0.5 * dt

@@ -1,0 +1,85 @@
+"""CONDOR's mission (seed 004 ch. 6-7): GPS loiter round the tent -> switch -> GPS-free vision orbit.
+
+* ``gps_loiter``: the autopilot's loiter of ``loiter_radius_m`` round the surveyed tent, the
+  coordinated logic on the navigator's GPS range (base rate ``V_GS / R_loiter`` from a 0.5 s mean of
+  the GPS ground speed);
+* at ``switch_time_s``, once the vision radius is coming in (``health.tracking``), the custom mode
+  takes over: ``set_source("vision")`` to the navigator, and the configured orbit logic (eq. 5.1-5.3,
+  7.1) flies ``radius_m`` on the vision range alone; while the radius is stale the base rate is held
+  (never a NaN to the controller).
+
+``step(t, estimate, health) -> (TurnReference, mode)`` at the autopilot's rate; ``info`` holds the
+outer loop's internals for the log; ``recorder(stream, t, **fields)`` gets the mode changes.
+"""
+
+from __future__ import annotations
+
+from visnav.guidance.orbit import OrbitGains, OrbitGuidance
+from visnav.measurements import FixedWingEstimate, Health, NavCommand, TurnReference
+
+
+class CondorMission:
+    def __init__(self, cfg, navigator, recorder=None) -> None:
+        """``cfg``: the scenario's ``mission`` block (``config_condor.CondorMissionConfig``)."""
+        self.cfg, self.nav = cfg, navigator
+        self.record = recorder or (lambda *a, **k: None)
+        o, va = cfg.control.orbit, cfg.airframe.airspeed_mps
+        g_orig, g_mod = OrbitGains(o.kp_original, o.kd_original), OrbitGains(o.kp_modified, o.kd_modified)
+        self.guidance = OrbitGuidance(o.logic, o.radius_m, va, g_orig, g_mod, o.base_limit)
+        # the GPS loiter knows its ground speed: base rate V_GS / R_loiter from a 0.5 s mean of it
+        self.loiter = OrbitGuidance("coordinated", o.loiter_radius_m, va, g_orig, g_mod, o.base_limit, v_avg_tau_s=0.5)
+        self.mode = "gps_loiter"
+        self.done = False
+        self.switched_at: float | None = None
+        self.info: dict = {}
+        self._t: float | None = None
+
+    def start(self, t: float) -> None:
+        self.record("mode", t, mode=self.mode,
+                    reason=f"GPS loiter at {self.cfg.control.orbit.loiter_radius_m:.0f} m, tracker started on the tent")
+
+    def on_touchdown(self, t: float) -> None:
+        """A fixed wing on an orbit has no touchdown."""
+
+    def step(self, t: float, estimate: FixedWingEstimate, health: Health) -> tuple[TurnReference, str]:
+        cfg, o = self.cfg, self.cfg.control.orbit
+        dt = 1.0 / 50.0 if self._t is None else t - self._t
+        self._t = t
+        e = estimate
+        if self.mode == "gps_loiter" and t >= o.switch_time_s and health.tracking:
+            self.mode, self.switched_at = "vision_orbit", t
+            self.nav.command(NavCommand(t, "set_source", {"source": "vision"}))
+            self.record("mode", t, mode=self.mode, reason="custom mode switched on (vision radius in)")
+            e = self.nav.estimate(t)
+        if self.mode == "gps_loiter":
+            if e.radius_valid and e.ground_speed == e.ground_speed:
+                ref = self.loiter.update(dt, e.radius, e.radius_rate, e.ground_speed)
+            else:  # no GPS fix yet (or lost): the loiter's base rate
+                base = self.loiter.v_avg / self.loiter.r_des
+                ref = {"psidot_ref_ail": base, "psidot_ref_rud": None, "base": base, "err": 0.0,
+                       "v_bank": self.loiter.v_avg}
+        else:
+            ref = self.guidance.update(dt, e.radius, e.radius_rate, e.airspeed)
+            if not e.radius_valid:  # no vision: hold the base rate (never a NaN to the controller)
+                ref = {**ref, "psidot_ref_ail": ref["base"], "err": 0.0,
+                       "psidot_ref_rud": None if ref["psidot_ref_rud"] is None else ref["base"]}
+        self.info = {"R": e.radius, "Rdot": e.radius_rate, "base": ref["base"], "err": ref["err"],
+                     "psidot_ref": ref["psidot_ref_ail"]}
+        return TurnReference(t, ref["psidot_ref_ail"], ref["psidot_ref_rud"], ref["v_bank"], cfg.control.altitude_m,
+                             cfg.airframe.airspeed_mps), self.mode
+
+
+class GroundTestMission:
+    """The static ground test of ch. 4 (Tables 4.1-4.2): nothing flies; ``finish`` marks it done."""
+
+    def __init__(self) -> None:
+        self.mode, self.done, self.info = "ground_test", False, {}
+
+    def step(self, t: float, estimate=None, health=None) -> tuple[None, str]:
+        return None, self.mode
+
+    def on_touchdown(self, t: float) -> None:
+        """Nothing flies."""
+
+    def finish(self, t: float) -> None:
+        self.mode, self.done = "done", True

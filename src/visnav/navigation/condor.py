@@ -1,0 +1,282 @@
+"""CONDOR navigator (seed 004 ch. 2-4, 6-7): everything the gimbal-camera orbit estimates, from modelled
+sensors only.
+
+Two halves, as on the real system:
+
+* the ground station's vision (§2.4, §4): frames from the gimbal camera go to the blob tracker
+  (started on the tent by the operator's ``OperatorClick``), the tent pixel through the distortion
+  table and rectification (``vision/condor_pipeline.VisionRange``) with the camera AHRS' tilt and
+  roll (``AttitudeSample(sensor="camera")``) and the barometric height gives the ground range R and
+  the bearing Psi_VB. Each fix (``TargetRangeSample``, stamped with the frame's instant, carrying the
+  pan potentiometer reading of that frame) waits in ``uplink``: the simulation sends it through the
+  telemetry link (a latency + drop channel) and delivers it back with ``update``;
+* on board: the autopilot's state (``navigation/fixedwing.AutopilotNavigator``: AHRS, gyros,
+  accelerometers, pitot, baro), the ``RadiusFilter`` of the uplinked radii (alpha-beta, holds across
+  dropouts), the GPS (a complementary filter on position, velocity as measured) and the compass.
+
+``estimate(t)`` (``FixedWingEstimate``): attitude / rates / specific force / airspeed / height as the
+autopilot measures them; position and the range to the target from the GPS while ``source == "gps"``
+(the loiter: range = |GPS position - surveyed tent|, rate from the GPS velocity); after the mission's
+``set_source("vision")`` the range and rate from the radius filter, and the position of eq. 3.23-3.24:
+tent - R (cos b, sin b) with b = compass heading + pan potentiometer + Psi_VB of the last fix, carried
+to ``t`` along the compass heading at the measured airspeed. The tent's position reaches the
+navigator as a ``NavInit(source="survey")``.
+
+``health(t)``: the radius filter's innovations go to an ``IntegrityMonitor`` (NIS with the
+innovation variance ``sigma_R^2 / (1 - alpha)``, sigma_R = ``radius_sigma_pct`` of R: the steady
+alpha-beta filter's innovation variance for white range noise), stale after ``stale_s`` without a fix.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+
+from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
+from visnav.measurements import (AttitudeSample, FixedWingEstimate, Frame, GpsSample, HeadingSample,
+                                 Health, NavInit, OperatorClick, PanSample, TargetRangeSample)
+from visnav.navigation.fixedwing import AutopilotNavigator
+from visnav.vision.blob_tracker import BlobTracker
+
+
+class RadiusFilter:
+    """Alpha-beta filter of the radius messages (value, rate); holds across dropouts."""
+
+    def __init__(self, alpha: float = 0.5, beta: float = 0.1, stale_s: float = 3.0) -> None:
+        self.alpha, self.beta, self.stale_s = alpha, beta, stale_s
+        self.R: float | None = None
+        self.Rdot = 0.0
+        self.t = -math.inf
+        self.t_last_meas = -math.inf
+
+    def update(self, t_meas: float, R: float) -> float | None:
+        """Fuse one radius; returns the innovation (None when not used)."""
+        if not math.isfinite(R) or R <= 0:
+            return None  # "no estimate" never reaches the controller
+        if self.R is None:
+            self.R, self.t, self.t_last_meas = R, t_meas, t_meas
+            return None
+        dt = t_meas - self.t
+        if dt <= 0:
+            return None
+        pred = self.R + self.Rdot * dt
+        res = R - pred
+        self.R = pred + self.alpha * res
+        self.Rdot += self.beta * res / dt
+        self.t = self.t_last_meas = t_meas
+        return res
+
+    def predict(self, t: float) -> tuple[float, float]:
+        if self.R is None:
+            return math.nan, 0.0
+        return self.R + self.Rdot * min(t - self.t, self.stale_s), self.Rdot
+
+    def stale(self, t: float) -> bool:
+        return self.R is None or t - self.t_last_meas > self.stale_s
+
+
+_NAN3 = np.full(3, np.nan)
+_NAN3.setflags(write=False)
+_NAN66 = np.full((6, 6), np.nan)
+_NAN66.setflags(write=False)
+
+
+def centred(camera, u: float, v: float) -> tuple[float, float]:
+    """Seed 004 image coordinates (X right, Y up) [px] from the image centre of an OpenCV pixel."""
+    return u - (camera.width - 1) / 2.0, (camera.height - 1) / 2.0 - v
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class CondorNavigator(AutopilotNavigator):
+    def __init__(self, vision, camera, altimeter: tuple[float, float, float], tracker: BlobTracker | None = None,
+                 radius_filter: RadiusFilter | None = None, gps_gain: float = 0.3, gps_stale_s: float = 1.0,
+                 radius_sigma_pct: float = 1.0, heading_sigma_deg: float = 2.0, gps_sigma_m: float = 1.0,
+                 integrity: IntegrityConfig | None = None) -> None:
+        """``vision``: a ``VisionRange``; ``camera``: its ``PinholeCamera``; ``altimeter``: (measured outside
+        temperature [C], c0, c1) of eq. 2.1; ``gps_gain``: the complementary filter's weight of a GPS fix;
+        ``radius_sigma_pct``, ``heading_sigma_deg``, ``gps_sigma_m``: what the navigator assumes of its
+        sensors (integrity and the protection level)."""
+        super().__init__(altimeter)
+        self.vision, self.camera = vision, camera
+        self.tracker = tracker or BlobTracker()
+        self.radius = radius_filter or RadiusFilter()
+        self.gps_gain, self.gps_stale_s = float(gps_gain), float(gps_stale_s)
+        self.radius_sigma, self.heading_sigma = radius_sigma_pct / 100.0, math.radians(heading_sigma_deg)
+        self.gps_sigma = float(gps_sigma_m)
+        self.integrity = IntegrityMonitor(integrity or IntegrityConfig(window=20, stale_s=self.radius.stale_s))
+        self.source = "gps"
+        self.target: np.ndarray | None = None
+        self.tracker_started = False
+        # ground station
+        self.cam_att: AttitudeSample | None = None
+        self.pan: PanSample | None = None
+        self.uplink: list[TargetRangeSample] = []
+        self.last_vision: dict | None = None
+        # on board
+        self.gps_pos: np.ndarray | None = None
+        self.gps_vel = np.zeros(3)
+        self.gps_t = -math.inf
+        self.headings: deque = deque(maxlen=64)
+        self.fix: tuple | None = None  # (t, R, Psi_VB, pan, heading at t)
+        self.fixes = self.radius_updates = 0
+        var = self.gps_sigma ** 2 * self.gps_gain / (2.0 - self.gps_gain)  # the GPS smoother's steady variance
+        self._gps_cov = np.diag([var, var, var, np.nan, np.nan, np.nan])
+        self.health_period_s = 0.1
+        self._assess: dict | None = None
+        self._assess_key: tuple | None = None
+        self._assess_t = -math.inf
+
+    # ------------------------------------------------------------------ measurements
+    def update(self, m) -> None:
+        if isinstance(m, Frame):
+            self._frame(m)
+        elif isinstance(m, TargetRangeSample):
+            self._fix(m)
+        elif isinstance(m, AttitudeSample) and m.sensor == "camera":
+            self.cam_att = m
+        elif isinstance(m, PanSample):
+            self.pan = m
+        elif isinstance(m, GpsSample):
+            self._gps(m)
+        elif isinstance(m, HeadingSample):
+            self.headings.append((float(m.t), float(m.heading)))
+        elif isinstance(m, OperatorClick):
+            self.tracker.start(float(m.pixel[0]), float(m.pixel[1]))
+            self.tracker_started = True
+        else:
+            super().update(m)  # AHRS, IMU, pitot, baro
+
+    def initialize(self, init: NavInit) -> None:
+        """``NavInit(source="survey", position=tent NED)``: where the tent is (the loiter's centre)."""
+        if init.position is None:
+            raise ValueError("CondorNavigator.initialize needs the tent's surveyed position")
+        self.target = np.asarray(init.position, float)[:3].copy()
+
+    def _cmd_set_source(self, t: float, source: str) -> None:
+        if source not in ("gps", "vision"):
+            raise ValueError(f"CondorNavigator source must be gps or vision, got {source!r}")
+        self.source = source
+
+    def pop_uplink(self) -> list[TargetRangeSample]:
+        out, self.uplink = self.uplink, []
+        return out
+
+    # ------------------------------------------------------------------ ground station
+    def _frame(self, f: Frame) -> None:
+        """Track the tent, range it (eq. 3.9-3.24); a valid fix goes to ``uplink``."""
+        rec = {"t": f.t, "tracked": False, "valid": False, "radius": math.nan, "bearing": math.nan, "X": math.nan,
+               "Y": math.nan, "tilt": math.nan, "roll": math.nan, "pan_pot": math.nan, "reason": "target not tracked"}
+        self.last_vision = rec
+        if not self.tracker_started:
+            rec["reason"] = "tracker not started"
+            return
+        tr = self.tracker.track(f.image)
+        if self.cam_att is not None:
+            rec["roll"], rec["tilt"] = float(self.cam_att.euler[0]), float(self.cam_att.euler[1])
+        if self.pan is not None:
+            rec["pan_pot"] = float(self.pan.pan)
+        if not tr.ok:
+            return
+        rec["tracked"] = True
+        rec["X"], rec["Y"] = centred(self.camera, float(tr.u), float(tr.v))
+        if self.cam_att is None or not math.isfinite(self.baro_raw):
+            rec["reason"] = "no camera attitude or height yet"
+            return
+        a = self.altimeter
+        est = self.vision.estimate(rec["X"], rec["Y"], self.baro_raw, rec["tilt"], rec["roll"], a[0], a[1], a[2])
+        rec["valid"], rec["reason"] = bool(est.valid), est.reason
+        if est.valid:
+            rec["radius"], rec["bearing"] = float(est.ground_range), float(est.bearing)
+            self.uplink.append(TargetRangeSample(t=f.t, range=rec["radius"], bearing=rec["bearing"],
+                                                 pan=rec["pan_pot"]))
+
+    # ------------------------------------------------------------------ on board
+    def _heading_at(self, t: float) -> float:
+        """Compass heading at ``t``: the last sample at or before it (the oldest one kept otherwise)."""
+        best = math.nan
+        for tm, h in self.headings:
+            if tm <= t + 1e-9 or not math.isfinite(best):
+                best = h
+            if tm > t + 1e-9:
+                break
+        return best
+
+    def _fix(self, m: TargetRangeSample) -> None:
+        R_pred = self.radius.predict(m.t)[0]
+        res = self.radius.update(m.t, float(m.range))
+        self.fixes += 1
+        if res is not None:
+            self.radius_updates += 1
+            S = (self.radius_sigma * max(R_pred, 1.0)) ** 2 / (1.0 - self.radius.alpha)
+            self.integrity.record(m.t, "radius", res * res / S, 1, True)
+        if math.isfinite(m.range) and m.range > 0 and math.isfinite(m.pan):
+            self.fix = (float(m.t), float(m.range), float(m.bearing), float(m.pan), self._heading_at(m.t))
+
+    def _gps(self, m: GpsSample) -> None:
+        p = np.asarray(m.position, float)
+        if self.gps_pos is None:
+            self.gps_pos = p.copy()
+        else:
+            pred = self.gps_pos + self.gps_vel * (m.t - self.gps_t)
+            self.gps_pos = pred + self.gps_gain * (p - pred)
+        self.gps_vel = np.asarray(m.velocity, float).copy()
+        self.gps_t = float(m.t)
+
+    def _heading_now(self) -> float:
+        return self.headings[-1][1] if self.headings else math.nan
+
+    def estimate(self, t: float) -> FixedWingEstimate:
+        base = self._base(t)
+        pos, vel, R, Rdot, valid, gs = _NAN3, _NAN3, math.nan, 0.0, False, math.nan
+        cov = _NAN66
+        if self.source == "gps":
+            if self.gps_pos is not None:
+                pos = self.gps_pos + self.gps_vel * (t - self.gps_t)
+                vel = self.gps_vel
+                gs = math.hypot(vel[0], vel[1])
+                cov = self._gps_cov
+                if self.target is not None:
+                    rn, re = pos[0] - self.target[0], pos[1] - self.target[1]
+                    R = math.hypot(rn, re)
+                    Rdot = (rn * vel[0] + re * vel[1]) / max(R, 1.0)
+                    valid = t - self.gps_t <= self.gps_stale_s
+        else:
+            R, Rdot = self.radius.predict(t)
+            valid = not self.radius.stale(t)
+            if self.fix is not None and self.target is not None and math.isfinite(self.fix[4]):
+                tf, Rf, psi_vb, pan, head = self.fix
+                b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
+                pos = self.target + np.array([-Rf * math.cos(b), -Rf * math.sin(b), 0.0])
+                h_now = self._heading_now()
+                if math.isfinite(self.va) and math.isfinite(h_now):
+                    pos[:2] += self.va * (t - tf) * np.array([math.cos(h_now), math.sin(h_now)])
+                pos[2] = -base["height"]
+                # radial: sigma_R; across: R sigma_heading; rotate to NED
+                c, s = math.cos(b), math.sin(b)
+                Rot = np.array([[c, -s], [s, c]])
+                P = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
+                cov = np.full((6, 6), np.nan)
+                cov[:2, :2] = P
+        return FixedWingEstimate(t=t, position=pos, velocity=vel, covariance=cov,
+                                 valid=math.isfinite(pos[0]) and math.isfinite(pos[1]), source=self.source, ground_speed=gs,
+                                 radius=R, radius_rate=Rdot, radius_valid=bool(valid), **base)
+
+    def health(self, t: float) -> Health:
+        """``tracking``: the vision radius is coming in (not stale); integrity of the radius filter and the
+        protection level of the position (re-assessed at most every ``health_period_s`` or on a new fix)."""
+        h = Health(source=self.source, tracking=not self.radius.stale(t))
+        key = (self.radius_updates, self.source)
+        if self._assess is None or key != self._assess_key or t - self._assess_t >= self.health_period_s:
+            P_h = self.estimate(t).covariance[:2, :2]
+            ok = math.isfinite(P_h[0, 0]) and math.isfinite(P_h[1, 1])
+            self._assess = self.integrity.assess(t, P_h if ok else None)
+            self._assess_key, self._assess_t = key, t
+        h.set_integrity(dict(self._assess))
+        if self.source == "vision" and self.radius.stale(t):
+            h.notes.append("vision radius stale")
+        return h
