@@ -36,7 +36,7 @@ def _switched_at(log) -> float | None:
     return None
 
 
-def condor_metrics(log, scenario, wall_time_s: float, error: str | None = None) -> dict:
+def condor_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
     """Metrics of a CONDOR run from its flight log (the same data as ``log.h5``) and the resolved scenario."""
     cfg = scenario.mission
     out: dict = {k: math.nan for k in KEYS}

@@ -154,7 +154,7 @@ class CondorSimulation:
         except KeyboardInterrupt:  # Ctrl-C: stop here and keep what the run has
             interrupted = True
         wall = time.perf_counter() - wall0
-        return RunResult(scenario=self.sc, log=self.log, metrics=condor_metrics(self.log, self.sc, wall, error),
+        return RunResult(scenario=self.sc, log=self.log, metrics=condor_metrics(self.log, self.sc, wall_time_s=wall, error=error),
                          error=error, interrupted=interrupted)
 
     def _push(self, t_deliver: float, m) -> None:
