@@ -211,7 +211,7 @@ class Simulation:
                 self._render_pool.shutdown(wait=True, cancel_futures=True)
                 self._render_pool = None
         wall = time.perf_counter() - wall0
-        metrics = self._metrics(self, wall_time_s=wall, error=error)
+        metrics = self._metrics(self.log, self.sc, wall_time_s=wall, error=error)  # from the log only
         return RunResult(scenario=sc, log=log, metrics=metrics, error=error, interrupted=interrupted)
 
     def _log_step(self, t, truth, est, ref, cmd, mode, health) -> None:
@@ -223,4 +223,5 @@ class Simulation:
         log.record("reference", t, position=ref.position, velocity=ref.velocity, yaw=ref.yaw)
         log.record("command", t, ail=cmd.ail, ele=cmd.ele, rud=cmd.rud, thr=cmd.thr)
         log.record("status", t, mode=mode, source=health.source, coherence=health.coherence,
-                   mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking)
+                   mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking,
+                   rejected_samples=health.rejected_samples, rejected_ranges=health.rejected_ranges)
