@@ -54,8 +54,8 @@ def deck_metrics(log, scenario=None, wall_time_s: float = float("nan"), error: s
     out["nees_mean"] = float(np.nanmean(es["nees"][auto])) if es and auto.any() else nan
     cam = log.get("camera")
     out["lights_used_mean"] = float(np.mean(cam["lights_used"])) if cam else nan
-    out["blobs_rejected"] = int(np.sum(cam["rejected"])) if cam else 0
-    drop = log.get("imu_dropped")
+    out["blobs_rejected"] = int(np.sum(cam["rejected"])) if cam else nan  # no camera stream: unknown
+    drop = log.get("imu_dropped")  # one row per dropped sample: none recorded is none dropped
     out["imu_dropped"] = int(len(drop["t"])) if drop else 0
     out["touchdown_time_s"] = td["t"] if td else nan
     # time flown without a 3-light fix before contact (the camera of eq. 5.9 loses the lights over the deck origin)

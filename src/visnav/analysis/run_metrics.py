@@ -24,6 +24,7 @@ METRICS: dict[str, str] = {
     "witas-homing": "visnav.analysis.witas_metrics:witas_metrics",
     "pad-landing": "visnav.analysis.pad_report:pad_metrics",
     "mav-geolocation": "visnav.analysis.geolocation_metrics:geolocation_metrics",
+    "deck": "visnav.analysis.deck_metrics:deck_metrics",
 }
 
 
