@@ -306,3 +306,50 @@ class NavCommand:
     t: float
     name: str
     args: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class RelativeStateSample:
+    """An outside observer's view of the vehicle relative to a moving deck (motion capture, a safety pilot):
+    the 12 relative states of ``estimation/deck.py`` (r, e, v, w_d; vehicle body frame) at ``t``, with the
+    1-sigma of its noise per state."""
+
+    t: float
+    state: np.ndarray
+    sigma: np.ndarray
+    source: str = "pilot"  # pilot | mocap
+
+
+@dataclass(frozen=True)
+class AttitudeThrustCommand:
+    """Inputs of a multirotor's attitude + thrust autopilot (the deck Y6's Pixhawk, seed 003 §2.2.2)."""
+
+    t: float
+    roll: float  # rad
+    pitch: float  # rad
+    yaw_rate: float  # rad/s
+    throttle: float  # 0..1
+
+
+@dataclass(frozen=True)
+class DeckReference:
+    """What the deck mission asks the deck controller for (level-deck frame: heading-free, z down, relative
+    to the deck; ``control/deck.py``).
+
+    ``kind``: ``level`` (hover level on the IMU, no position loop), ``follow`` (spring-damper on
+    ``position`` / ``velocity`` plus the feed-forward ``accel``, eq. 4.25) or ``descend`` (thrust along
+    ``normal``, sink at the final descent speed, horizontal hold on ``target``). ``target``: the body
+    origin at contact; ``normal``: the predicted upward deck normal there; ``flare_time_left``: the
+    trajectory's time to go when the flare may act (None: no flare). ``pilot_view``: the safety pilot's
+    view of the relative state; when set the controller flies on it instead of the navigator's estimate.
+    """
+
+    t: float
+    kind: str
+    position: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    accel: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    target: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    flare_time_left: float | None = None
+    pilot_view: np.ndarray | None = None

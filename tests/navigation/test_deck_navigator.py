@@ -1,43 +1,70 @@
-"""The deck navigator's handling of bad input: NaN bearings, empty frames, IMU out of order."""
+"""The deck navigator on the Navigator interface: bad input, tuning from its own config, frames at their stamp,
+and the same estimate from a plain list of measurements as inside the closed loop."""
 
 import numpy as np
+import pytest
 
 from visnav.estimation import deck as dm
-from visnav.navigation.deck import DeckNavigator
+from visnav.measurements import AttitudeSample, Frame, ImuSample, NavCommand, NavInit
+from visnav.navigation.base import Navigator
+from visnav.navigation.deck import DeckNavConfig, DeckNavigator
+from visnav.scenarios.schema import load_scenario
 from visnav.world.deck import LEDS_EQ_5_10
 
 CAM = dm.CameraGeometry(rho=np.array([0.101, 0.008, 0.11]),
                         T_cam=np.array([[0, 1, 0], [-np.sin(0.76), 0, np.cos(0.76)], [np.cos(0.76), 0, np.sin(0.76)]]))
-G = np.array([0.0, 0.0, 9.81])
+LEVEL = AttitudeSample(t=0.0, euler=np.array([0.0, 0.0, np.nan]))
+ACC = np.array([0.0, 0.0, -9.81])
 
 
-def _nav():
-    x0, P0 = dm.initial_state_static()
-    return DeckNavigator(LEDS_EQ_5_10, CAM, x0, P0, np.eye(6) * 1e-4, np.eye(6) * 1e-4, np.radians(2), np.radians(2))
+def _cfg(imu_cov=None, ship_cov=None, **kw):
+    from visnav.geometry.camera import PinholeCamera
+
+    return DeckNavConfig(lights=LEDS_EQ_5_10, cam=CAM, camera=PinholeCamera.ideal(752, 480, 420.0),
+                         imu_cov=np.eye(6) * 1e-4 if imu_cov is None else imu_cov,
+                         ship_cov=np.eye(6) * 1e-4 if ship_cov is None else ship_cov,
+                         acquisition_sigmas=(np.radians(2), np.radians(2)), tracking_sigmas=(1e-3, 0.05), **kw)
+
+
+def _nav(**kw):
+    nav = DeckNavigator(_cfg(**kw))
+    nav.initialize(NavInit(t=0.0, source="static"))
+    nav.update(LEVEL)
+    return nav
+
+
+def test_it_is_a_navigator_and_refuses_other_messages():
+    nav = _nav()
+    assert isinstance(nav, Navigator)
+    with pytest.raises(TypeError, match="ImuSample, AttitudeSample or Frame"):
+        nav.update(NavInit(t=0.0, source="x"))
+    with pytest.raises(ValueError, match="no command 'land'"):
+        nav.command(NavCommand(0.0, "land"))
 
 
 def test_out_of_order_and_nan_imu_samples_are_dropped_and_counted():
     nav = _nav()
-    acc = np.array([0, 0, -9.81])
-    assert nav.imu(0.00, acc, np.zeros(3), G)
-    assert nav.imu(0.01, acc, np.zeros(3), G)
+    nav.update(ImuSample(0.00, ACC, np.zeros(3)))
+    nav.update(ImuSample(0.01, ACC, np.zeros(3)))
     x = nav.x.copy()
-    assert not nav.imu(0.005, acc, np.zeros(3), G)
-    assert not nav.imu(0.01, acc, np.zeros(3), G)
-    assert not nav.imu(0.02, [np.nan, 0, 0], np.zeros(3), G)
+    nav.update(ImuSample(0.005, ACC, np.zeros(3)))
+    nav.update(ImuSample(0.01, ACC, np.zeros(3)))
+    nav.update(ImuSample(0.02, np.array([np.nan, 0, 0]), np.zeros(3)))
     np.testing.assert_array_equal(nav.x, x)
     assert nav.stats.imu_dropped == 3 and nav.stats.imu_samples == 2
+    assert nav.health(0.02).rejected_samples == 3
 
 
 def test_empty_frame_and_nan_bearings_change_nothing_bad():
     nav = _nav()
-    nav.imu(0.0, [0, 0, -9.81], np.zeros(3), G)
+    nav.update(ImuSample(0.0, ACC, np.zeros(3)))
     x, P = nav.x.copy(), nav.P.copy()
-    assert nav.camera(np.zeros((0, 2)), np.zeros((0, 2))) == 0
-    assert nav.camera(np.full((3, 2), np.nan), np.full((3, 2), np.nan)) == 0
+    assert nav.fuse_bearings(np.zeros((0, 2)), np.zeros((0, 2))) == 0
+    assert nav.fuse_bearings(np.full((3, 2), np.nan), np.full((3, 2), np.nan)) == 0
+    nav.update(Frame(t=0.0, image=np.zeros((480, 752), np.uint8)))  # a black frame: no blobs
     np.testing.assert_array_equal(nav.x, x)
     np.testing.assert_array_equal(nav.P, P)
-    assert nav.stats.empty_frames == 2
+    assert nav.stats.empty_frames == 3
 
 
 def test_true_bearings_with_a_nan_row_and_a_distractor_converge():
@@ -45,10 +72,10 @@ def test_true_bearings_with_a_nan_row_and_a_distractor_converge():
     truth = np.r_[1.3, 0.1, 1.1, 0.0, 0.0, 0.3, np.zeros(6)]
     bear, rate = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
     for k in range(60):
-        nav.imu(k * 0.03, [0, 0, -9.81], np.zeros(3), G)
+        nav.update(ImuSample(k * 0.03, ACC, np.zeros(3)))
         b = np.vstack([bear[0], [[np.nan, 0.1]], [[0.5, -0.4]]])  # a NaN row and a bright non-light
         r = np.vstack([rate[0], [[np.nan, np.nan]], [[np.nan, np.nan]]])
-        nav.camera(b, r)
+        nav.fuse_bearings(b, r)
     assert np.linalg.norm(nav.x[:3] - truth[:3]) < 0.05
     assert abs(nav.x[5] - 0.3) < np.radians(3)
     assert nav.stats.blobs_rejected > 0 and nav.stats.lights_used_last == 4
@@ -58,14 +85,13 @@ def test_gyro_noise_telescopes_into_the_velocity_and_covariance_holds_it():
     # vehicle and deck at rest: the only velocity error comes from the numerical angular acceleration,
     # sum (n_k - n_k-1) x r = (n_N - n_0) x r, bounded (not a random walk); covariance() carries the
     # newest sample's part, [r]x Sigma_g [r]x^T, on top of P
-    x0, P0 = dm.initial_state_static()
     sg = 0.003
-    imu_cov = np.diag([0.0] * 3 + [sg**2] * 3)
-    nav = DeckNavigator(LEDS_EQ_5_10, CAM, x0, P0, imu_cov, np.zeros((6, 6)), np.radians(2), np.radians(2))
+    nav = _nav(imu_cov=np.diag([0.0] * 3 + [sg**2] * 3), ship_cov=np.zeros((6, 6)))
+    x0 = nav.x.copy()
     rng = np.random.default_rng(0)
     n = sg * rng.standard_normal((50, 3))
     for k in range(50):
-        nav.imu(0.01 * k, -G, n[k], G)
+        nav.update(ImuSample(0.01 * k, ACC, n[k]))
     r = nav.x[0:3]
     np.testing.assert_allclose(nav.x[6:9] - x0[6:9], -np.cross(n[-1] - n[0], r), atol=2e-4)
     assert np.linalg.norm(np.cross(n[-1] - n[0], r)) > 2e-3  # the effect is ten times the tolerance
@@ -74,3 +100,121 @@ def test_gyro_noise_telescopes_into_the_velocity_and_covariance_holds_it():
     np.testing.assert_allclose(extra[6:9, 6:9], S @ S.T * sg**2, rtol=1e-12)
     extra[6:9, 6:9] = 0.0
     np.testing.assert_array_equal(extra, 0.0)
+
+
+def test_commands_restart_with_a_yaw_and_switch_to_the_sensor_noise():
+    nav = _nav()
+    assert nav.bearing_var == pytest.approx(np.radians(2) ** 2)  # eq. 5.12 start: acquisition R
+    nav.command(NavCommand(1.0, "track"))
+    assert (nav.bearing_var, nav.rate_var) == pytest.approx((1e-6, 0.05**2))
+    nav.command(NavCommand(2.0, "restart", {"yaw_deg": 45.0}))
+    x0, P0 = dm.initial_state_static()
+    assert nav.x[5] == pytest.approx(np.radians(45.0))
+    np.testing.assert_array_equal(nav.x[:5], x0[:5])
+    np.testing.assert_array_equal(nav.P, P0)
+    assert nav.bearing_var == pytest.approx(np.radians(2) ** 2)
+    # a start from a given state (the Vicon start) uses the sensor's R at once
+    nav.initialize(NavInit(t=3.0, source="truth+noise", state=np.r_[1.0, 0, 1, np.zeros(9)], covariance=np.eye(12)))
+    assert nav.bearing_var == pytest.approx(1e-6)
+
+
+def test_filter_tuning_comes_from_the_filter_config_not_the_world():
+    """The mismatch campaigns: deck.motion_scale moves the world only; filter.motion_scale / sea_state tune Q."""
+    def ship(*sets):
+        sc = load_scenario("deck-moving", list(sets))
+        return DeckNavConfig.from_mission(sc.mission, 0.03).ship_cov
+
+    nominal = ship()
+    for ms in ("1.3", "1.5"):
+        np.testing.assert_array_equal(ship(f"mission.deck.motion_scale={ms}"), nominal)
+    # eq. 3.7 closed form of the stewart preset, 1.5x amplitudes: (1.5 A + 3 1.5 sA) (w + 3 sW)^2, over w dt
+    A, W, sA, sW = dm.SEA_STATES["stewart"]
+    bound = (1.5 * A + 4.5 * sA) * (W + 3 * sW) ** 2
+    np.testing.assert_allclose(np.diag(ship("mission.filter.motion_scale=1.5")), bound**2 / W / 0.01, rtol=1e-12)
+    # the default is the sea state the scenario names; a static deck is tuned for calm (the 1e-4 floor)
+    assert load_scenario("deck-moving").mission.filter.sea_state == "stewart"
+    assert load_scenario("deck-moving", ["mission.deck.sea_state=ship_ss4"]).mission.filter.sea_state == "ship_ss4"
+    sc = load_scenario("deck-static")
+    assert sc.mission.filter.sea_state == "calm"
+    np.testing.assert_array_equal(np.diag(DeckNavConfig.from_mission(sc.mission, 0.03).ship_cov), 1e-4)
+
+
+def _run_frames(late: bool, mid: bool = False):
+    """IMU at 100 Hz over a turning, accelerating vehicle; one frame of true bearings at t_f, delivered in
+    order (late=False) or 50 ms late (after the IMU samples up to t_f + 0.05)."""
+    nav = _nav()
+    nav.command(NavCommand(0.0, "track"))
+    truth = np.r_[1.2, 0.05, 1.0, 0.0, 0.0, 0.1, np.zeros(6)]
+    b, r = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    t_f = 0.105 if mid else 0.10
+    frame_uv = _render_uv(b[0])
+    for k in range(21):
+        t = 0.01 * k
+        nav.update(ImuSample(t, ACC + [0.3 * np.sin(5 * t), 0.2, 0.1], np.array([0.0, 0.02, 0.3 * t])))
+        if not late and k == int(np.floor(t_f * 100 + 1e-9)):
+            nav.update(frame_uv(t_f))  # right after the IMU sample at (or just before) t_f
+        if late and k == 15:
+            nav.update(frame_uv(t_f))  # after the sample at 0.15
+    return nav
+
+
+def _render_uv(bearings):
+    """A frame whose blobs sit at the pixels of ``bearings`` (ideal camera: tan of the bearings x f)."""
+    def make(t):
+        img = np.full((480, 752), 20, np.uint8)
+        yy, xx = np.mgrid[0:480, 0:752]
+        f = np.zeros(img.shape)
+        for bx, by in bearings:
+            u, v = 420.0 * np.tan(bx) + 375.5, 420.0 * np.tan(by) + 239.5
+            f = np.maximum(f, 230 * np.exp(-((xx - u) ** 2 + (yy - v) ** 2) / (2 * 1.3**2)))
+        return Frame(t=t, image=np.clip(img + f, 0, 255).astype(np.uint8))
+    return make
+
+
+def test_a_late_frame_is_fused_at_its_own_stamp():
+    on_time, late = _run_frames(False), _run_frames(True)
+    assert on_time.stats.lights_used_last == 4 and late.stats.lights_used_last == 4
+    np.testing.assert_allclose(late.x, on_time.x, atol=1e-9)
+    np.testing.assert_allclose(late.P, on_time.P, atol=1e-12)
+    # fused at the last IMU time instead (the old behaviour) the estimate differs by far more
+    old = _run_frames(False)
+    old_way = _nav()
+    old_way.command(NavCommand(0.0, "track"))
+    for k in range(21):
+        t = 0.01 * k
+        old_way.update(ImuSample(t, ACC + [0.3 * np.sin(5 * t), 0.2, 0.1], np.array([0.0, 0.02, 0.3 * t])))
+    truth = np.r_[1.2, 0.05, 1.0, 0.0, 0.0, 0.1, np.zeros(6)]
+    b, _ = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    old_way.update(_render_uv(b[0])(0.20))  # the same image stamped with the last IMU time
+    assert np.linalg.norm(old_way.x[:3] - old.x[:3]) > 1e-4
+    # a frame between two IMU samples: in order it is predicted to (the newest input held), late it is
+    # rewound to; both land between the two samples' states and close to each other
+    a, c = _run_frames(False, mid=True), _run_frames(True, mid=True)
+    assert a.stats.lights_used_last == 4 and c.stats.lights_used_last == 4
+    np.testing.assert_allclose(c.x[:3], a.x[:3], atol=1e-4)
+    # older than the history: dropped and counted, the state untouched
+    nav = _run_frames(False)
+    x = nav.x.copy()
+    nav.update(_render_uv(b[0])(-1.0))
+    assert nav.stats.frames_dropped == 1
+    np.testing.assert_array_equal(nav.x, x)
+
+
+def test_health_reports_the_hand_over_check_and_integrity():
+    nav = _nav()
+    nav.command(NavCommand(0.0, "track"))
+    truth = np.r_[1.0, 0.0, 1.0, np.zeros(9)]  # the eq. 5.12 start is the truth: bearings fit at once
+    b, r = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    make = _render_uv(b[0])
+    h = nav.health(0.0)
+    assert not h.converged and h.frames_1s == 0
+    for k in range(40):
+        t = 0.03 * k
+        nav.update(ImuSample(t, ACC, np.zeros(3)))
+        nav.update(make(t))
+    h = nav.health(1.17)
+    assert h.frames_1s == 34 and h.min_lights_1s == 4 and h.lights_used == 4  # frames after t - 1 s
+    assert h.converged == bool(h.bearing_rms_1s <= np.radians(0.2))
+    assert h.converged and h.tracking
+    assert h.integrity in ("ok", "degraded") and np.isfinite(h.hpl_m)
+    assert set(h.nis_per_dof) == {"bearing", "rate"}

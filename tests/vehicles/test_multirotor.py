@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from visnav.vehicles.base import Environment
 from visnav.vehicles.multirotor import G, AttitudeThrustCommand, Multirotor, MultirotorParams
 
 
@@ -39,10 +40,18 @@ def test_ground_effect_cheeseman_bennett():
     assert p.ground_effect(10.0) == pytest.approx(1.0, abs=1e-4)
     assert p.ground_effect(0.001) == 1.3
     v = Multirotor(p, [0, 0, -0.2])
-    s = v.step(AttitudeThrustCommand(0, 0, 0, 0, p.hover_throttle), 0.01, rotor_height_m=0.1)
+    s = v.step(AttitudeThrustCommand(0, 0, 0, 0, p.hover_throttle), 0.01, Environment(rotor_height_m=0.1))
     assert s.velocity[2] < 0  # more thrust near the ground: climbs
 
 
 def test_gear_point_is_below_body():
     v = Multirotor(MultirotorParams(gear_offset=0.17), [1, 2, -3.0])
     np.testing.assert_allclose(v.gear_point(), [1, 2, -2.83])
+
+
+def test_drag_acts_on_the_airspeed():
+    """Level hover in a steady wind: the linear drag accelerates the vehicle at c_d * wind (eq. of the docstring)."""
+    p = MultirotorParams()
+    v = Multirotor(p, [0.0, 0.0, -5.0])
+    s = v.step(AttitudeThrustCommand(0, 0, 0, 0, p.hover_throttle), 0.01, Environment(wind_ned=np.array([2.0, 0.0, 0.0])))
+    assert s.velocity[0] == pytest.approx(p.drag * 2.0 * 0.01, rel=1e-9)

@@ -5,7 +5,8 @@ import pytest
 
 from visnav.geometry.camera import PinholeCamera
 from visnav.sensors.led_camera import LedCamera
-from visnav.sim.deck_loop import DIST_EQ_5_6_5_7, camera_rotation
+from visnav.estimation.deck import camera_rotation
+from visnav.scenarios.config_deck import DIST_EQ_5_6_5_7
 from visnav.vision.blobs import BearingTracker, find_blobs, pixels_to_bearings
 
 CAM = PinholeCamera(752, 480, 420.0, 420.0, 375.5, 239.5, DIST_EQ_5_6_5_7)
@@ -51,3 +52,24 @@ def test_rates_from_frame_to_frame_matching_and_new_blobs():
     b0 = np.arctan((np.array([[300.0, 200.0], [100.0, 100.0]]) - [319.5, 239.5]) / 500.0)
     np.testing.assert_allclose(f1.rates[:2], (f1.bearings[:2] - b0) / 0.1, rtol=1e-12)
     assert np.all(np.isnan(f1.rates[2]))  # a new blob has no rate (§3.1.2)
+
+
+def test_centroid_noise_moves_each_spot_by_its_sigma():
+    """LedCamera's centroid noise (the camera's property): blob centroids scatter about the noiseless ones by
+    sigma (0.3 px; the render alone adds 0.025 px, so the scatter is hypot(0.3, 0.025) within sampling error)."""
+    T = camera_rotation(np.radians(43.5), np.radians(-3.4))
+    rho = np.array([0.101, 0.008, 0.11])
+    lights = np.array([[0.9, -0.1, 1.1], [1.1, 0.1, 1.0], [1.0, 0.3, 0.95], [0.8, 0.35, 1.2]])
+    clean = LedCamera(CAM, T, rho, np.random.default_rng(0), noise_gray=0.0)
+    ref = find_blobs(clean.render(np.zeros(3), np.eye(3), lights, lights[:3] + 0.5))
+    ref = ref[np.argsort(ref[:, 0])]
+    noisy = LedCamera(CAM, T, rho, np.random.default_rng(0), noise_gray=0.0, centroid_noise_px=0.3,
+                      jitter_rng=np.random.default_rng(1))
+    d = []
+    for _ in range(150):
+        uv = find_blobs(noisy.render(np.zeros(3), np.eye(3), lights, lights[:3] + 0.5))
+        uv = uv[np.argsort(uv[:, 0])]
+        d.append(uv - ref)
+    d = np.concatenate(d)
+    assert np.std(d) == pytest.approx(0.3, rel=0.1)
+    assert abs(np.mean(d)) < 4 * 0.3 / np.sqrt(d.size)

@@ -1,4 +1,4 @@
-"""Metrics of a deck landing run (issue #6 keys), from the flight log and the touchdown record."""
+"""Metrics of a deck landing run (issue #6 keys), from the flight log alone (``touchdown``, ``camera``, ...)."""
 
 from __future__ import annotations
 
@@ -23,10 +23,18 @@ def final_approach_mask(log) -> np.ndarray:
     return np.isin(es["mode"], ["approach", "descend"]) if es else np.zeros(0, bool)
 
 
-def deck_metrics(sim, sim_time_s: float, wall_time_s: float, error: str | None) -> dict:
-    log, td = sim.log, sim.touchdown
-    out: dict = {"landed": bool(td is not None and td["on_deck"] and error is None)}
+def deck_metrics(log, scenario=None, wall_time_s: float = float("nan"), error: str | None = None) -> dict:
+    """Every metric of a deck run from its ``FlightLog`` (or the same data read back from ``log.h5``).
+
+    ``scenario`` is the resolved scenario (unused by the keys so far; kept for the one metrics signature).
+    """
     nan = float("nan")
+    tdl = log.get("touchdown")
+    td = None
+    if tdl and len(tdl["t"]):
+        td = dict(t=float(tdl["t"][0]), rel_speed=float(tdl["rel_speed"][0]), pos_err=float(tdl["pos_err"][0]),
+                  on_deck=bool(tdl["on_deck"][0]), att_mismatch=float(tdl["att_mismatch"][0]))
+    out: dict = {"landed": bool(td is not None and td["on_deck"] and error is None)}
     out["touchdown_rel_speed_mps"] = td["rel_speed"] if td else nan
     out["touchdown_attitude_mismatch_deg"] = td["att_mismatch"] if td else nan
     out["touchdown_position_error_m"] = td["pos_err"] if td else nan
@@ -46,14 +54,15 @@ def deck_metrics(sim, sim_time_s: float, wall_time_s: float, error: str | None) 
     out["nees_mean"] = float(np.nanmean(es["nees"][auto])) if es and auto.any() else nan
     cam = log.get("camera")
     out["lights_used_mean"] = float(np.mean(cam["lights_used"])) if cam else nan
-    st = sim.nav.stats
-    out["blobs_rejected"] = int(st.blobs_rejected)
-    out["imu_dropped"] = int(st.imu_dropped)
+    out["blobs_rejected"] = int(np.sum(cam["rejected"])) if cam else nan  # no camera stream: unknown
+    drop = log.get("imu_dropped")  # one row per dropped sample: none recorded is none dropped
+    out["imu_dropped"] = int(len(drop["t"])) if drop else 0
     out["touchdown_time_s"] = td["t"] if td else nan
     # time flown without a 3-light fix before contact (the camera of eq. 5.9 loses the lights over the deck origin)
     seen = cam["t"][cam["lights_used"] >= 3] if cam else np.zeros(0)
     out["blind_before_touchdown_s"] = float(td["t"] - seen[-1]) if td and seen.size else nan
     # time past the trajectory's end without contact (the descend mode; 0 when contact came during the approach)
+    sim_time_s = float(tr["t"][-1]) if tr and len(tr["t"]) else 0.0
     md = log.get("mode")
     t_desc = [t for t, m in zip(md["t"], md["mode"]) if m == "descend"] if md else []
     out["descend_s"] = float((td["t"] if td else sim_time_s) - t_desc[0]) if t_desc else 0.0

@@ -25,6 +25,7 @@ METRICS: dict[str, str] = {
     "pad-landing": "visnav.analysis.pad_report:pad_metrics",
     "mav-geolocation": "visnav.analysis.geolocation_metrics:geolocation_metrics",
     "condor": "visnav.analysis.condor_metrics:condor_metrics",
+    "deck": "visnav.analysis.deck_metrics:deck_metrics",
 }
 
 

@@ -42,6 +42,44 @@ from visnav.geometry.rotations import skew
 N_STATE = 12
 POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 
+# name -> (amplitude [m, m, m, rad, rad, rad], omega [rad/s], sigma_amplitude, sigma_omega)
+SEA_STATES: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {
+    "calm": (np.zeros(6), np.zeros(6), np.zeros(6), np.zeros(6)),
+    # the lab Stewart platform (Fig. 5.5 style: a few cm, a few degrees, periods of 5-10 s)
+    "stewart": (np.array([0.04, 0.04, 0.04, np.radians(6), np.radians(6), np.radians(3)]),
+                np.array([0.7, 0.8, 1.0, 0.9, 0.7, 0.5]),
+                np.array([0.01, 0.01, 0.01, np.radians(1), np.radians(1), np.radians(0.5)]),
+                np.array([0.1, 0.1, 0.1, 0.1, 0.1, 0.05])),
+    # a frigate in sea state 4 (full scale, for the process-noise sizing of eq. 3.7)
+    "ship_ss4": (np.array([0.5, 0.4, 0.8, np.radians(5), np.radians(2), np.radians(1)]),
+                 np.array([0.5, 0.5, 0.6, 0.5, 0.6, 0.4]),
+                 np.array([0.1, 0.1, 0.2, np.radians(1), np.radians(0.5), np.radians(0.3)]),
+                 np.array([0.05, 0.05, 0.05, 0.05, 0.05, 0.05])),
+}
+
+
+def ship_process_noise(sea_state: str, motion_scale: float = 1.0, accel_scale: float = 1.0,
+                       dt: float = 0.01) -> np.ndarray:
+    """Per-step variances (6,) of the deck's linear and angular accelerations for the filter's Q (eq. 3.7-3.8).
+
+    The eq. 3.7 bound of the sea state ``sea_state`` (its amplitudes times ``motion_scale``) times
+    ``accel_scale``, as white accelerations over the correlation time ``1 / omega`` discretised at
+    ``dt``: ``bound^2 / (omega dt)``, floored at 1e-4 (calm: no deck motion).
+    """
+    if sea_state not in SEA_STATES:
+        raise ValueError(f"unknown sea state {sea_state!r}; known: {', '.join(SEA_STATES)}")
+    A, W, sA, sW = SEA_STATES[sea_state]
+    bound = ship_acceleration_bound(A * motion_scale, W, sA * motion_scale, sW) * accel_scale
+    var = np.where(W > 0, bound**2 / np.maximum(W, 1e-6) / dt, 0.0)
+    return np.maximum(var, 1e-4)
+
+
+def camera_rotation(depression: float, yaw: float) -> np.ndarray:
+    """T_cam: body FRD -> OpenCV camera axes for an optical axis ``depression`` below x, turned by ``yaw``."""
+    zc = np.array([np.cos(depression) * np.cos(yaw), np.cos(depression) * np.sin(yaw), np.sin(depression)])
+    xc = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+    return np.vstack([xc, np.cross(zc, xc), zc])
+
 
 def euler_dcm_batch(e: np.ndarray) -> np.ndarray:
     """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3)."""

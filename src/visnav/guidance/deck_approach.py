@@ -18,12 +18,16 @@ landing point along the predicted deck normal (so that the gear, not the body, m
   first two derivatives by the chain rule (the exact form of eq. 4.18-4.20's omega x terms).
 * :class:`StraightApproach` - §5.3.3: one gap per axis, all with the same k and duration: a
   straight line to the target.
+* :func:`level_deck_geometry` - the vehicle relative to the deck in the heading-free level frame and
+  the level-deck frame, from the 12 relative states, the gyro and the autopilot's roll and pitch;
+  :func:`touchdown_target` - the body origin at contact and the predicted upward deck normal there.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
 from visnav.guidance.tau import duration_for_touchdown_acceleration, higher_order_tau
 
 G = 9.81
@@ -123,3 +127,39 @@ class StraightApproach:
     def desired(self, t: float):
         g, gd, gdd = higher_order_tau(t, 1.0, self.T, self.k)
         return self.x0 * g, self.x0 * gd, self.x0 * gdd
+
+
+def rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def level_deck_geometry(x: np.ndarray, gyro: np.ndarray, roll: float, pitch: float):
+    """The vehicle relative to the deck from the relative state ``x`` (``estimation/deck.py``).
+
+    Returns (p, v) of the vehicle relative to the deck in the heading-free level frame, the deck's attitude
+    there ``Cd0``, the level-deck yaw ``psi_d`` (so ``rot_z(psi_d).T @ p`` is the level-deck position), and
+    the deck's body rates.
+    """
+    Ch0 = euler_to_dcm([roll, pitch, 0.0])
+    r, e, v, wd = x[0:3], x[3:6], x[6:9], x[9:12]
+    p = -Ch0 @ r
+    vel = -Ch0 @ (v + np.cross(gyro, r))
+    Cd0 = Ch0 @ euler_to_dcm(e).T
+    psi_d = float(dcm_to_euler(Cd0)[2])
+    return p, vel, Cd0, psi_d, wd
+
+
+def touchdown_target(Cd0: np.ndarray, wd: np.ndarray, psi_d: float, t_go: float, landing_point: np.ndarray,
+                     gear_offset: float, overshoot: float, moving: bool):
+    """Touchdown target (body origin, level-deck frame) and the predicted upward deck normal there.
+
+    The deck attitude is predicted ``t_go`` ahead (eq. 4.4-4.9) when ``moving``; the target lies
+    ``gear_offset`` above the landing point along the normal, ``overshoot`` lower (so that contact comes
+    before the trajectory's end).
+    """
+    Cp = predict_deck_attitude(Cd0, wd, t_go) if moving else Cd0
+    Rz = rot_z(psi_d)
+    n_up = Rz.T @ (-Cp[:, 2])
+    land = Rz.T @ (Cp @ landing_point)  # the desired landing location (§2.3), level-deck frame
+    return land + (gear_offset - overshoot) * n_up, n_up

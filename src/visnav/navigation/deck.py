@@ -1,25 +1,53 @@
-"""The deck navigator: IMU-driven predictions and bearing corrections of the relative deck UKF (seed 003 ch. 3).
+"""The deck navigator (seed 003 ch. 3): relative deck UKF fed by the IMU, the autopilot's attitude and LED frames.
 
-* :meth:`DeckNavigator.imu` predicts over the time since the previous IMU sample (eq. 3.1-3.5) with
-  the process noise of eq. 3.8; the angular acceleration is the numerical derivative of the gyro
-  rates (unfiltered by default: its noise telescopes in the velocity, while a low-pass lag biases
-  the Euler term during manoeuvres). Samples out of order or with NaN are dropped and counted.
-* :meth:`DeckNavigator.camera` associates the frame's bearings with the expected lights
-  (eq. 3.11-3.12, bearings only, the covariance of each light's predicted bearings from the
-  unscented transform plus R) and corrects with the matched bearings and, for blobs matched to the
-  previous frame, their bearing rates (eq. 3.10; new blobs' rates are discarded, §3.1.2). Rows with
-  NaN are dropped; an empty frame changes nothing.
+It implements the ``Navigator`` interface (``navigation/base.py``) and takes only typed messages:
+
+* ``ImuSample`` - predicts over the time since the previous sample (eq. 3.1-3.5) with the process
+  noise of eq. 3.8, ``T_g g`` from the newest ``AttitudeSample`` (roll, pitch); the angular
+  acceleration is the numerical derivative of the gyro rates (unfiltered by default: its noise
+  telescopes in the velocity, while a low-pass lag biases the Euler term during manoeuvres).
+  Samples out of order or with NaN are dropped and counted.
+* ``AttitudeSample`` - the autopilot's roll and pitch (yaw unused).
+* ``Frame`` - the image: blobs (``vision/blobs.find_blobs``), their bearings and frame-to-frame rates
+  (``BearingTracker``), association with the expected lights (eq. 3.11-3.12, bearings only, the
+  covariance of each light's predicted bearings from the unscented transform plus R) and the
+  correction with the matched bearings and, for blobs matched to the previous frame, their rates
+  (eq. 3.10; new blobs' rates are discarded, §3.1.2). The frame is fused at its own time stamp: a
+  frame newer than the filter is predicted to (zero-order hold of the last IMU sample); an older one
+  (delivered late) rewinds the filter to its stamp from the stored prediction history (``history_s``),
+  is fused there and the IMU samples since are replayed.
+
+``initialize(NavInit)``: ``state`` / ``covariance`` given (the thesis' Vicon start, §5.3.5) -> the
+sensor's R from the first frame; none -> eq. 5.12-5.17 with the acquisition R (the thesis' 2 deg).
+Commands (``NavCommand``): ``restart`` (eq. 5.12 again with relative yaw ``yaw_deg``: the operator's
+reset, Fig. 5.7) and ``track`` (hand-over: from now on the sensor's own R). ``estimate(t)`` is the
+state propagated to ``t`` with the IMU data the filter has; ``health(t)`` carries the operator's
+convergence check (§5.3.1: lights used and RMS bearing innovation over the last second) and the
+integrity keys (bearing and bearing-rate NIS, ``estimation/integrity.py``).
+
+Tuning comes from :class:`DeckNavConfig` alone: the ship process noise from ``filter.sea_state`` and
+``filter.motion_scale`` (never the world's deck motion), R from the camera's specification.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from visnav.estimation import deck as dm
 from visnav.estimation.association import associate
+from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
 from visnav.estimation.ukf import UnscentedKalmanFilter
+from visnav.geometry.rotations import euler_to_dcm
+from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavInit
+from visnav.navigation.base import CommandDispatch
+from visnav.vision.blobs import BearingTracker, find_blobs
+
+G = 9.81
+#: centroid error of the rendered spots alone, found by ``find_blobs`` (measured: 0.0033 deg at f = 420 px)
+RENDER_CENTROID_PX = 0.025
 
 
 @dataclass
@@ -27,37 +55,184 @@ class DeckNavStats:
     imu_samples: int = 0
     imu_dropped: int = 0
     frames: int = 0
+    frames_dropped: int = 0  # older than the history, or before initialisation
     empty_frames: int = 0
     blobs: int = 0
     blobs_rejected: int = 0
     lights_used_last: int = 0
 
 
-class DeckNavigator:
-    def __init__(self, lights: np.ndarray, cam: dm.CameraGeometry, x0, P0, imu_cov: np.ndarray,
-                 ship_cov: np.ndarray, bearing_sigma: float, rate_sigma: float, gate: float = 13.8,
-                 alpha: float = 0.1, beta: float = 2.0, kappa: float = 0.0, gyro_dot_tau: float = 0.0):
-        self.lights = np.asarray(lights, float)
-        self.cam = cam
-        self.ukf = UnscentedKalmanFilter(x0, P0, dm.process_model, alpha=alpha, beta=beta, kappa=kappa,
-                                         residual_x=dm.residual_x, state_add=dm.state_add)
-        self.imu_cov, self.ship_cov = imu_cov, ship_cov
-        self.bearing_var, self.rate_var = bearing_sigma**2, rate_sigma**2
-        self.gate = gate
-        self.gyro_dot_tau = gyro_dot_tau
+@dataclass
+class DeckNavConfig:
+    """Everything the deck navigator is tuned with (built from the mission config by :meth:`from_mission`)."""
+
+    lights: np.ndarray  # (L, 3) the deck's light layout, deck frame [m] (the vehicle's calibration data)
+    cam: dm.CameraGeometry
+    camera: object  # PinholeCamera (intrinsics, distortion)
+    imu_cov: np.ndarray  # (6, 6) per-sample accel + gyro covariance
+    ship_cov: np.ndarray  # (6, 6) per-IMU-step deck accelerations (eq. 3.7-3.8)
+    acquisition_sigmas: tuple[float, float]  # bearing [rad], rate [rad/s] before the hand-over
+    tracking_sigmas: tuple[float, float]  # the same after it
+    imu_period_s: float = 0.01
+    gate: float = 13.8
+    alpha: float = 0.1
+    beta: float = 2.0
+    kappa: float = 0.0
+    blob_threshold: int = 150
+    converged_bearing_rms: float = np.radians(0.2)
+    gyro_dot_tau: float = 0.0
+    history_s: float = 0.5
+    integrity: IntegrityConfig = field(default_factory=IntegrityConfig)
+
+    @classmethod
+    def from_mission(cls, cfg, frame_interval_s: float) -> "DeckNavConfig":
+        """From a ``DeckMissionConfig``: ``filter.*``, the IMU's and camera's specifications, the light layout.
+
+        ``frame_interval_s`` is the interval between the frames the camera delivers (the bearing-rate
+        sigma is a two-frame difference). The deck's true motion (``deck.motion``, ``deck.motion_scale``)
+        is not read: the ship noise is ``filter.sea_state`` x ``filter.motion_scale``.
+        """
+        f, c, imu = cfg.filter, cfg.camera, cfg.imu
+        period = 1.0 / imu.rate_hz
+        sea = f.sea_state if f.sea_state is not None else "calm"
+        ship_var = dm.ship_process_noise(sea, f.motion_scale, f.ship_accel_scale, period)
+        imu_cov = np.diag([imu.accel_noise_mps2**2] * 3 + [imu.gyro_noise_rad_s**2] * 3) * f.imu_noise_scale**2
+        imu_cov = imu_cov + np.diag([(G * np.radians(imu.attitude_noise_deg)) ** 2] * 3 + [0.0] * 3)
+        sig_b = (np.radians(f.bearing_noise_deg) if f.bearing_noise_deg is not None
+                 else np.hypot(c.centroid_noise_px, RENDER_CENTROID_PX) / c.focal_px)
+        sig_r = (np.radians(f.bearing_rate_noise_deg_s) if f.bearing_rate_noise_deg_s is not None
+                 else np.sqrt(2.0) * sig_b / frame_interval_s)
+        acq = (np.radians(f.acquisition_bearing_noise_deg), np.radians(f.acquisition_rate_noise_deg_s))
+        return cls(lights=np.asarray(cfg.deck.lights_m, float),
+                   cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
+                   camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
+                   acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,
+                   gate=f.gate, alpha=f.alpha, beta=f.beta, kappa=f.kappa, blob_threshold=c.blob_threshold,
+                   converged_bearing_rms=np.radians(f.converged_bearing_rms_deg))
+
+
+@dataclass(frozen=True)
+class DeckEstimate:
+    """The navigator's estimate at ``t``: the 12 relative states, their covariance, and the newest IMU and
+    autopilot readings the controller flies on (gyro, specific force, roll, pitch)."""
+
+    t: float
+    state: np.ndarray
+    covariance: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+    roll: float
+    pitch: float
+    valid: bool = True
+
+
+@dataclass
+class DeckHealth(Health):
+    """``Health`` plus the operator's hand-over check (§5.3.1) over the last second."""
+
+    lights_used: int = 0  # in the newest frame
+    frames_1s: int = 0
+    min_lights_1s: int = 0
+    bearing_rms_1s: float = float("nan")  # RMS bearing innovation over the frames of the last second [rad]
+    converged: bool = False
+
+
+@dataclass
+class _Step:
+    """One IMU prediction: the filter after it, and the input that drove it (for re-fusing a late frame)."""
+
+    t: float
+    x: np.ndarray
+    P: np.ndarray
+    u: dm.ImuInput | None
+    fused: list = field(default_factory=list)  # (bearings, rates, gyro) of the frames fused at t
+
+
+class DeckNavigator(CommandDispatch):
+    def __init__(self, config: DeckNavConfig, recorder=None):
+        self.cfg = config
+        self.lights = np.asarray(config.lights, float)
+        self.cam = config.cam
+        self.imu_cov, self.ship_cov = config.imu_cov, config.ship_cov
+        self.gate = config.gate
+        self.tracker = BearingTracker(config.camera, threshold=config.blob_threshold)
+        self.recorder = recorder
         self.stats = DeckNavStats()
-        self._t: float | None = None
+        self.integrity = IntegrityMonitor(config.integrity)
+        self.ukf: UnscentedKalmanFilter | None = None
+        self.bearing_var, self.rate_var = (s**2 for s in config.acquisition_sigmas)
+        self._t: float | None = None  # time of the filter's state
+        self._t_imu: float | None = None  # time of the newest IMU sample
         self._gyro: np.ndarray | None = None
         self._gyro_dot = np.zeros(3)
+        self._u: dm.ImuInput | None = None
+        self._accel = np.zeros(3)
+        self._rp: np.ndarray | None = None  # roll, pitch of the newest AttitudeSample
         self.last_gyro = np.zeros(3)
         self.last_nis, self.last_dof = float("nan"), 0
         self.last_bearing_rms = float("nan")  # RMS bearing innovation of the last update [rad]
+        self._hist: deque[_Step] = deque(maxlen=max(2, int(np.ceil(config.history_s / config.imu_period_s)) + 1))
+        self._frames: deque = deque()  # (t, lights used, bearing rms) of the recent frames
 
-    def reset(self, x0, P0) -> None:
-        """Restart the filter (the thesis' operator resets it during manual flight, Fig. 5.7)."""
-        self.ukf.x = np.array(x0, float)
-        self.ukf.P = np.array(P0, float)
+    # --- the interface ---------------------------------------------------------------------
+    def initialize(self, init: NavInit) -> None:
+        """Start from ``init.state`` / ``init.covariance`` (sensor R), or from eq. 5.12-5.17 (acquisition R)."""
+        if init.state is not None:
+            if init.covariance is None:
+                raise ValueError("a deck NavInit with a state needs its covariance")
+            self._start(init.t, np.asarray(init.state, float), np.asarray(init.covariance, float),
+                        self.cfg.tracking_sigmas, init.source)
+        else:
+            x0, P0 = dm.initial_state_static()
+            self._start(init.t, x0, P0, self.cfg.acquisition_sigmas, init.source)
 
+    def update(self, m) -> None:
+        if isinstance(m, ImuSample):
+            self._imu(m)
+        elif isinstance(m, AttitudeSample):
+            self._attitude(m)
+        elif isinstance(m, Frame):
+            self._frame(m)
+        else:
+            raise TypeError(f"DeckNavigator takes ImuSample, AttitudeSample or Frame, not {type(m).__name__}")
+
+    def estimate(self, t: float) -> DeckEstimate:
+        if self.ukf is None:
+            return DeckEstimate(t=t, state=np.full(12, np.nan), covariance=np.full((12, 12), np.nan),
+                                gyro=self.last_gyro.copy(), accel=self._accel.copy(), roll=np.nan, pitch=np.nan,
+                                valid=False)
+        x, P = self.ukf.x.copy(), self.covariance()
+        dt = t - self._t
+        if dt > 1e-9 and self._u is not None:  # propagate the mean with the newest input (zero-order hold)
+            x = dm.process_model(x[None, :], dt, self._u)[0]
+            P = P + dm.process_noise(x, dt, self._u, self.imu_cov, self.ship_cov)
+        rp = self._rp if self._rp is not None else np.full(2, np.nan)
+        return DeckEstimate(t=t, state=x, covariance=P, gyro=self.last_gyro.copy(), accel=self._accel.copy(),
+                            roll=float(rp[0]), pitch=float(rp[1]))
+
+    def health(self, t: float) -> DeckHealth:
+        recent = [f for f in self._frames if f[0] > t - 1.0]
+        used = [f[1] for f in recent]
+        rms = np.array([f[2] for f in recent], float)
+        rms_1s = float(np.sqrt(np.nanmean(rms**2))) if np.isfinite(rms).any() else float("nan")
+        conv = (len(recent) >= 5 and min(used) >= 3 and bool(rms_1s <= self.cfg.converged_bearing_rms))
+        h = DeckHealth(source="camera", tracking=conv, rejected_samples=self.stats.imu_dropped,
+                       lights_used=self.stats.lights_used_last, frames_1s=len(recent),
+                       min_lights_1s=min(used) if used else 0, bearing_rms_1s=rms_1s, converged=conv)
+        P_h = self.ukf.P[0:2, 0:2] if self.ukf is not None else None
+        return h.set_integrity(self.integrity.assess(t, P_h))
+
+    def _cmd_restart(self, t: float, yaw_deg: float = 0.0) -> None:
+        """The operator's reset (Fig. 5.7): eq. 5.12-5.17 again, relative yaw ``yaw_deg``, acquisition R."""
+        x0, P0 = dm.initial_state_static()
+        x0[5] = np.radians(yaw_deg)
+        self._start(t, x0, P0, self.cfg.acquisition_sigmas, f"restart from relative yaw {yaw_deg:.0f} deg")
+
+    def _cmd_track(self, t: float) -> None:
+        """Hand-over: the filter has converged; from now on R is the camera's own noise."""
+        self.bearing_var, self.rate_var = (s**2 for s in self.cfg.tracking_sigmas)
+
+    # --- filter ----------------------------------------------------------------------------
     @property
     def x(self) -> np.ndarray:
         return self.ukf.x
@@ -65,6 +240,21 @@ class DeckNavigator:
     @property
     def P(self) -> np.ndarray:
         return self.ukf.P
+
+    def _start(self, t, x0, P0, sigmas, source) -> None:
+        if self.ukf is None:
+            c = self.cfg
+            self.ukf = UnscentedKalmanFilter(x0, P0, dm.process_model, alpha=c.alpha, beta=c.beta, kappa=c.kappa,
+                                             residual_x=dm.residual_x, state_add=dm.state_add)
+        else:
+            self.ukf.x, self.ukf.P = np.array(x0, float), np.array(P0, float)
+        self.bearing_var, self.rate_var = (s**2 for s in sigmas)
+        if self._t is None or t > self._t:
+            self._t = t
+        self._hist.clear()
+        self._hist.append(_Step(self._t, self.ukf.x.copy(), self.ukf.P.copy(), None))
+        if self.recorder is not None:
+            self.recorder("nav_init", t, x0=np.array(x0, float), sigma=np.sqrt(np.diag(P0)), source=source)
 
     def covariance(self) -> np.ndarray:
         """Covariance of the estimate including the gyro's white noise in the velocity (what NEES should use).
@@ -80,29 +270,114 @@ class DeckNavigator:
         P[6:9, 6:9] += S @ self.imu_cov[3:6, 3:6] @ S.T
         return P
 
-    def imu(self, t: float, accel, gyro, gravity_body) -> bool:
-        """Predict to ``t`` with one IMU sample; False (and counted) when the sample is dropped."""
-        accel, gyro, gb = (np.asarray(a, float) for a in (accel, gyro, gravity_body))
-        if not (np.isfinite(t) and np.all(np.isfinite(accel)) and np.all(np.isfinite(gyro)) and np.all(np.isfinite(gb))):
-            self.stats.imu_dropped += 1
-            return False
-        if self._t is None:
-            self._t, self._gyro, self.last_gyro = t, gyro, gyro
+    def _attitude(self, m: AttitudeSample) -> None:
+        rp = np.asarray(m.euler, float)[:2]
+        if np.all(np.isfinite(rp)):
+            self._rp = rp
+
+    def _drop_imu(self, reason: str, t: float) -> None:
+        self.stats.imu_dropped += 1
+        if self.recorder is not None:
+            self.recorder("imu_dropped", t, reason=reason)
+
+    def _imu(self, m: ImuSample) -> None:
+        t = float(m.t)
+        accel, gyro = np.asarray(m.accel, float), np.asarray(m.gyro, float)
+        if not (np.isfinite(t) and np.all(np.isfinite(accel)) and np.all(np.isfinite(gyro))):
+            return self._drop_imu("not finite", t)
+        if self._rp is None:
+            return self._drop_imu("no attitude yet", t)
+        if self._t_imu is None:
+            self._t_imu, self._gyro, self.last_gyro, self._accel = t, gyro, gyro, accel
             self.stats.imu_samples += 1
-            return True
-        dt = t - self._t
-        if dt <= 0:
-            self.stats.imu_dropped += 1
-            return False
-        raw = (gyro - self._gyro) / dt
-        a = dt / (self.gyro_dot_tau + dt)
+            return None
+        dt_imu = t - self._t_imu
+        if dt_imu <= 0:
+            return self._drop_imu("out of order", t)
+        raw = (gyro - self._gyro) / dt_imu
+        a = dt_imu / (self.cfg.gyro_dot_tau + dt_imu)
         self._gyro_dot = self._gyro_dot + a * (raw - self._gyro_dot)
+        gb = euler_to_dcm([self._rp[0], self._rp[1], 0.0]).T @ np.array([0.0, 0.0, G])
         u = dm.ImuInput(accel=accel, gyro=gyro, gyro_dot=self._gyro_dot, gravity_body=gb)
-        Q = dm.process_noise(self.ukf.x, dt, u, self.imu_cov, self.ship_cov)
-        self.ukf.predict(dt, Q, u=u)
-        self._t, self._gyro, self.last_gyro = t, gyro, gyro
+        self._t_imu, self._gyro, self.last_gyro, self._accel, self._u = t, gyro, gyro, accel, u
         self.stats.imu_samples += 1
-        return True
+        if self.ukf is None:
+            return None
+        if t > self._t:
+            self._predict(t - self._t, u)
+            self._t = t
+            self._hist.append(_Step(t, self.ukf.x.copy(), self.ukf.P.copy(), u))
+        return None
+
+    def _predict(self, dt: float, u: dm.ImuInput) -> None:
+        """One prediction over ``dt``; a part of an IMU interval takes the noise of a continuous process (Q ~ dt)."""
+        scale = 1.0 if abs(dt - self.cfg.imu_period_s) < 1e-9 else self.cfg.imu_period_s / dt
+        Q = dm.process_noise(self.ukf.x, dt, u, self.imu_cov * scale if scale != 1.0 else self.imu_cov,
+                             self.ship_cov * scale if scale != 1.0 else self.ship_cov)
+        self.ukf.predict(dt, Q, u=u)
+
+    def _frame(self, f: Frame) -> None:
+        self.stats.frames += 1
+        if self.ukf is None:
+            self.stats.frames_dropped += 1
+            return
+        t = float(f.t)
+        uv = find_blobs(f.image, self.tracker.threshold)
+        bf = self.tracker.from_pixels(t, uv)
+        if t >= self._t - 1e-12:
+            if t > self._t + 1e-12 and self._u is not None:  # newer than the IMU: predict to the frame
+                self._predict(t - self._t, self._u)
+                self._t = t
+                self._hist.append(_Step(t, self.ukf.x.copy(), self.ukf.P.copy(), self._u))
+            used, rejected = self._correct(bf.bearings, bf.rates, self.last_gyro)
+            last = self._hist[-1] if self._hist else None
+            if last is not None and abs(last.t - self._t) < 1e-12:
+                last.x, last.P = self.ukf.x.copy(), self.ukf.P.copy()
+                last.fused.append((bf.bearings, bf.rates, self.last_gyro))
+        else:
+            res = self._fuse_late(t, bf)
+            if res is None:
+                self.stats.frames_dropped += 1
+                used, rejected = 0, 0
+            else:
+                used, rejected = res
+        self._frames.append((t, used, self.last_bearing_rms if used else float("nan")))
+        while self._frames and self._frames[0][0] < t - 2.0:
+            self._frames.popleft()
+        if self.recorder is not None:
+            self.recorder("camera", t, blobs=len(bf.bearings), lights_used=used, rejected=rejected,
+                          nis=self.last_nis if used else float("nan"), dof=self.last_dof if used else 0,
+                          bearing_rms=self.last_bearing_rms if used else float("nan"))
+
+    def _fuse_late(self, t: float, bf):
+        """Rewind to the stored step before ``t``, fuse there, replay the IMU inputs since. None: too old."""
+        steps = list(self._hist)
+        j = max((i for i, s in enumerate(steps) if s.t <= t + 1e-12), default=None)
+        if j is None:
+            return None
+        base = steps[j]
+        self.ukf.x, self.ukf.P = base.x.copy(), base.P.copy()
+        later = steps[j + 1:]
+        u = later[0].u if later else self._u
+        if t > base.t + 1e-12 and u is not None:
+            self._predict(t - base.t, u)
+        gyro = u.gyro if u is not None else self.last_gyro
+        res = self._correct(bf.bearings, bf.rates, gyro)
+        t_prev = max(t, base.t)
+        new = steps[:j]
+        if t > base.t + 1e-12:
+            new += [base, _Step(t, self.ukf.x.copy(), self.ukf.P.copy(), u, [(bf.bearings, bf.rates, gyro)])]
+        else:
+            new.append(_Step(base.t, self.ukf.x.copy(), self.ukf.P.copy(), base.u,
+                             base.fused + [(bf.bearings, bf.rates, gyro)]))
+        for s in later:  # replay the IMU inputs and the frames fused since
+            self._predict(s.t - t_prev, s.u)
+            for fb in s.fused:
+                self._correct(*fb, replay=True)
+            t_prev = s.t
+            new.append(_Step(s.t, self.ukf.x.copy(), self.ukf.P.copy(), s.u, s.fused))
+        self._hist = deque(new, maxlen=self._hist.maxlen)
+        return res
 
     def expected_bearings(self):
         """Predicted bearings (L, 2) of every light and their covariances (L, 2, 2) with R."""
@@ -112,37 +387,56 @@ class DeckNavigator:
         blocks = np.stack([S[2 * j:2 * j + 2, 2 * j:2 * j + 2] for j in range(L)])
         return zp.reshape(L, 2), blocks
 
-    def camera(self, bearings, rates) -> int:
-        """Correct with one frame's bearings (M, 2) and rates (M, 2); returns the number of lights used."""
-        self.stats.frames += 1
+    def fuse_bearings(self, bearings, rates) -> int:
+        """Correct at the filter's time with bearings (M, 2) and rates (M, 2) already extracted (NaN rows
+        dropped, rates NaN for new blobs); returns the number of lights used. ``update(Frame)`` does this
+        after finding the blobs; this entry is for bearings from elsewhere (tests, other trackers)."""
+        return self._correct(bearings, rates, self.last_gyro)[0]
+
+    def _correct(self, bearings, rates, gyro, replay: bool = False) -> tuple[int, int]:
+        """Associate and correct; returns (lights used, blobs rejected). ``replay``: re-fusing after a late
+        frame (counters and integrity already have it)."""
         b = np.asarray(bearings, float).reshape(-1, 2)
         r = np.asarray(rates, float).reshape(-1, 2)
         if r.shape != b.shape:
             raise ValueError(f"bearings {b.shape} and rates {r.shape} differ in shape")
         ok = np.all(np.isfinite(b), axis=1)
         b, r = b[ok], r[ok]
-        self.stats.blobs += int(ok.sum())
+        st = self.stats if not replay else DeckNavStats()
+        st.blobs += int(ok.sum())
         if len(b) == 0:
-            self.stats.empty_frames += 1
-            self.stats.lights_used_last = 0
-            return 0
+            st.empty_frames += 1
+            st.lights_used_last = 0
+            return 0, 0
         zp, S = self.expected_bearings()
         assign = associate(b, zp, S, self.gate)
-        self.stats.blobs_rejected += int(np.sum(assign < 0))
+        rejected = int(np.sum(assign < 0))
+        st.blobs_rejected += rejected
         m = np.nonzero(assign >= 0)[0]
         if m.size == 0:
-            self.stats.lights_used_last = 0
-            return 0
+            st.lights_used_last = 0
+            if not replay:
+                self.integrity.record(self._t, "bearing", float("nan"), 0, False)
+            return 0, rejected
         m = m[np.argsort(assign[m])]
         idx = assign[m]
         has_rate = np.all(np.isfinite(r[m]), axis=1)
         ridx = idx[has_rate]
         z = np.concatenate([b[m].ravel(), r[m][has_rate].ravel()])
         R = np.diag(np.r_[np.full(2 * idx.size, self.bearing_var), np.full(2 * ridx.size, self.rate_var)])
-        self.ukf.update(z, R, hx=dm.measurement_model, lights=self.lights, cam=self.cam, gyro=self.last_gyro,
+        self.ukf.update(z, R, hx=dm.measurement_model, lights=self.lights, cam=self.cam, gyro=gyro,
                         idx=idx, rate_idx=ridx)
-        self.stats.lights_used_last = int(idx.size)
+        st.lights_used_last = int(idx.size)
+        if replay:
+            return int(idx.size), rejected
         self.last_nis, self.last_dof = self.ukf.nis, int(z.size)
-        yb = self.ukf.y[:2 * idx.size]
+        nb = 2 * idx.size
+        yb = self.ukf.y[:nb]
         self.last_bearing_rms = float(np.sqrt(np.mean(yb * yb)))
-        return int(idx.size)
+        # the bearing and rate parts' own NIS (marginal blocks of S) for the integrity monitor
+        S_all, y = self.ukf.S, self.ukf.y
+        self.integrity.record(self._t, "bearing", float(yb @ np.linalg.solve(S_all[:nb, :nb], yb)), nb, True)
+        if y.size > nb:
+            yr = y[nb:]
+            self.integrity.record(self._t, "rate", float(yr @ np.linalg.solve(S_all[nb:, nb:], yr)), yr.size, True)
+        return int(idx.size), rejected

@@ -10,6 +10,10 @@ from pydantic import Field, field_validator, model_validator
 from visnav.scenarios.base import _M
 
 
+#: lens distortion of eq. 5.6-5.7 in OpenCV's rational order (k1, k2, p1, p2, k3, k4, k5, k6)
+DIST_EQ_5_6_5_7 = (-0.188, -0.1631, 0.00136, 0.001605, 0.1631, 0.131, -0.366, 0.2436)
+
+
 class DeckWorldConfig(_M):
     motion: Literal["static", "moving"] = "static"
     sea_state: Literal["calm", "stewart", "ship_ss4"] = "stewart"
@@ -60,11 +64,27 @@ class DeckCameraConfig(_M):
     hide_light: int = Field(-1, ge=-1, le=63, description="index of a light that drops out of view")
     hide_after_s: float = Field(0.0, ge=0, le=3600)
 
+    def pinhole(self):
+        """The camera's intrinsics (``geometry.camera.PinholeCamera``), with eq. 5.6-5.7 distortion if enabled."""
+        from visnav.geometry.camera import PinholeCamera
+
+        dist = DIST_EQ_5_6_5_7 if self.distortion else (0.0,) * 8
+        return PinholeCamera(self.width_px, self.height_px, self.focal_px, self.focal_px, (self.width_px - 1) / 2,
+                             (self.height_px - 1) / 2, dist)
+
+    def rotation(self) -> np.ndarray:
+        """T_cam: body FRD -> camera axes (eq. 5.9)."""
+        from visnav.estimation.deck import camera_rotation
+
+        return camera_rotation(np.radians(self.depression_deg), np.radians(self.yaw_deg))
+
 
 class DeckImuConfig(_M):
     accel_noise_mps2: float = Field(0.05, ge=0, le=2)
     gyro_noise_rad_s: float = Field(0.003, ge=0, le=0.5)
     attitude_noise_deg: float = Field(0.1, ge=0, le=5, description="autopilot roll/pitch used for T_g g (eq. 3.4)")
+    rate_hz: float = Field(100.0, gt=1, le=1000, description="IMU and autopilot attitude rate (realised as a whole "
+                           "number of run.dt_s steps)")
 
 
 class DeckFilterConfig(_M):
@@ -88,6 +108,12 @@ class DeckFilterConfig(_M):
                                             description="relative yaws the filter restarts from, in turn, while "
                                                         "it has not converged (manual flight)")
     ship_accel_scale: float = Field(1.0, ge=0, le=100, description="multiplies the eq. 3.7 bound in Q")
+    sea_state: Literal["calm", "stewart", "ship_ss4"] | None = Field(
+        None, description="sea state the filter's ship process noise (eq. 3.7-3.8) is tuned for; None: the "
+        "nominal one of the scenario's deck (deck.sea_state for a moving deck, calm for a static one). The "
+        "filter never sees the world's deck.motion_scale")
+    motion_scale: float = Field(1.0, ge=0, le=3, description="multiplies the tuned sea state's amplitudes in Q "
+                                "(the filter's assumption; deck.motion_scale is the world's)")
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
 
 
@@ -134,6 +160,9 @@ class DeckStartConfig(_M):
     heading_offset_max_deg: float = Field(45.0, ge=0, le=90, description="start azimuth around 'behind the "
                                           "deck', and so the relative heading (the vehicle faces the deck)")
     manual_s: float = Field(5.0, ge=0, le=60, description="pilot holds the start (truth) while the filter converges")
+    pilot_position_noise_m: float = Field(0.0, ge=0, le=1, description="pilot = truth: white noise on the "
+                                          "relative position the safety pilot sees (a sensor, "
+                                          "sensors/deck_observer.py); 0: round 1's exact hold")
     pilot: Literal["truth", "imu"] = Field("imu", description="before hand-over: 'truth' holds the start point "
                                            "(the thesis' safety pilot / motion capture); 'imu' hovers level on the "
                                            "IMU alone (no truth), the hand-over and the first plan then use the "
@@ -149,6 +178,12 @@ class DeckMissionConfig(_M):
     filter: DeckFilterConfig = DeckFilterConfig()
     guidance: DeckGuidanceConfig = DeckGuidanceConfig()
     start: DeckStartConfig = DeckStartConfig()
+
+    @model_validator(mode="after")
+    def _filter_sea_state(self):
+        if self.filter.sea_state is None:  # the nominal sea state of the deck the scenario names
+            self.filter.sea_state = self.deck.sea_state if self.deck.motion == "moving" else "calm"
+        return self
 
     @model_validator(mode="after")
     def _landing_point_on_plate(self):

@@ -48,3 +48,32 @@ class Imu:
         )
         att = AttitudeSample(t=t, euler=s.euler + self.attitude_noise * n[6:9])
         return imu, att
+
+
+class AccelGyro:
+    """Accelerometers and gyros with white noise only (the deck Y6's Pixhawk IMU, seed 003 §5.1)."""
+
+    def __init__(self, rng: np.random.Generator, accel_noise: float, gyro_noise: float, rate_hz: float = 100.0,
+                 latency_s: float = 0.0):
+        self.rng, self.rate_hz, self.latency_s = rng, rate_hz, latency_s
+        self.accel_noise, self.gyro_noise = accel_noise, gyro_noise
+
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> ImuSample:
+        s = truth_at(t)
+        acc = s.specific_force + self.accel_noise * self.rng.standard_normal(3)
+        gyro = s.body_rates + self.gyro_noise * self.rng.standard_normal(3)
+        return ImuSample(t=t, accel=acc, gyro=gyro)
+
+
+class RollPitchAhrs:
+    """The autopilot's roll and pitch (white noise of ``attitude_noise_deg``); no heading: yaw is NaN."""
+
+    def __init__(self, rng: np.random.Generator, attitude_noise_deg: float, rate_hz: float = 100.0,
+                 latency_s: float = 0.0):
+        self.rng, self.rate_hz, self.latency_s = rng, rate_hz, latency_s
+        self.sigma = np.radians(attitude_noise_deg)
+
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> AttitudeSample:
+        s = truth_at(t)
+        rp = s.euler[:2] + self.sigma * self.rng.standard_normal(2)
+        return AttitudeSample(t=t, euler=np.array([rp[0], rp[1], np.nan]))

@@ -5,6 +5,11 @@ and each visible light drawn as a Gaussian spot at its distorted projection (eq.
 sensor noise. Extra bright points (not deck lights) can be drawn too, for robustness tests.
 Only the few pixels around each spot are touched; a frame costs well under a millisecond plus the
 noise (a pre-drawn field shifted at random each frame).
+
+``centroid_noise_px`` moves each spot by white noise before it is drawn: real LED blobs flicker,
+bloom and are smeared by the rolling shutter, so their centroids scatter by a few tenths of a pixel
+(the rendered spots alone are found to 0.025 px). As a sensor (``sample(t, truth_at, world)``) it
+returns a time-stamped ``Frame``; finding the blobs is the navigator's job (``vision/blobs.py``).
 """
 
 from __future__ import annotations
@@ -12,12 +17,20 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from visnav.geometry.rotations import euler_to_dcm
+from visnav.measurements import Frame
+
 
 class LedCamera:
     def __init__(self, camera, T_cam: np.ndarray, rho: np.ndarray, rng: np.random.Generator, noise_gray: float = 2.0,
-                 spot_sigma_px: float = 1.3, sea_gray: int = 25, deck_gray: int = 60):
+                 spot_sigma_px: float = 1.3, sea_gray: int = 25, deck_gray: int = 60, centroid_noise_px: float = 0.0,
+                 jitter_rng: np.random.Generator | None = None, rate_hz: float = 30.0, latency_s: float = 0.0):
         self.camera, self.T_cam, self.rho = camera, np.asarray(T_cam, float), np.asarray(rho, float)
         self.rng = rng
+        self.rate_hz, self.latency_s = rate_hz, latency_s
+        self.centroid_noise_px = centroid_noise_px
+        self.jitter_rng = jitter_rng if jitter_rng is not None else rng
+        self._index = 0
         self.spot_sigma = spot_sigma_px
         self.sea_gray, self.deck_gray = sea_gray, deck_gray
         h, w = camera.height, camera.width
@@ -45,6 +58,9 @@ class LedCamera:
             cv2.fillPoly(img, [np.round(uvc[okc]).astype(np.int32)], float(self.deck_gray))
         pts = lights_ned if extra_ned is None or len(extra_ned) == 0 else np.vstack([lights_ned, extra_ned])
         uv, ok = self.project(pts, position, C_bn)
+        if self.centroid_noise_px > 0 and ok.any():
+            uv = uv.copy()
+            uv[ok] += self.centroid_noise_px * self.jitter_rng.standard_normal((int(ok.sum()), 2))
         r, s2 = self._r, 2.0 * self.spot_sigma**2
         for (u, v) in uv[ok]:
             iu, iv = int(round(u)), int(round(v))
@@ -60,3 +76,12 @@ class LedCamera:
             dy, dx = self.rng.integers(0, 64, 2)
             img += self._noise[dy:dy + cam.height, dx:dx + cam.width]
         return np.clip(img, 0, 255).astype(np.uint8)
+
+    def sample(self, t: float, truth_at, world) -> Frame:
+        """The frame taken at ``t`` of the deck scene ``world`` (``world/deck.DeckWorld``)."""
+        s = truth_at(t)
+        ds = world.motion.state(t)
+        img = self.render(s.position, euler_to_dcm(s.euler), world.to_ned(ds, world.lights_at(t)),
+                          world.to_ned(ds, world.corners), world.to_ned(ds, world.extra) if len(world.extra) else None)
+        self._index += 1
+        return Frame(t=t, image=img, index=self._index - 1)

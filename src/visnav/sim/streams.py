@@ -53,7 +53,7 @@ _DECK_ORDER = "state order: position (m), euler (rad), velocity (m/s), deck_rate
 #: the deck landing (sim/deck_loop.py)
 DECK_STREAMS = {
     "truth": {k: (u, f, "true " + d) for k, (u, f, d) in _DECK_STATE.items()},
-    "estimate": {**{k: (u, f, "UKF estimate of the " + d) for k, (u, f, d) in _DECK_STATE.items()},
+    "estimate": {**{k: (u, f, "UKF estimate of the " + d) for k, (u, f, d) in _DECK_STATE.items()},  # at the step
                  "sigma": ("mixed", _DECK_ORDER, "UKF 1-sigma of the 12 states"),
                  "nees": ("1", "", "normalised estimation error squared of the 12 states"),
                  "mode": ("text", "", "mission mode")},
@@ -69,13 +69,21 @@ DECK_STREAMS = {
                                "desired position of the tau trajectory (NaN while hovering)"),
                   "velocity": ("m/s", "NED axes, relative to the deck", "desired velocity"),
                   "accel": ("m/s^2", "NED axes", "commanded acceleration")},
-    "camera": {"blobs": ("1", "", "blobs found in the frame"), "lights_used": ("1", "", "lights associated and used"),
+    "camera": {"blobs": ("1", "", "blobs the navigator found in the frame (t: the frame's stamp)"),
+               "lights_used": ("1", "", "lights associated and used"),
+               "rejected": ("1", "", "blobs the association gated out"),
                "nis": ("1", "", "normalised innovation squared of the update"),
                "dof": ("1", "", "degrees of freedom of the NIS"),
                "bearing_rms": ("rad", "camera", "RMS bearing residual of the update")},
-    "filter_init": {"x0": ("mixed", _DECK_ORDER, "UKF initial state"),
-                    "sigma": ("mixed", _DECK_ORDER, "UKF initial 1-sigma"),
-                    "source": ("text", "", "how the filter was started (or restarted)")},
+    "nav_init": {"x0": ("mixed", _DECK_ORDER, "UKF initial state"),
+                 "sigma": ("mixed", _DECK_ORDER, "UKF initial 1-sigma"),
+                 "source": ("text", "", "how the filter was started or restarted: static (eq. 5.12), truth+noise "
+                                        "(the Vicon start, NavInit from the simulation), restart from a yaw")},
+    "imu_dropped": {"reason": ("text", "", "why the navigator dropped an IMU sample")},
+    "touchdown": {"rel_speed": ("m/s", "", "true speed of the gear relative to the deck point it meets"),
+                  "pos_err": ("m", "deck plane", "true gear distance from the desired landing location"),
+                  "on_deck": ("bool", "", "the gear is on the square plate"),
+                  "att_mismatch": ("deg", "", "angle between the vehicle's and the deck's z axes")},
     "retarget_skipped": {"reason": ("text", "", "why the touchdown point was not re-aimed")},
 }
 

@@ -8,7 +8,7 @@ the Odroid closes the outer loops. Modelled here:
 * thrust along body -z follows ``throttle * max_thrust`` through a first-order lag, multiplied by
   the ground-effect factor of Cheeseman and Bennett, ``1 / (1 - (R / 4 z)^2)`` (z the rotor height
   above the surface below, capped);
-* translation: m a = m g + C_b^n [0, 0, -T] - m c_d v (linear drag); the landing gear is
+* translation: m a = m g + C_b^n [0, 0, -T] - m c_d (v - v_wind) (linear drag); the landing gear is
   ``gear_offset`` below the body origin along body z.
 """
 
@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from visnav.geometry.rotations import euler_rates_to_body_rates, euler_to_dcm
+from visnav.measurements import AttitudeThrustCommand  # noqa: F401 - the command type lives in measurements.py
+from visnav.vehicles.base import Environment
 
 G = 9.81
 
@@ -51,15 +53,6 @@ class MultirotorParams:
         return float(min(1.0 / (1.0 - min(q, 0.9)), 1.3))
 
 
-@dataclass(frozen=True)
-class AttitudeThrustCommand:
-    t: float
-    roll: float  # rad
-    pitch: float  # rad
-    yaw_rate: float  # rad/s
-    throttle: float  # 0..1
-
-
 @dataclass
 class MultirotorState:
     position: np.ndarray
@@ -79,7 +72,11 @@ class Multirotor:
                                      euler=np.array([0.0, 0.0, yaw]), euler_rate=np.zeros(3), thrust=T0,
                                      specific_force=np.array([0.0, 0.0, -G]), body_rates=np.zeros(3))
 
-    def step(self, cmd: AttitudeThrustCommand, dt: float, rotor_height_m: float = np.inf) -> MultirotorState:
+    def step(self, cmd: AttitudeThrustCommand, dt: float, environment: Environment | None = None) -> MultirotorState:
+        """One step of ``dt`` under ``cmd``; ``environment.rotor_height_m`` sets the ground effect, the linear
+        drag acts on the velocity relative to ``environment.wind_ned``."""
+        env = environment or Environment()
+        rotor_height_m, wind = env.rotor_height_m, np.asarray(env.wind_ned, float)
         p, s = self.p, self.state
         wn, z = p.attitude_omega, p.attitude_zeta
         e, ed = s.euler.copy(), s.euler_rate.copy()
@@ -92,7 +89,7 @@ class Multirotor:
         T_cmd = float(np.clip(cmd.throttle, 0.0, 1.0)) * p.max_thrust * ge
         thrust = s.thrust + (T_cmd - s.thrust) * min(dt / p.thrust_tau, 1.0)
         C = euler_to_dcm(e)
-        f_n = C @ np.array([0.0, 0.0, -thrust / p.mass]) - p.drag * s.velocity  # specific force, NED
+        f_n = C @ np.array([0.0, 0.0, -thrust / p.mass]) - p.drag * (s.velocity - wind)  # specific force, NED
         acc = f_n + np.array([0.0, 0.0, G])
         vel = s.velocity + acc * dt
         pos = s.position + (s.velocity + vel) * 0.5 * dt

@@ -13,11 +13,12 @@ origin at the landing point; the lights lie in it (eq. 5.10 by default).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from visnav.geometry.rotations import euler_rates_to_body_rates, euler_to_dcm
+from visnav.estimation.deck import SEA_STATES as _SEA_STATES
+from visnav.geometry.rotations import dcm_to_euler, euler_rates_to_body_rates, euler_to_dcm
 
 #: the four LEDs of eq. 5.10 (deck frame, m)
 LEDS_EQ_5_10 = np.array([[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.0], [0.058, 0.0, 0.0]])
@@ -25,20 +26,9 @@ LEDS_EQ_5_10 = np.array([[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.
 #: axis order of every (6,) array here
 AXES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 
-# name -> (amplitude [m, m, m, rad, rad, rad], omega [rad/s], sigma_amplitude, sigma_omega)
-SEA_STATES: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {
-    "calm": (np.zeros(6), np.zeros(6), np.zeros(6), np.zeros(6)),
-    # the lab Stewart platform (Fig. 5.5 style: a few cm, a few degrees, periods of 5-10 s)
-    "stewart": (np.array([0.04, 0.04, 0.04, np.radians(6), np.radians(6), np.radians(3)]),
-                np.array([0.7, 0.8, 1.0, 0.9, 0.7, 0.5]),
-                np.array([0.01, 0.01, 0.01, np.radians(1), np.radians(1), np.radians(0.5)]),
-                np.array([0.1, 0.1, 0.1, 0.1, 0.1, 0.05])),
-    # a frigate in sea state 4 (full scale, for the process-noise sizing of eq. 3.7)
-    "ship_ss4": (np.array([0.5, 0.4, 0.8, np.radians(5), np.radians(2), np.radians(1)]),
-                 np.array([0.5, 0.5, 0.6, 0.5, 0.6, 0.4]),
-                 np.array([0.1, 0.1, 0.2, np.radians(1), np.radians(0.5), np.radians(0.3)]),
-                 np.array([0.05, 0.05, 0.05, 0.05, 0.05, 0.05])),
-}
+#: the sea-state presets (nominal amplitude, frequency and their sigmas per axis) live beside the filter
+#: that is tuned from them (``estimation/deck.py``); the world draws its motion around them
+SEA_STATES = _SEA_STATES
 
 
 def validate_lights(lights) -> np.ndarray:
@@ -117,3 +107,47 @@ class DeckMotion:
         rates = euler_rates_to_body_rates(euler, dd[3:])
         return DeckState(t=t, position=pos, velocity=vel, euler=euler, body_rates=np.asarray(rates),
                          C=euler_to_dcm(euler))
+
+
+def relative_state(vehicle, ds: DeckState) -> np.ndarray:
+    """The 12 relative states of ``estimation/deck.py`` (r, e, v, w_d) from the true vehicle and deck states.
+
+    ``vehicle`` has ``position``, ``velocity``, ``euler`` and ``body_rates`` (a ``VehicleState``).
+    """
+    Ch = euler_to_dcm(vehicle.euler)
+    r = Ch.T @ (ds.position - vehicle.position)
+    e = dcm_to_euler(ds.C.T @ Ch)
+    v = Ch.T @ (ds.velocity - vehicle.velocity) - np.cross(vehicle.body_rates, r)
+    return np.r_[r, e, v, ds.body_rates]
+
+
+@dataclass
+class DeckWorld:
+    """The deck scene the sensors see: its motion, the square plate, the lights and other bright points.
+
+    ``hide_light`` (an index, -1 none) drops one light out of view from ``hide_after_s`` on (a light
+    that fails or is occluded).
+    """
+
+    motion: DeckMotion
+    lights: np.ndarray  # (L, 3) deck frame [m]
+    size_m: float
+    extra: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # bright non-lights, deck frame
+    hide_light: int = -1
+    hide_after_s: float = 0.0
+
+    def __post_init__(self):
+        self.lights = validate_lights(self.lights)
+        self.extra = np.asarray(self.extra, float).reshape(-1, 3)
+        h = self.size_m / 2
+        self.corners = np.array([[h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0], [-h, h, 0.0]])
+
+    def lights_at(self, t: float) -> np.ndarray:
+        """The lights that shine at ``t`` (deck frame)."""
+        if 0 <= self.hide_light < len(self.lights) and t >= self.hide_after_s:
+            return np.delete(self.lights, self.hide_light, axis=0)
+        return self.lights
+
+    @staticmethod
+    def to_ned(ds: DeckState, points: np.ndarray) -> np.ndarray:
+        return ds.position + np.asarray(points, float) @ ds.C.T

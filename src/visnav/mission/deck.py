@@ -1,0 +1,187 @@
+"""The ship-deck landing mission (seed 003 §5.3): manual, hover, approach, descend, landed / missed.
+
+``DeckMission.step(t, estimate, health) -> (DeckReference, mode)`` at the controller's rate. Modes
+(logged in the ``mode`` stream with the reason of each change):
+
+* ``manual`` - before the hand-over (in §5.3.2 and §5.3.5 the vehicle was flown by hand while the
+  estimator started and converged): with ``start.pilot = "imu"`` a level hover on the IMU alone
+  (reference ``level``), with ``"truth"`` the safety pilot holds the start point on what he sees (the
+  ``RelativeStateSample`` of the pilot sensor, ``sensors/deck_observer.py``, passed to the controller
+  as ``pilot_view``). After ``start.manual_s`` the hand-over waits for the operator's check (§5.3.1),
+  which the navigator's ``health.converged`` reports (every frame of the last second with >= 3 lights
+  and an RMS bearing innovation below ``filter.converged_bearing_rms_deg``); failing it the filter is
+  restarted (the thesis' operator reset it, Fig. 5.7): with the eq. 5.12 start from the next relative
+  yaw of ``filter.yaw_hypotheses_deg`` (``NavCommand("restart")``), with the Vicon start from the newest
+  motion-capture sample (``NavInit``); the hold goes on. On hand-over the navigator is told to track
+  (``NavCommand("track")``: the sensor's own R);
+* ``hover`` (moving deck) - autonomous hold on the estimates for at least ``hover_min_s``, until the
+  start conditions of §5.3.5 hold (near the start point; predicted approach path within
+  ``lambda_max_deg`` of the start azimuth and at least ``gamma_min_deg`` from vertical);
+* ``approach`` - the tau trajectory (static: three straight gaps, k = 0.3, 15 s; moving: alpha,
+  beta, rho gaps of ch. 4, re-aimed at every step at the latest touchdown prediction through a
+  first-order filter); a moving-deck trajectory ends with the flare (``control/deck.flare``); one that
+  ends without contact goes around (back to ``hover``) up to ``guidance.go_arounds`` times;
+* ``descend`` - past the trajectory's end without contact: thrust along the estimated deck normal,
+  sink at ``final_descent_mps`` (not in the thesis, whose runs end at the trajectory's end);
+* ``landed`` / ``missed`` - ``on_touchdown``: the gear met the deck on / off the plate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.guidance.deck_approach import (StraightApproach, TauGapApproach, level_deck_geometry, rot_z,
+                                           touchdown_acceleration, touchdown_target)
+from visnav.measurements import DeckReference, NavCommand, NavInit, RelativeStateSample
+
+
+class DeckMission:
+    def __init__(self, cfg, navigator, hold_point, gear_offset: float, period_s: float, recorder=None):
+        """``cfg``: the ``DeckMissionConfig``; ``hold_point``: the start point held in ``manual`` and ``hover``
+        (level-deck frame, vehicle relative to the deck); ``period_s``: the interval ``step`` is called at."""
+        self.cfg, self.nav = cfg, navigator
+        self.period = period_s
+        self.start_rel_ld = np.asarray(hold_point, float)
+        self.gear_offset = gear_offset
+        self.recorder = recorder
+        self.moving = cfg.deck.motion == "moving"
+        self.landing_point = np.asarray(cfg.guidance.landing_point_m, float)
+        self.approach = None
+        self._a_td = np.zeros(3)
+        self._c0 = np.zeros(3)
+        self._go_arounds = 0
+        self._n_restarts = 0
+        self._seen: dict[str, RelativeStateSample] = {}
+        self.mode, self.t_mode, self.done = "", 0.0, False
+        self._set_mode(0.0, "manual", "pilot holds the start while the filter starts")
+
+    # --- inputs besides the navigator --------------------------------------------------------
+    def observe(self, m: RelativeStateSample) -> None:
+        """The safety pilot's / motion capture's view (``m.source``: pilot | mocap); the newest is kept."""
+        self._seen[m.source] = m
+
+    def on_touchdown(self, t: float, on_deck: bool = True, reason: str = "gear contact") -> None:
+        self._set_mode(t, "landed" if on_deck else "missed", reason)
+        self.done = True
+
+    # --- the state machine -------------------------------------------------------------------
+    def _set_mode(self, t, mode, reason):
+        if self.recorder is not None:
+            self.recorder("mode", t, mode=mode, previous=self.mode, reason=reason)
+        self.mode, self.t_mode = mode, t
+
+    def target(self, Cd0, wd, psi_d, t_go):
+        g = self.cfg.guidance
+        return touchdown_target(Cd0, wd, psi_d, t_go, self.landing_point, self.gear_offset,
+                                g.overshoot_moving_m if self.moving else g.overshoot_m, self.moving)
+
+    def step(self, t: float, est, health) -> tuple[DeckReference, str]:
+        cfg, g = self.cfg, self.cfg.guidance
+        mode = self.mode
+        pilot_view = None
+        if mode == "manual" and cfg.start.pilot == "truth" and "pilot" in self._seen:
+            pilot_view = self._seen["pilot"].state  # the safety pilot flies on what he sees
+        x = pilot_view if pilot_view is not None else est.state
+        p, _, Cd0, psi_d, wd = level_deck_geometry(x, est.gyro, est.roll, est.pitch)
+        p_ld = rot_z(psi_d).T @ p
+        tm = t - self.t_mode
+        if mode in ("manual", "hover"):
+            if mode == "manual" and tm >= cfg.start.manual_s:
+                if health.converged:
+                    self._begin(t, p_ld, Cd0, wd, psi_d)
+                else:
+                    self._restart(t)
+            elif mode == "hover":
+                self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
+            if self.mode == "manual" and cfg.start.pilot == "imu":
+                return DeckReference(t=t, kind="level"), self.mode
+            return DeckReference(t=t, kind="follow", position=self.start_rel_ld, velocity=np.zeros(3),
+                                 accel=np.zeros(3), pilot_view=pilot_view), self.mode
+        tau = isinstance(self.approach, TauGapApproach)
+        if mode == "approach":
+            n_up = None
+            if tau:
+                c, n_up = self.target(Cd0, wd, psi_d, max(self.approach.T - tm, 0.0))
+                try:
+                    a_td, _, _ = touchdown_acceleration(n_up, g.touchdown_accel_mps2)
+                    # the prediction is noisy (deck rates x time to go): re-aim through a first-order filter
+                    w = min(self.period / g.retarget_tau_s, 1.0) if g.retarget_tau_s > 0 else 1.0
+                    self._a_td = self._a_td + w * (a_td - self._a_td)
+                    self.approach.retarget(self._a_td)
+                except ValueError as exc:  # predicted deck too steep to match: keep the last aim, say so
+                    if self.recorder is not None:
+                        self.recorder("retarget_skipped", t, reason=str(exc))
+            else:
+                c = self._c0
+            pd, vd, a_now = self.approach.desired(tm)
+            # the horizontal acceleration feed-forward is realised by tilting, through the attitude loop's lag:
+            # take it that far ahead; the vertical one (thrust, fast) as it is
+            _, _, a_lead = self.approach.desired(min(tm + g.feedforward_lead_s, self.approach.T))
+            ref = DeckReference(t=t, kind="follow", position=c + pd, velocity=vd,
+                                accel=np.array([a_lead[0], a_lead[1], a_now[2]]), target=c, normal=n_up,
+                                flare_time_left=self.approach.T - tm if tau else None)
+            if tm >= self.approach.T:
+                if tau and self._go_arounds < g.go_arounds:
+                    # no contact at the trajectory's end: back to the start point, a new approach when the
+                    # start conditions hold again (the descend mode would hold the matched tilt for too long)
+                    self._go_arounds += 1
+                    self._set_mode(t, "hover", f"trajectory ended without contact: go-around {self._go_arounds}")
+                else:
+                    self._set_mode(t, "descend", "trajectory ended without contact")
+            return ref, self.mode
+        # descend
+        c, n_up = self.target(Cd0, wd, psi_d, 0.0)
+        return DeckReference(t=t, kind="descend", target=c, normal=n_up,
+                             flare_time_left=np.inf if tau else None), self.mode
+
+    def _restart(self, t: float) -> None:
+        f = self.cfg.filter
+        hyp = f.yaw_hypotheses_deg
+        if self._n_restarts >= len(hyp):
+            raise RuntimeError("the deck filter did not converge from any initial yaw hypothesis")
+        if f.init == "truth":  # the Vicon start again, from where the vehicle is now
+            seen = self._seen.get("mocap")
+            if seen is None:
+                raise RuntimeError("filter.init = truth needs the motion-capture sample to restart from")
+            self.nav.initialize(NavInit(t=t, source="truth+noise (restart)", state=seen.state,
+                                        covariance=np.diag(seen.sigma**2)))
+            why = "restart from the truth"
+        else:
+            self.nav.command(NavCommand(t, "restart", {"yaw_deg": float(hyp[self._n_restarts])}))
+            why = f"restart from relative yaw {hyp[self._n_restarts]:.0f} deg"
+        self._n_restarts += 1
+        self._set_mode(t, "manual", f"filter not converged: {why}")
+
+    def _begin(self, t, p_ld, Cd0, wd, psi_d):
+        g = self.cfg.guidance
+        self.nav.command(NavCommand(t, "track"))  # converged: from now on the sensor's own noise
+        if not self.moving:
+            self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
+            self.approach = StraightApproach(p_ld - self._c0, g.duration_s, g.k_static)
+            self._set_mode(t, "approach", f"manual hold over; straight tau gaps, k={g.k_static}, T={g.duration_s}s")
+        else:
+            self._set_mode(t, "hover", "handed over to the autonomy")
+
+    def _maybe_start(self, t, tm, p_ld, Cd0, wd, psi_d):
+        g = self.cfg.guidance
+        if tm < (g.go_around_hover_s if self._go_arounds else g.hover_min_s):
+            return
+        rho0 = float(np.linalg.norm(p_ld))
+        T = np.sqrt(18.0 * rho0 / g.touchdown_accel_mps2)
+        c, n_up = self.target(Cd0, wd, psi_d, T)
+        try:
+            a_td, lam, gam = touchdown_acceleration(n_up, g.touchdown_accel_mps2)
+        except ValueError:
+            return
+        az = np.arctan2(p_ld[1] - c[1], p_ld[0] - c[0])
+        dl = abs((lam - az + np.pi) % (2 * np.pi) - np.pi)
+        near = np.linalg.norm(p_ld - self.start_rel_ld) <= g.start_tolerance_m
+        ok = (near and dl <= np.radians(g.lambda_max_deg)
+              and np.radians(g.gamma_min_deg) <= gam <= np.radians(g.gamma_max_deg))
+        relaxed = tm >= g.max_wait_s and gam <= np.radians(g.gamma_max_deg)  # late: any heading, never too flat
+        if ok or relaxed:
+            self.approach = TauGapApproach(p_ld - c, a_td, g.k_rho, g.k_alpha_beta)
+            self._a_td = a_td
+            why = "conditions met" if ok else "waited max_wait_s"
+            self._set_mode(t, "approach", f"{why}: lambda={np.degrees(lam):.0f} deg, gamma={np.degrees(gam):.0f} deg, "
+                                          f"T={self.approach.T:.2f}s")
