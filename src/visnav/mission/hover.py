@@ -107,6 +107,10 @@ class HoverMission:
                                                                      c.sweep_duration_s))
         return u
 
+    def camera_wanted(self, t: float) -> bool:
+        """The tracker runs for the whole hover."""
+        return True
+
     def on_touchdown(self, t: float) -> None:
         self._set("touchdown", t, "unexpected ground contact")
         self.done = True

@@ -207,6 +207,10 @@ class PalaceMission:
         self.abort_hold = self._last_pos + np.array([0.0, 0.0, -self.cfg.abort_climb_m])
         self._set("abort", t, why)
 
+    def camera_wanted(self, t: float) -> bool:
+        """Frames are needed until MPE ends (below 1 m: inertial + sonar), and not during an abort."""
+        return self.mode not in ("final", "landed", "abort")
+
     def on_touchdown(self, t: float) -> None:
         if self.mode != "landed":
             self._set("landed", t, "weight on wheels")

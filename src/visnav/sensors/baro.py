@@ -27,7 +27,7 @@ class Baro:
         self.bias = rng.normal(0.0, bias_sigma_m) if bias_sigma_m > 0 else 0.0
         self._t = None
 
-    def sample(self, t: float, truth_at: TruthAt) -> BaroSample:
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> BaroSample:
         if self._t is not None and self.bias_sigma > 0:
             a = math.exp(-(t - self._t) / self.tau)
             self.bias = a * self.bias + self.bias_sigma * math.sqrt(1 - a * a) * self.rng.standard_normal()
@@ -45,7 +45,7 @@ class Compass:
         self.bias = math.radians(rng.normal(0.0, bias_deg)) if bias_deg > 0 else 0.0
         self.latency_s = latency_s
 
-    def sample(self, t: float, truth_at: TruthAt) -> HeadingSample:
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> HeadingSample:
         s = truth_at(t)
         h = float(s.euler[2]) + self.bias + self.sigma * self.rng.standard_normal()
         return HeadingSample(t=t, heading=(h + math.pi) % (2 * math.pi) - math.pi)

@@ -32,7 +32,7 @@ class Gps:
             return False
         return self.jam_end_s is None or t < self.jam_end_s
 
-    def sample(self, t: float, truth_at: TruthAt) -> GpsSample | None:
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> GpsSample | None:
         if self.jammed(t):
             return None
         s = truth_at(t)
