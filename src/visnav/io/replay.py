@@ -19,9 +19,11 @@ from typing import Callable
 import numpy as np
 
 from visnav.io.recording import STREAM_NAMES, Recording, RecordingError
+from visnav.measurements import NavCommand, NavInit
 from visnav.sim.log import FlightLog, register_stream
 
-register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv)"),
+register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv): the "
+                                             "NavCommand name, initialize, or an older recording's method"),
                 args=("text", "JSON", "its arguments: {\"args\": [...], \"kwargs\": {...}}"))
 
 Builder = Callable[["Recording", "ReplayOptions", Callable], object]
@@ -245,6 +247,18 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
             else:
                 meth = str(c["method"][b[k]])
                 args = json.loads(c["args"][b[k]]) if "args" in c and c["args"][b[k]] else {}
+                if meth in ("command", "initialize"):  # a NavCommand / NavInit: rebuilt from its fields
+                    kw = args.get("kwargs", {})
+                    if meth == "command":
+                        nav.command(NavCommand(kw.get("t", t), kw["name"], kw.get("args", {})))
+                        meth = kw["name"]
+                    else:
+                        arr = lambda x: None if x is None else np.asarray(x, float)  # noqa: E731
+                        nav.initialize(NavInit(kw.get("t", t), kw.get("source", "recorded"),
+                                               *(arr(kw.get(f)) for f in ("position", "velocity", "attitude", "state",
+                                                                          "covariance"))))
+                    log.record("nav_request", t, method=meth, args=json.dumps(args))
+                    continue
                 fn = getattr(nav, meth, None)
                 if fn is None:
                     notes.append(f"commands.csv: {meth!r} is not a {navigator} navigator request; skipped")
