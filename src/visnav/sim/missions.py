@@ -102,12 +102,10 @@ class BuildContext:
         return self.textured_world().wind
 
     def camera_geometry(self):
-        from visnav.geometry.camera import PinholeCamera
-        from visnav.geometry.mounts import FixedMount
+        """(PinholeCamera, FixedMount) of ``[sensors.camera]``."""
+        from visnav.io.navigators import rmax_camera
 
-        c = self.scenario.sensors.camera
-        return (PinholeCamera.ideal(c.width, c.height, c.focal_px),
-                FixedMount.depressed(c.depression_deg, lever_arm=tuple(c.lever_arm_m)))
+        return rmax_camera(self.scenario)
 
     def rmax_sensors(self, camera: bool = True) -> dict:
         """The ``[sensors]`` section: IMU (+ attitude), GPS, laser, sonar and (``camera``) the camera."""
@@ -128,11 +126,11 @@ class BuildContext:
                                    noise_sigma=c.noise_sigma, latency_s=c.latency_s, delay_s=c.delay_s)
         return out
 
-    def palace_navigator(self):
-        from visnav.navigation.palace import PalaceNavigator
+    def navigator(self, name: str, **parts):
+        """The registered navigator ``name`` (``io/navigators.py``) configured by the scenario."""
+        from visnav.io.navigators import make_navigator
 
-        model, mount = self.camera_geometry()
-        return PalaceNavigator(self.scenario.navigation, model, mount, recorder=self.record)
+        return make_navigator(name, self.scenario, self.record, **parts)
 
 
 def register(name: str) -> Callable[[Builder], Builder]:
@@ -159,7 +157,7 @@ def _palace(ctx: BuildContext) -> MissionParts:
     sc = ctx.scenario
     world = ctx.textured_world()
     model, mount = ctx.camera_geometry()
-    nav = ctx.palace_navigator()
+    nav = ctx.navigator("palace")
     c = sc.sensors.camera
     mission = PalaceMission(sc.mission, nav, yaw=ctx.yaw, image_size=(c.width, c.height), recorder=ctx.record)
     return MissionParts(world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
@@ -175,7 +173,7 @@ def _hover(ctx: BuildContext) -> MissionParts:
 
     world = ctx.textured_world()
     model, mount = ctx.camera_geometry()
-    nav = ctx.palace_navigator()
+    nav = ctx.navigator("palace")
     mission = HoverMission(ctx.scenario.mission, nav, yaw=ctx.yaw, recorder=ctx.record)
     return MissionParts(world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
                         controller=RmaxPositionController(), metrics=hover_metrics,
@@ -195,7 +193,7 @@ def _pfcm(ctx: BuildContext) -> MissionParts:
     mission = PfcmMission(cfg, recorder=ctx.record)
     controller = PathFollowingController(path_loop_gains(cfg), recorder=ctx.record)
     # PFCM flies on the PALACE navigator's GPS solution: no camera
-    return MissionParts(world=world, sensors=ctx.rmax_sensors(camera=False), navigator=ctx.palace_navigator(),
+    return MissionParts(world=world, sensors=ctx.rmax_sensors(camera=False), navigator=ctx.navigator("palace"),
                         mission=mission, controller=controller, metrics=pfcm_metrics,
                         start_position=mission.start_position(), start_yaw=mission.start_yaw, camera_model=model,
                         mount=mount)

@@ -17,13 +17,11 @@ def build(ctx):
     from visnav.control.rmax import RmaxPositionController
     from visnav.geometry.camera import PinholeCamera
     from visnav.geometry.pad import PadLayout
-    from visnav.navigation.pad import PadNavigator
     from visnav.sensors.imu import Imu
     from visnav.sensors.pad_camera import PadCamera
     from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
     from visnav.sensors.split_imu import SplitRateImu
     from visnav.sim.missions import MissionParts
-    from visnav.vision.pad import PadDetector
     from visnav.world.pad import pad_board
 
     sc, record = ctx.scenario, ctx.record
@@ -48,8 +46,7 @@ def build(ctx):
     s = sc.sensors.imu
     imu = Imu(rng[2], rate_hz=fc.gyro_hz, accel_noise=s.accel_noise, gyro_noise=s.gyro_noise, accel_bias=s.accel_bias,
               gyro_bias=s.gyro_bias, attitude_noise_deg=s.attitude_noise_deg, latency_s=s.latency_s, delay_s=s.delay_s)
-    detector = PadDetector(layout, cam.K, sigma_floor_px=fc.sigma_floor_px, cov_inflation=fc.cov_inflation)
-    nav = PadNavigator(fc, detector, ptu, recorder=record)
+    nav = ctx.navigator("pad", camera=cam, ptu=ptu, layout=layout)
     mission = PadLandingMission(cfg, recorder=record)
     # GPS-free: the split-rate IMU (with the attitude solution) and the pan-tilt camera only
     return MissionParts(world=world, sensors={"imu": SplitRateImu(imu, fc.accel_hz), "camera": camera}, navigator=nav,

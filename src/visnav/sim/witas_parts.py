@@ -58,10 +58,8 @@ def reference_map(cfg, ground):
 def build(ctx):
     from visnav.analysis.witas_metrics import witas_metrics
     from visnav.control.rmax_path import PathFollowingController
-    from visnav.geometry.camera import PinholeCamera
-    from visnav.geometry.mounts import FixedMount
+    from visnav.io.navigators import NAVIGATORS
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
-    from visnav.navigation.witas import WitasNavigator
     from visnav.scenarios.schema import PfcmMissionConfig
     from visnav.sensors.baro import Baro, Compass
     from visnav.sensors.camera import Camera
@@ -92,15 +90,14 @@ def build(ctx):
     std = ctx.rmax_sensors(camera=False)
     gps = std["gps"]
     gps.jam_start_s, gps.jam_end_s = cfg.gps_loss_s, None
-    model = PinholeCamera.ideal(cc.width, cc.height, cc.focal_px)
-    mount = FixedMount.depressed(cc.depression_deg, lever_arm=tuple(cc.lever_arm_m))
+    model, mount = NAVIGATORS["witas"].camera(sc)
     sensors = {"imu": std["imu"], "gps": gps,
                "camera": Camera(model, mount, rng[1], capture_hz=25.0, process_hz=cfg.filter.odometry_hz,
                                 noise_sigma=cc.noise_sigma, latency_s=cc.latency_s),
                "baro": Baro(rng[2], cfg.baro.rate_hz, cfg.baro.sigma_m, cfg.baro.bias_sigma_m, cfg.baro.bias_tau_s)}
     if cfg.compass.enabled:
         sensors["compass"] = Compass(rng[3], cfg.compass.rate_hz, cfg.compass.sigma_deg, cfg.compass.bias_deg)
-    nav = WitasNavigator(cfg.filter, model.K, mount, reference, recorder=record, rng=rng[4])
+    nav = ctx.navigator("witas", camera=model, mount=mount, reference=reference)
     # the eq. 4.25 gains without the eq. 4.26 inner roll loop: with it (stiffer lateral loop) seeds 1-8 gave
     # odometry drift median 0.88 % (max 1.92) against 0.67 % (1.35) and PMF max 2.98 m (4.53) against
     # 3.22 m (3.86), home error 0.84 against 1.06 m (docs/results-witas.md)
