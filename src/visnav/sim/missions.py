@@ -98,8 +98,18 @@ class BuildContext:
         return build_world(self.scenario.world, self.rng[0], heading_rad=self.yaw)
 
     def scenario_wind(self):
-        """The ``[world]`` section's wind, for a mission that brings its own ground."""
-        return self.textured_world().wind
+        """The ``[world]`` section's wind alone (no ground drawn), for a mission that renders no ground or
+        brings its own. The gusts draw from the world's generator undrawn by a ground (another realisation
+        than under ``textured_world`` where turbulence is on)."""
+        from visnav.world.scene import build_wind
+
+        return build_wind(self.scenario.world, self.rng[0], heading_rad=self.yaw)
+
+    def wind_world(self):
+        """A world with the ``[world]`` section's wind and no ground (nothing is rendered)."""
+        from visnav.world.scene import World
+
+        return World(ground=None, surface=self.scenario.world.surface, wind=self.scenario_wind())
 
     def camera_geometry(self):
         """(PinholeCamera, FixedMount) of ``[sensors.camera]``."""
@@ -188,7 +198,7 @@ def _pfcm(ctx: BuildContext) -> MissionParts:
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
 
     cfg = ctx.scenario.mission
-    world = ctx.textured_world()
+    world = ctx.wind_world()  # no camera: no ground to render
     model, mount = ctx.camera_geometry()
     mission = PfcmMission(cfg, recorder=ctx.record)
     controller = PathFollowingController(path_loop_gains(cfg), recorder=ctx.record)
