@@ -40,7 +40,7 @@ def test_palace_commands_and_unknown_ones():
     assert nav.health(1.0).source == "mpe"
     nav.command(NavCommand(1.0, "request-tracking", {"target_ned": [0.0, 0.0, 0.0], "init_from": "gps"}))
     assert nav.health(1.0).tracking_pending
-    with pytest.raises(ValueError, match="no command 'fly'; known: request-tracking, request-tracking-rebase, set-source, stop-tracking"):
+    with pytest.raises(ValueError, match="no command 'fly'; known: request_tracking, request_tracking_rebase, set_source, stop_tracking"):
         nav.command(NavCommand(1.0, "fly", {}))
     with pytest.raises(ValueError, match="unknown navigation source"):
         nav.command(NavCommand(1.0, "set-source", {"source": "magic"}))

@@ -42,7 +42,7 @@ class CommandDispatch:
     def command(self, request: NavCommand) -> None:
         fn = getattr(self, "_cmd_" + request.name.replace("-", "_"), None)
         if fn is None:
-            known = sorted(k[5:].replace("_", "-") for k in dir(self) if k.startswith("_cmd_"))
+            known = sorted(k[5:] for k in dir(self) if k.startswith("_cmd_"))
             raise ValueError(f"{type(self).__name__} has no command {request.name!r}; known: {', '.join(known)}")
         fn(request.t, **request.args)
 
