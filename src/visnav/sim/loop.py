@@ -4,7 +4,8 @@ One fixed dynamics step (``run.dt_s``, 100 Hz); every other block runs at its ow
 integer divisor of it: IMU 100 Hz, mission + position loop 10 Hz, GPS and laser 10 Hz, sonar
 20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered). Each
 measurement is stamped with the instant it describes and delivered after its sensor's latency.
-Truth reaches only the sensors (through ``TruthHistory``) and the log.
+Truth reaches only the sensors (through ``TruthHistory``), the log and an explicit, logged ``NavInit``.
+The parts come from the mission's builder (``sim/missions.py``); the loop builds nothing else.
 """
 
 from __future__ import annotations
@@ -54,17 +55,13 @@ class Simulation:
         self.sc = sc = scenario
         self.dt = sc.run.dt_s
         self.log = FlightLog(schema=RMAX_STREAMS)
-        self.parts = parts = build_mission(BuildContext(sc, self.log.record))
+        self.parts = parts = build_mission(BuildContext(sc, self.log.record, navigator_wrapper))
         self.world = parts.world
         self.sensors = dict(parts.sensors)
         self.camera = self.sensors.get("camera")
         self.camera_model, self.mount = parts.camera_model, parts.mount
         self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
-        self.nav = parts.navigator
-        if navigator_wrapper is not None:
-            self.nav = navigator_wrapper(self.nav)
-            if getattr(self.mission, "nav", None) is parts.navigator:  # the mission talks through the wrapper too
-                self.mission.nav = self.nav
+        self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
         init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
                             euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
                             specific_force=np.array([0.0, 0.0, -9.81]))

@@ -81,6 +81,7 @@ class BuildContext:
 
     scenario: object
     record: Callable
+    navigator_wrapper: Callable | None = None  # wraps the navigator (visnav record's proxy) before a mission gets it
 
     @cached_property
     def rng(self) -> list[np.random.Generator]:
@@ -137,10 +138,12 @@ class BuildContext:
         return out
 
     def navigator(self, name: str, **parts):
-        """The registered navigator ``name`` (``io/navigators.py``) configured by the scenario."""
+        """The registered navigator ``name`` (``io/navigators.py``) configured by the scenario (wrapped by
+        ``navigator_wrapper`` when given)."""
         from visnav.io.navigators import make_navigator
 
-        return make_navigator(name, self.scenario, self.record, **parts)
+        nav = make_navigator(name, self.scenario, self.record, **parts)
+        return nav if self.navigator_wrapper is None else self.navigator_wrapper(nav)
 
 
 def register(name: str) -> Callable[[Builder], Builder]:
