@@ -62,6 +62,7 @@ class Simulation:
         self.camera_model, self.mount = parts.camera_model, parts.mount
         self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
         self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
+        self.notes = list(parts.info.get("notes", []))  # how the scenario was set up (the CLI prints them)
         init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
                             euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
                             specific_force=np.array([0.0, 0.0, -9.81]))
