@@ -131,6 +131,7 @@ class Health:
 
     source: str = "gps"
     tracking: bool = False
+    tracking_pending: bool = False  # a tracking request of the mission waits for a frame (PALACE)
     coherence: float = float("nan")
     tracked_px: tuple[float, float] = (float("nan"), float("nan"))
     mpe_rate_hz: float = 0.0

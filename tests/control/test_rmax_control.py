@@ -18,6 +18,7 @@ from visnav.control.rmax import (
     position_loop,
 )
 from visnav.measurements import NavEstimate, PositionReference
+from visnav.vehicles.base import Environment
 from visnav.vehicles.rmax import RMAX_TRANSFER_FUNCTIONS, RmaxModel, RmaxParams
 
 DT = 0.01
@@ -126,7 +127,7 @@ def simulate(ref: PositionReference, seconds: float, gains=None, wind=(0.0, 0.0,
     ctrl = RmaxPositionController(gains)
     st, pos = model.state, []
     for _ in range(int(round(seconds / DT))):
-        st = model.step(ctrl.command(st.t, _nav(st), ref), DT, wind)
+        st = model.step(ctrl.command(st.t, _nav(st), ref), DT, Environment(np.asarray(wind, float)))
         pos.append(st.position)
     return np.array(pos), st
 

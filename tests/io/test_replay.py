@@ -53,7 +53,7 @@ def test_palace_replay_reproduces_the_closed_loop(palace_rec):
     diff, n = _max_difference(rec.run.log, res.log)
     assert n >= 100 and diff <= 1e-6
     cmds = res.log.get("nav_request")
-    assert {"request_tracking", "request_tracking_rebase", "set_source"} <= set(cmds["method"])
+    assert {"request-tracking", "request-tracking-rebase", "set-source"} <= set(cmds["method"])
     assert "mpe" in set(res.log.get("estimate")["source"])  # the MPE path was exercised
     m = res.metrics
     assert m["frames_used"] == rec.counts["frames"] and m["frames_dropped"] == 0

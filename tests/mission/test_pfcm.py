@@ -123,9 +123,11 @@ def _pair(name, overrides, seed):
 
 def test_roll_compensator_is_the_default_and_lowers_the_spiral_error():
     assert load_scenario("pfcm-spiral").mission.roll_compensator is True
-    off, on = _pair("pfcm-spiral", SHORT_SPIRAL, 1)  # 10 m/s into a 30 m radius helix, ~33 s
+    # in the 3 m/s steady wind without gusts: the comparison does not hang on one gust realisation (with light
+    # turbulence the ratio on/off ranged 0.59-0.82 over 6 realisations, seeds 1-3 of two gust streams)
+    off, on = _pair("pfcm-spiral", SHORT_SPIRAL + ["world.turbulence=none"], 1)  # 10 m/s into a 30 m radius helix
     assert off["path_completed"] and on["path_completed"]
-    assert on["cross_track_rms_m"] < 0.8 * off["cross_track_rms_m"]  # 0.17 m against 0.26 m
+    assert on["cross_track_rms_m"] < 0.8 * off["cross_track_rms_m"]  # 0.16 m against 0.23 m
     assert on["cross_track_max_m"] < off["cross_track_max_m"]
     assert on["speed_error_rms_mps"] < off["speed_error_rms_mps"] + 0.02
     assert on["max_roll_deg"] < 16.5 + 0.6  # within the roll command limit (+ a small overshoot)

@@ -21,7 +21,7 @@ def test_truth_history_interpolates_and_clamps():
         h.push(_state(k * 0.01, x=k * 0.01 * 2.0))  # 2 m/s north
     assert abs(h(1.734).position[0] - 3.468) < 1e-9
     assert abs(h(1.99).position[0] - 3.98) < 1e-9
-    oldest = 1.99 - (h.n - 2) * 0.01
+    oldest = 1.99 - (h.n - 1) * 0.01  # the buffer holds n steps
     assert abs(h(0.0).position[0] - 2 * oldest) < 1e-9  # older than the buffer: clamps to the oldest
 
 

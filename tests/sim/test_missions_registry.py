@@ -30,6 +30,6 @@ def test_every_registered_simulation_imports():
 def test_unknown_mission_type_names_the_known_ones():
     from types import SimpleNamespace
 
-    fake = SimpleNamespace(sc=SimpleNamespace(mission=SimpleNamespace(type="nope")))
+    fake = missions.BuildContext(SimpleNamespace(mission=SimpleNamespace(type="nope")), lambda *a, **k: None)
     with pytest.raises(ValueError, match="'nope' has no builder; known: .*palace"):
         missions.build(fake)

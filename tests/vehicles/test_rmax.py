@@ -10,6 +10,7 @@ from scipy import signal
 from scipy.linalg import expm
 
 from visnav.measurements import VehicleState, YacsCommand
+from visnav.vehicles.base import Environment
 from visnav.vehicles.rmax import (
     RMAX_TRANSFER_FUNCTIONS,
     RmaxModel,
@@ -27,7 +28,7 @@ def run(model: RmaxModel, cmd: YacsCommand, seconds: float, wind=(0.0, 0.0, 0.0)
     """States and eq. 3.4 outputs after each step."""
     states, outs = [], []
     for _ in range(int(round(seconds / DT))):
-        states.append(model.step(cmd, DT, wind))
+        states.append(model.step(cmd, DT, Environment(wind)))
         outs.append(model.yacs_outputs)
     return states, outs
 
@@ -182,7 +183,7 @@ def test_inputs_saturate_at_500(raw, clipped):
 def test_drag_acts_on_air_relative_body_velocity():
     for yaw, drag in ((0.0, -0.1), (math.pi / 2, -0.025)):  # east wind: side-on (Yv) or head-on (Xu)
         model = RmaxModel(position=(0, 0, -50), yaw=yaw)
-        s = model.step(YacsCommand(0.0), 1e-3, (0.0, 3.0, 0.0))
+        s = model.step(YacsCommand(0.0), 1e-3, Environment((0.0, 3.0, 0.0)))
         assert s.velocity[1] / 1e-3 == pytest.approx(-drag * 3.0, rel=1e-3)
     model = RmaxModel(RmaxParams(heave_damping="full"), position=(0, 0, -50))
     states, _ = run(model, YacsCommand(0.0), 12.0, wind=(0.0, 0.0, -2.0))  # updraft, 1/|Zw| = 1.7 s
@@ -230,7 +231,7 @@ def test_initial_state_and_bad_input():
     with pytest.raises(ValueError, match="dt"):
         model.step(YacsCommand(0.0), 0.0)
     with pytest.raises(ValueError, match="wind_ned"):
-        model.step(YacsCommand(0.0), DT, (1.0, 2.0))
+        model.step(YacsCommand(0.0), DT, Environment((1.0, 2.0)))
     with pytest.raises(ValueError, match="command"):
         model.step(YacsCommand(0.0, ail=float("nan")), DT)
     with pytest.raises(ValueError, match="Yv"):
@@ -268,7 +269,7 @@ def test_scalar_rk4_equals_the_numpy_derivative_bit_for_bit():
         k3, _ = model._deriv(y + 0.5 * DT * k2, ah, wind)
         k4, _ = model._deriv(y + DT * k3, a1, wind)
         want = y + DT * (k1 + 2 * k2 + 2 * k3 + k4) / 6.0
-        s = model.step(cmd, DT, wind)
+        s = model.step(cmd, DT, Environment(wind))
         np.testing.assert_array_equal(model._y, want)
         np.testing.assert_allclose(s.euler[:2], a1[:2], rtol=0, atol=1e-15)
         np.testing.assert_allclose(s.specific_force, model._deriv(want, a1, wind)[1], rtol=0, atol=1e-15)

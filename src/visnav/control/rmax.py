@@ -353,6 +353,7 @@ class RmaxPositionController:
         if not (np.isfinite(rate_hz) and rate_hz > 0):
             raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
         self.gains = gains if gains is not None else RmaxPositionGains()
+        self.rate_hz = float(rate_hz)
         self.period = 1.0 / rate_hz
         self.reset()
 

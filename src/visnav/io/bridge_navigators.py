@@ -1,17 +1,15 @@
-"""Navigators for the live bridge, built from a scenario exactly as the simulation builds them.
+"""Navigators for the live bridge, from the one registry (``io/navigators.py``) the simulation and the replay use.
 
-``build_navigator("witas")`` loads the ``witas-homing`` scenario (or any scenario name / .toml path),
-builds its simulation with ``sim.missions.make_simulation`` and takes the navigator it wired
-(``sim.nav``: the WITAS navigator with its reference map, or the PALACE navigator) together with
-the camera rate the navigator consumes. Until the architecture refactor (#13) separates navigator
-construction from the simulation, this builds (and discards) the simulated world too: a few seconds
-at start-up, nothing per frame.
+``build_navigator("witas")`` takes the navigator's default scenario (``witas-homing``; ``palace`` ->
+``palace-landing``), or any scenario name / .toml path, whose mission type names the navigator; no
+simulation is built (the WITAS reference map is degraded from the scenario's ground, or ``--map``).
 
 Known gaps of live use (see docs/autopilots.md): the navigator's camera model is the scenario's (a
-camera.yaml is used for its time offset only); the PALACE navigator only tracks once a mission calls
-``request_tracking`` (the bridge runs no mission), so over the bridge it is a GPS-phase navigator; the
+camera.yaml is used for its time offset only); the PALACE navigator only tracks once a mission commands
+``request-tracking`` (the bridge runs no mission), so over the bridge it is a GPS-phase navigator; the
 WITAS navigator engages vision when GPS samples stop (its ``gps_timeout_s``) and needs a reference
-map georeferenced at the bridge's NED origin (``--map`` / ``--origin``).
+map georeferenced at the bridge's NED origin (``--map`` / ``--origin``); the pad navigator needs a
+pan-tilt link (not there yet).
 """
 
 from __future__ import annotations
@@ -19,22 +17,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-ALIASES = {"witas": "witas-homing", "palace": "palace-landing"}
-
 
 @dataclass
 class BuiltNavigator:
     navigator: object
     camera_hz: float
-    scenario: str
-    sim: object  # the simulation it came from (its world and camera renderer serve the SIL camera)
+    scenario: str  # the run name of its scenario
+    sc: object  # the resolved Scenario (``sim.missions.make_simulation(sc)`` builds its simulated world)
 
 
 def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None) -> BuiltNavigator:
     """Raises ScenarioError / FileNotFoundError / ValueError with a one-line message on bad input."""
+    from visnav.io.navigators import NAVIGATORS
     from visnav.scenarios.schema import load_scenario
 
-    scenario = ALIASES.get(name, name)
+    scenario = NAVIGATORS[name].scenario if name in NAVIGATORS else name
     sets = list(overrides or [])
     sc = load_scenario(scenario, sets)
     if map_path:
@@ -44,10 +41,8 @@ def build_navigator(name: str, map_path: str | None = None, overrides: list[str]
 
 
 def navigator_from_scenario(sc) -> BuiltNavigator:
-    """The navigator a validated Scenario's simulation wires (and the camera rate it consumes)."""
-    from visnav.sim.missions import make_simulation
+    """The registered navigator a validated Scenario's mission flies with (and the camera rate it consumes)."""
+    from visnav.io.navigators import NAVIGATORS, make_navigator, navigator_for
 
-    sim = make_simulation(sc)
-    flt = getattr(sc.mission, "filter", None)
-    camera_hz = float(getattr(flt, "odometry_hz", 0) or getattr(sim.camera, "rate_hz", 10.0))
-    return BuiltNavigator(sim.nav, camera_hz, sc.run.name, sim)
+    name = navigator_for(getattr(sc.mission, "type", "palace"))
+    return BuiltNavigator(make_navigator(name, sc), float(NAVIGATORS[name].camera_hz(sc)), sc.run.name, sc)

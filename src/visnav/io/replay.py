@@ -3,9 +3,8 @@
 The measurements of a ``Recording`` go to the navigator in delivery order; the recorded mission
 requests (``commands.csv``) are replayed at their place in that order, and the estimate is asked at the
 recorded times (a simulated recording) or at a fixed output rate (a recording without ``estimate``
-rows). A navigator is a registered builder (``@register_navigator``): adding the deck or CONDOR
-navigator later is one function that takes the recording and returns an object with ``update``,
-``estimate`` and ``health``.
+rows). The navigators are those of the one registry (``io/navigators.py``), built from the recording's
+scenario with its camera (``camera.yaml``) and, for WITAS, ``--map`` or the scenario's reference map.
 """
 
 from __future__ import annotations
@@ -14,29 +13,15 @@ import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
-
 import numpy as np
 
 from visnav.io.recording import STREAM_NAMES, Recording, RecordingError
+from visnav.measurements import NavCommand, NavInit
 from visnav.sim.log import FlightLog, register_stream
 
-register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv)"),
+register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv): the "
+                                             "NavCommand name, initialize, or an older recording's method"),
                 args=("text", "JSON", "its arguments: {\"args\": [...], \"kwargs\": {...}}"))
-
-Builder = Callable[["Recording", "ReplayOptions", Callable], object]
-NAVIGATORS: dict[str, tuple[Builder, tuple[str, ...]]] = {}
-
-
-def register_navigator(name: str, needs: tuple[str, ...]):
-    """Register ``builder(recording, options, recorder) -> navigator``; ``needs`` are the streams it needs."""
-
-    def deco(fn: Builder) -> Builder:
-        NAVIGATORS[name] = (fn, needs)
-        return fn
-
-    return deco
-
 
 @dataclass
 class ReplayOptions:
@@ -73,46 +58,31 @@ def scenario_of(rec: Recording, default: str, overrides=()):
 
 
 # ------------------------------------------------------------------------------------ navigators
-@register_navigator("palace", needs=("imu", "attitude", "gps"))
-def _palace(rec: Recording, opts: ReplayOptions, recorder):
-    from visnav.navigation.palace import PalaceNavigator
+def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
+    """The registered navigator ``name`` (``io/navigators.py``) with the recording's camera and scenario."""
+    from visnav.io.navigators import make_navigator, spec
 
-    sc = scenario_of(rec, "palace-landing", opts.scenario_overrides)
+    sc = scenario_of(rec, spec(name).scenario, opts.scenario_overrides)
+    parts: dict = {}
     if rec.camera is not None:
-        camera, mount = rec.camera.camera, rec.camera.mount
-    else:  # no frames and no camera.yaml: GPS / inertial only; the scenario's camera stands in for MPE's
-        from visnav.geometry.camera import PinholeCamera
-        from visnav.geometry.mounts import FixedMount
-
-        c = sc.sensors.camera
-        camera = PinholeCamera.ideal(c.width, c.height, c.focal_px)
-        mount = FixedMount.depressed(c.depression_deg, lever_arm=tuple(c.lever_arm_m))
+        parts |= {"camera": rec.camera.camera, "mount": rec.camera.mount}
+    elif name == "palace":  # no frames and no camera.yaml: the scenario's camera stands in for MPE's
         rec.notes.append("no camera.yaml and no frames: PALACE runs on GPS / inertial only")
-    return PalaceNavigator(sc.navigation, camera, mount, recorder=recorder), sc
+    if name == "witas":
+        if opts.map_path:
+            from visnav.world.maps import GeoImage
 
-
-@register_navigator("witas", needs=("imu", "attitude", "gps", "baro", "frames"))
-def _witas(rec: Recording, opts: ReplayOptions, recorder):
-    from visnav.world.witas_map import make_ground, mission_rngs, reference_map
-    from visnav.navigation.witas import WitasNavigator
-
-    sc = scenario_of(rec, "witas-homing", opts.scenario_overrides)
-    cfg = sc.mission
-    if opts.map_path:
-        from visnav.world.maps import GeoImage
-
-        try:
-            reference = GeoImage.load(opts.map_path)
-        except (OSError, ValueError) as exc:
-            raise RecordingError(f"{opts.map_path}: cannot load the reference map ({exc})") from None
-    elif rec.scenario_toml is not None:  # a simulated recording: the same degraded map as the closed loop
-        reference = reference_map(cfg, make_ground(cfg, sc.run.seed)[0])
-    else:
-        raise RecordingError(f"{rec.path}: the witas navigator needs a reference map: give --map MAP "
-                             "(PNG/JPEG + world file)")
-    nav = WitasNavigator(cfg.filter, rec.camera.camera.K, rec.camera.mount, reference, recorder=recorder,
-                         rng=mission_rngs(sc.run.seed)[4])
-    return nav, sc
+            try:
+                parts["reference"] = GeoImage.load(opts.map_path)
+            except (OSError, ValueError) as exc:
+                raise RecordingError(f"{opts.map_path}: cannot load the reference map ({exc})") from None
+        elif rec.scenario_toml is None:  # a simulated recording has its scenario: the closed loop's map
+            raise RecordingError(f"{rec.path}: the witas navigator needs a reference map: give --map MAP "
+                                 "(PNG/JPEG + world file)")
+    try:
+        return make_navigator(name, sc, recorder, **parts), sc
+    except ValueError as exc:
+        raise RecordingError(str(exc)) from None
 
 
 def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
@@ -164,12 +134,13 @@ def _events(rec: Recording, out_rate: float):
 def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, progress=None) -> ReplayResult:
     """Run ``navigator`` on ``rec``; an error inside the replay stops it and keeps what it has
     (``metrics["error"]``)."""
+    from visnav.io.navigators import NAVIGATORS
+
     opts = opts or ReplayOptions()
     if navigator not in NAVIGATORS:
         raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))} "
                              "(deck and CONDOR follow issue #13)")
-    builder, needs = NAVIGATORS[navigator]
-    rec.require(needs, navigator)
+    rec.require(NAVIGATORS[navigator].needs, navigator)
     notes: list[str] = []
     metrics: dict = {}
     if opts.time_offset == "auto":
@@ -182,7 +153,7 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
     log = FlightLog()
-    nav, sc = builder(rec, opts, log.record)
+    nav, sc = _navigator(navigator, rec, opts, log.record)
     kinds, a, b, times = _events(rec, opts.output_rate_hz)
     wall0 = time.perf_counter()
     counts, error = _feed(rec, nav, navigator, log, notes, (kinds, a, b, times), opts, progress)
@@ -245,6 +216,18 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
             else:
                 meth = str(c["method"][b[k]])
                 args = json.loads(c["args"][b[k]]) if "args" in c and c["args"][b[k]] else {}
+                if meth in ("command", "initialize"):  # a NavCommand / NavInit: rebuilt from its fields
+                    kw = args.get("kwargs", {})
+                    if meth == "command":
+                        nav.command(NavCommand(kw.get("t", t), kw["name"], kw.get("args", {})))
+                        meth = kw["name"]
+                    else:
+                        arr = lambda x: None if x is None else np.asarray(x, float)  # noqa: E731
+                        nav.initialize(NavInit(kw.get("t", t), kw.get("source", "recorded"),
+                                               *(arr(kw.get(f)) for f in ("position", "velocity", "attitude", "state",
+                                                                          "covariance"))))
+                    log.record("nav_request", t, method=meth, args=json.dumps(args))
+                    continue
                 fn = getattr(nav, meth, None)
                 if fn is None:
                     notes.append(f"commands.csv: {meth!r} is not a {navigator} navigator request; skipped")

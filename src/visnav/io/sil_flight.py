@@ -36,8 +36,10 @@ def _free_port() -> int:
 
 def fly(name: str, seconds: float, gps_s: float = 4.0, output: str = "odometry") -> dict:
     """Fly ``name`` (witas / palace / a scenario in CASES) for ``seconds`` of wall time; the figures."""
+    from visnav.sim.missions import make_simulation
+
     built = build_navigator(name)
-    sim = built.sim
+    sim = make_simulation(built.sc)  # its world and camera renderer serve the SIL camera
     port = _free_port()
     notes: list[str] = []
     link = MavlinkLink(f"udpin:127.0.0.1:{port}", notify=notes.append)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
+from visnav.mission.base import NavigatorRequests
 
 AXES = {"lateral": 0, "longitudinal": 1}  # index into (ail, ele, rud, thr)
 
@@ -27,10 +28,11 @@ def log_chirp(t: np.ndarray | float, f0: float, f1: float, duration: float) -> n
     return np.where((t >= 0) & (t <= duration), np.sin(phase), 0.0)
 
 
-class HoverMission:
+class HoverMission(NavigatorRequests):
     def __init__(self, cfg, navigator, yaw: float = 0.0, recorder=None):
         self.cfg = cfg
         self.nav = navigator
+        self.source = "gps"  # the navigation source this mission set (the navigator starts on GPS)
         self.yaw = float(yaw)
         self.point = np.array([cfg.point_m[0], cfg.point_m[1], 0.0])
         g = np.deg2rad(cfg.look_angle_deg)
@@ -60,38 +62,38 @@ class HoverMission:
         c = self.cfg
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t
-        if self.nav.source == "mpe":
+        if self.source == "mpe":
             self.vision_time += dt
         if self.mode == "settle" and t - self.t_mode >= c.settle_s:
-            self.nav.request_tracking(self.point, init_from="gps")
+            self._ask(t, "request-tracking", target_ned=self.point, init_from="gps")
             self._set("acquire", t, "start tracking")
         elif self.mode == "acquire":
-            if not health.tracking and not self.nav.tracking_pending:
-                self.nav.request_tracking(self.point, init_from="gps")  # tracker failed: again (§4.1)
+            if not health.tracking and not self._pending(health, t):
+                self._ask(t, "request-tracking", target_ned=self.point, init_from="gps")  # tracker failed: again (§4.1)
                 self.good_since = None
-            good = health.tracking and health.coherence >= c.coherence_threshold and not self.nav.tracking_pending
+            good = health.tracking and health.coherence >= c.coherence_threshold and not self._pending(health, t)
             if not good:
                 self.good_since = None
             elif self.good_since is None:
                 self.good_since = t
             elif t - self.good_since >= c.coherence_time_s:
                 if c.source == "mpe":
-                    self.nav.request_tracking_rebase("gps")
-                    self.nav.set_source("mpe")
+                    self._ask(t, "request-tracking-rebase", init_from="gps")
+                    self._ask(t, "set-source", source="mpe")
                 self.t_hold = t
                 self._set("hold", t, f"hover on {c.source}, MPE {'closed' if c.source == 'mpe' else 'open'} loop")
         elif self.mode == "hold":
-            if not health.tracking and not self.nav.tracking_pending:
+            if not health.tracking and not self._pending(health, t):
                 self._set("lost", t, "track lost")
-                if self.nav.source == "mpe":
-                    self.nav.set_source("gps")
+                if self.source == "mpe":
+                    self._ask(t, "set-source", source="gps")
             elif t - self.t_mode >= c.hold_s:
                 self._set("done", t, "hold complete")
                 self.done = True
         elif self.mode == "lost" and t - self.t_mode > 2.0:
             self.done = True
         ref = PositionReference(t=t, position=self.hold.copy(), velocity=np.zeros(3), yaw=self.yaw,
-                                source=self.nav.source)
+                                source=self.source)
         return ref, self.mode
 
     def actuator_injection(self, t: float) -> np.ndarray | None:
@@ -106,6 +108,10 @@ class HoverMission:
         u[AXES[c.sweep_axis]] = c.sweep_amplitude * float(log_chirp(tau, c.sweep_f0_hz, c.sweep_f1_hz,
                                                                      c.sweep_duration_s))
         return u
+
+    def camera_wanted(self, t: float) -> bool:
+        """The tracker runs for the whole hover."""
+        return True
 
     def on_touchdown(self, t: float) -> None:
         self._set("touchdown", t, "unexpected ground contact")

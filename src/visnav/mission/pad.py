@@ -100,6 +100,10 @@ class PadLandingMission:
         self.ref_v = v
         return PositionReference(t=t, position=self.ref_p.copy(), velocity=v, yaw=0.0, source="vision"), self.mode
 
+    def camera_wanted(self, t: float) -> bool:
+        """Frames until touch-down or an abort (near the ground the pattern leaves the view by itself)."""
+        return self.mode not in ("landed", "abort")
+
     def on_touchdown(self, t: float) -> None:
         self.touchdown_t = t
         self._set("landed", t, "touch-down")

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
+from visnav.mission.base import NavigatorRequests
 from visnav.log_schema import register_stream
 
 register_stream("reinit", x=("px", "image, OpenCV (x right)", "new point tracked after a re-initialisation"),
@@ -28,10 +29,11 @@ register_stream("palace_progress",
                 fallbacks=("1", "", "fall-backs from MPE to GPS so far"))
 
 
-class PalaceMission:
+class PalaceMission(NavigatorRequests):
     def __init__(self, cfg, navigator, yaw: float = 0.0, image_size=(640, 480), recorder=None):
         self.cfg = cfg
         self.nav = navigator
+        self.source = "gps"  # the navigation source this mission set (the navigator starts on GPS)
         self.yaw = float(yaw)
         self.W, self.H = image_size
         self.point = np.array([cfg.landing_point_m[0], cfg.landing_point_m[1], 0.0])
@@ -81,19 +83,19 @@ class PalaceMission:
         h_est = -float(nav.position[2])
         self._last_pos = np.array(nav.position, dtype=float)
         descent_rate = 0.0
-        if self.nav.source == "mpe":
+        if self.source == "mpe":
             self.vision_time += dt
 
         if self.mode == "settle":
             if t - self.t_mode >= c.settle_s:
-                self.nav.request_tracking(self.point, init_from="gps")
+                self._ask(t, "request-tracking", target_ned=self.point, init_from="gps")
                 self._set("acquire", t, "start tracking the designated point")
         elif self.mode == "acquire":
-            if health.tracking and not self.nav.tracking_pending:
+            if health.tracking and not self._pending(health, t):
                 self._set("descend_gps", t, "tracking")
-        elif self.mode in ("descend_gps", "verify") and not health.tracking and not self.nav.tracking_pending:
+        elif self.mode in ("descend_gps", "verify") and not health.tracking and not self._pending(health, t):
             # the correlation tracker reported a failure: repeat the initialisation (§4.1)
-            self.nav.request_tracking(self.point, init_from="gps")
+            self._ask(t, "request-tracking", target_ned=self.point, init_from="gps")
             self.record("reacquire", t)
             self.good_since = None
         if self.mode == "descend_gps":
@@ -105,14 +107,14 @@ class PalaceMission:
                 self._set("verify", t, "at switch height")
         elif self.mode == "verify":
             good = (health.tracking and health.coherence >= c.coherence_threshold and health.mpe_rate_hz >= 8.0
-                    and health.laser_ok and not self.nav.tracking_pending)
+                    and health.laser_ok and not self._pending(health, t))
             if not good:
                 self.good_since = None
             elif self.good_since is None:
                 self.good_since = t
             elif t - self.good_since >= c.coherence_time_s:
-                self.nav.request_tracking_rebase("gps")
-                self.nav.set_source("mpe")
+                self._ask(t, "request-tracking-rebase", init_from="gps")
+                self._ask(t, "set-source", source="mpe")
                 self.switch_time = t
                 self._set("hold" if c.hold_s > 0 else "descend_mpe", t, "2 s of good coherence: switch to MPE")
         elif self.mode == "hold":
@@ -121,9 +123,9 @@ class PalaceMission:
         elif self.mode == "descend_mpe":
             descent_rate = self._flare(c.descent_speed_mps * self.sin_g)
             if self._vision_checks(t, health, h_est) and h_est <= c.inertial_height_m:
-                self.nav.set_source("inertial")
+                self._ask(t, "set-source", source="inertial")
                 self.record("mpe_end", t)
-                self.nav.stop_tracking()
+                self._ask(t, "stop-tracking")
                 self.final_xy = self.slope_point(self.h_ref)[:2].copy()
                 self._set("final", t, "below 1 m: inertial + sonar")
         elif self.mode == "final":
@@ -157,7 +159,7 @@ class PalaceMission:
             pos = self.slope_point(self.h_ref)
             moving = descent_rate > 0 and self.h_ref > floor
             vel = (self.back * -1.0 + np.array([0.0, 0.0, 1.0])) * descent_rate if moving else np.zeros(3)
-        ref = PositionReference(t=t, position=pos, velocity=vel, yaw=self.yaw, source=self.nav.source)
+        ref = PositionReference(t=t, position=pos, velocity=vel, yaw=self.yaw, source=self.source)
         return ref, self.mode
 
     def _flare(self, rate: float) -> float:
@@ -179,7 +181,7 @@ class PalaceMission:
                 return False
         else:
             self.laser_lost_since = None
-        if self.nav.tracking_pending:
+        if self._pending(health, t):
             return True
         # MPE jumps or stops updating at 10 Hz -> back to GPS, re-verify
         bad = health.mpe_jump or (t - (self.switch_time or t) > 1.0 and health.mpe_rate_hz < 8.0)
@@ -191,8 +193,8 @@ class PalaceMission:
                 if self.fallbacks > c.max_fallbacks:
                     self._abort(t, f"MPE failed {self.fallbacks} times: soft abort on GPS")
                     return False
-                self.nav.set_source("gps")
-                self.nav.request_tracking(None, init_from="gps")
+                self._ask(t, "set-source", source="gps")
+                self._ask(t, "request-tracking", target_ned=None, init_from="gps")
                 self.reinitializations += 1
                 self.bad_since = None
                 self.h_ref = h_est
@@ -204,18 +206,22 @@ class PalaceMission:
         x, y = health.tracked_px
         m = c.edge_margin_px
         if np.isfinite(x) and not (m <= x <= self.W - 1 - m and m <= y <= self.H - 1 - m):
-            self.nav.request_tracking(None, init_from="estimate")
+            self._ask(t, "request-tracking", target_ned=None, init_from="estimate")
             self.reinitializations += 1
             self.record("reinit", t, x=x, y=y)
         return True
 
     def _abort(self, t: float, why: str) -> None:
-        self.nav.set_source("gps")
-        self.nav.stop_tracking()
+        self._ask(t, "set-source", source="gps")
+        self._ask(t, "stop-tracking")
         self.aborted = True
         # soft abort (§3.2): climb abort_climb_m straight up from where the vehicle is
         self.abort_hold = self._last_pos + np.array([0.0, 0.0, -self.cfg.abort_climb_m])
         self._set("abort", t, why)
+
+    def camera_wanted(self, t: float) -> bool:
+        """Frames are needed until MPE ends (below 1 m: inertial + sonar), and not during an abort."""
+        return self.mode not in ("final", "landed", "abort")
 
     def on_touchdown(self, t: float) -> None:
         if self.mode != "landed":

@@ -147,6 +147,10 @@ class PfcmMission:
             ref.step(t, nav)  # keep its last output current for the log
         return ref, self.mode
 
+    def camera_wanted(self, t: float) -> bool:
+        """PFCM itself does not stop the camera (a navigator that uses one, WITAS, gets every frame)."""
+        return True
+
     def on_touchdown(self, t: float) -> None:
         self.aborted = True
         self.done = True

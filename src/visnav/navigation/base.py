@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from typing import Any, Protocol, runtime_checkable
 
+import numpy as np
+
 from visnav.measurements import Health, NavCommand, NavInit
 
 
@@ -43,3 +45,14 @@ class CommandDispatch:
             known = sorted(k[5:] for k in dir(self) if k.startswith("_cmd_"))
             raise ValueError(f"{type(self).__name__} has no command {request.name!r}; known: {', '.join(known)}")
         fn(request.t, **request.args)
+
+
+def propagate(position, velocity, accel, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Position and velocity carried over ``dt`` at the constant acceleration ``accel`` (NED): what
+    ``estimate(t)`` answers between two filter updates. ``|dt|`` below 1 ns (the clock's rounding between
+    a sample's stamp and the loop time) returns copies unchanged."""
+    p, v = np.asarray(position, float), np.asarray(velocity, float)
+    if not abs(dt) >= 1e-9:
+        return p.copy(), v.copy()
+    a = np.asarray(accel, float)
+    return p + v * dt + 0.5 * a * (dt * dt), v + a * dt

@@ -27,11 +27,12 @@ from typing import Callable
 import numpy as np
 
 from visnav.estimation.eskf import EskfConfig, ErrorStateKF
+from visnav.estimation.history import History
 from visnav.estimation.ins import NavState, euler_to_quat
 from visnav.geometry.mounts import PanTiltMount
 from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
-from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavEstimate, PanTiltFrame
-from visnav.navigation.witas import _History
+from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavEstimate, NavInit, PanTiltFrame
+from visnav.navigation.base import CommandDispatch
 from visnav.vision.pad import PadDetector
 from visnav.log_schema import register_stream
 
@@ -70,7 +71,10 @@ def pointing_angles(d_body: np.ndarray, current: tuple[float, float], tilt_max: 
     return (pan, tilt) if best is None else (best[1], best[2])
 
 
-class PadNavigator:
+class PadNavigator(CommandDispatch):
+    """The ``navigation/base.Navigator`` of seed 002 ch. 6. It takes no commands: the filter starts at the
+    first vision fix (or at a ``NavInit``)."""
+
     def __init__(self, cfg, detector: PadDetector, ptu, recorder: Recorder | None = None):
         """``cfg``: a ``PadFilterConfig``; ``ptu``: the pan-tilt command link (``point_at(t, pan,
         tilt)``, ``mount`` geometry, ``head_offset``, ``mount.tilt_limits``)."""
@@ -86,7 +90,7 @@ class PadNavigator:
         self.recorder = recorder or (lambda *a, **k: None)
         self.kf: ErrorStateKF | None = None
         self.ahrs: np.ndarray | None = None
-        self.hist = _History(256)
+        self.hist = History(6, 256, angles=(5,), tolerance=0.05)  # filter (position, euler) for the frame instants
         self.h = Health(source="none")
         self._out: NavEstimate | None = None
         self._next_out = -math.inf
@@ -100,10 +104,11 @@ class PadNavigator:
         self._geom.set(pan, tilt)
         return self._geom.R_cam_to_body
 
-    def _start(self, t: float, position: np.ndarray) -> None:
+    def _start(self, t: float, position: np.ndarray, velocity: np.ndarray | None = None) -> None:
         c = self.cfg
         e = np.zeros(3) if self.ahrs is None else self.ahrs
-        s = NavState(t=float(t), position=position.copy(), velocity=np.zeros(3), quat=euler_to_quat(e))
+        v = np.zeros(3) if velocity is None else velocity.copy()
+        s = NavState(t=float(t), position=position.copy(), velocity=v, quat=euler_to_quat(e))
         sa = math.radians(c.init_attitude_sigma_deg)
         P0 = [c.init_position_sigma_m] * 3 + [c.init_velocity_sigma_mps] * 3 + [sa, sa, 3 * sa] + [0.02] * 3
         if c.gyro_bias_states:
@@ -113,6 +118,15 @@ class PadNavigator:
                          earth_rotation=False, gate_probability=c.gate_probability)
         self.kf = ErrorStateKF(s, np.array(P0), cfg)
         self.recorder("pad_filter_start", t, position=position.copy(), euler=e.copy())
+
+    def initialize(self, init: NavInit) -> None:
+        """Start the filter at an explicit pose instead of the first vision fix (zero velocity unless given)."""
+        if init.position is None:
+            raise ValueError("the pad navigator needs a position to start from (NavInit.position)")
+        if init.attitude is not None:
+            self.ahrs = np.asarray(init.attitude, float)
+        v = np.zeros(3) if init.velocity is None else np.asarray(init.velocity, float)
+        self._start(init.t, np.asarray(init.position, float), v)
 
     # ------------------------------------------------------------------ measurements
     def update(self, m) -> None:
@@ -135,7 +149,7 @@ class PadNavigator:
             return
         self.kf.predict(m)
         x = self.kf.x
-        self.hist.push(m.t, x.position.copy(), x.euler)
+        self.hist.push(m.t, np.concatenate((x.position, x.euler)))
         if m.t >= self._next_out - 1e-9:  # the 50 Hz output
             self._next_out = max(self._next_out + 1.0 / self.cfg.output_hz, m.t)
             self._out = NavEstimate(t=m.t, position=x.position.copy(), velocity=x.velocity.copy(),
@@ -158,7 +172,7 @@ class PadNavigator:
         C_bn_vis = C_cn @ R_cb.T
         offset = self.lever_arm + R_cb @ self.head_offset
         look = self.hist.at(f.t) if self.kf is not None else None
-        e_f = look[1] if look is not None else (self.ahrs if self.ahrs is not None else dcm_to_euler(C_bn_vis))
+        e_f = look[3:] if look is not None else (self.ahrs if self.ahrs is not None else dcm_to_euler(C_bn_vis))
         C_bn = euler_to_dcm(e_f)
         p_vis = pose.position - C_bn @ offset
         # floor: a constant plus a part proportional to the range (the 27 points share 6 ellipses,
@@ -193,7 +207,7 @@ class PadNavigator:
             look = self.hist.at(f.t)
             if look is None:
                 return
-            p, e = look
+            p, e = look[:3], look[3:]
             C_bn = euler_to_dcm(e)
             cam = p + C_bn @ (self.lever_arm + R_cb @ self.head_offset)
             d_b = C_bn.T @ (np.zeros(3) - cam)

@@ -21,6 +21,7 @@ import numpy as np
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.geometry.rotations import euler_to_dcm
+from visnav.estimation.history import History
 from visnav.estimation.mpe import MonocularPositionEstimator
 from visnav.estimation.position_filter import PositionFilter, accel_ned
 from visnav.measurements import (
@@ -30,8 +31,10 @@ from visnav.measurements import (
     Health,
     ImuSample,
     NavEstimate,
+    NavInit,
     RangeSample,
 )
+from visnav.navigation.base import CommandDispatch, propagate
 from visnav.vision.correlation import PnccTracker
 from visnav.vision.interest import forstner
 from visnav.log_schema import register_stream
@@ -58,43 +61,11 @@ register_stream("mpe", position=("m", _NED, "MPE position fix of the vehicle (Al
 Recorder = Callable[..., None]
 
 
-class _AttitudeHistory:
-    """Recent attitude samples for look-ups at an arbitrary instant (linear interpolation)."""
+class PalaceNavigator(CommandDispatch):
+    """The ``navigation/base.Navigator`` of seed 000. Commands (``command(NavCommand(t, name, args))``):
+    ``request-tracking`` (``target_ned``, ``init_from``), ``request-tracking-rebase`` (``init_from``),
+    ``stop-tracking``, ``set-source`` (``source``: gps | mpe | inertial)."""
 
-    def __init__(self, n: int = 256):
-        self.t = np.full(n, -np.inf)
-        self.e = np.zeros((n, 3))
-        self.k = 0
-        self.n = n
-
-    def push(self, t: float, euler: np.ndarray) -> None:
-        i = self.k % self.n
-        e = np.asarray(euler, float).copy()
-        if self.k > 0:
-            prev = self.e[(self.k - 1) % self.n, 2]
-            e[2] = prev + (e[2] - prev + np.pi) % (2 * np.pi) - np.pi
-        self.t[i] = t
-        self.e[i] = e
-        self.k += 1
-
-    @property
-    def newest(self) -> float:
-        return self.t[(self.k - 1) % self.n] if self.k else -np.inf
-
-    def at(self, t: float) -> np.ndarray | None:
-        if self.k == 0:
-            return None
-        m = min(self.k, self.n)
-        idx = (np.arange(self.k - m, self.k)) % self.n
-        ts = self.t[idx]
-        if t < ts[0] - 0.02 or t > ts[-1] + 0.02:
-            return None
-        out = np.array([np.interp(t, ts, self.e[idx, j]) for j in range(3)])
-        out[2] = (out[2] + np.pi) % (2 * np.pi) - np.pi
-        return out
-
-
-class PalaceNavigator:
     def __init__(self, cfg, camera: PinholeCamera, mount: FixedMount, recorder: Recorder | None = None):
         self.cfg = cfg
         self.camera = camera
@@ -110,7 +81,7 @@ class PalaceNavigator:
         )
         self.tracker: PnccTracker | None = None
         self.filter = PositionFilter(accel_noise=cfg.accel_noise)
-        self.att = _AttitudeHistory()
+        self.att = History(3, 256, angles=(2,), tolerance=0.02)  # attitude samples (roll, pitch, yaw)
         self.lasers: deque[RangeSample] = deque(maxlen=64)
         self.frames: deque[Frame] = deque(maxlen=8)
         self.last_gps: GpsSample | None = None
@@ -131,11 +102,13 @@ class PalaceNavigator:
         the image, or near the image centre when None; initialise the ground reference from the GPS
         fix or from the current estimate (``init_from`` = "gps" | "estimate")."""
         self._request = {"target": None if target_ned is None else np.asarray(target_ned, float), "init": init_from}
+        self.h.tracking_pending = True
 
     def request_tracking_rebase(self, init_from: str = "gps") -> None:
         """Keep the tracked point but re-base its ground reference (Algorithm 3) on the next frame
         from the GPS fix or the current estimate, as the mission manager does at the MPE switch."""
         self._rebase = init_from
+        self.h.tracking_pending = True
 
     def stop_tracking(self) -> None:
         self.tracker = None
@@ -150,6 +123,28 @@ class PalaceNavigator:
             raise ValueError(f"unknown navigation source {source!r}")
         self.source = source
         self.h.source = source
+
+    def _cmd_request_tracking(self, t: float, target_ned=None, init_from: str = "gps") -> None:
+        self.request_tracking(target_ned, init_from)
+
+    def _cmd_request_tracking_rebase(self, t: float, init_from: str = "gps") -> None:
+        self.request_tracking_rebase(init_from)
+
+    def _cmd_stop_tracking(self, t: float) -> None:
+        self.stop_tracking()
+
+    def _cmd_set_source(self, t: float, source: str) -> None:
+        self.set_source(source)
+
+    def initialize(self, init: NavInit) -> None:
+        """Start the position filter at an explicit pose (otherwise it starts at the first GPS fix); an
+        attitude, when given, stands as the attitude solution until the IMU's arrives."""
+        if init.position is None:
+            raise ValueError("PALACE needs a position to start from (NavInit.position)")
+        v = np.zeros(3) if init.velocity is None else np.asarray(init.velocity, float)
+        self.filter.reset(init.t, np.asarray(init.position, float), v)
+        if init.attitude is not None:
+            self.att.push(init.t, np.asarray(init.attitude, float))
 
     # ---------------------------------------------------------------- measurements
     def update(self, m) -> None:
@@ -178,7 +173,7 @@ class PalaceNavigator:
         self._last_imu_t = m.t
         if not self.filter.initialized or self.att.k == 0:
             return
-        e = self.att.e[(self.att.k - 1) % self.att.n]
+        e = self.att.newest()
         self.filter.predict(m.t, accel_ned(euler_to_dcm(e), m.accel))
 
     def _on_range(self, m: RangeSample) -> None:
@@ -241,7 +236,7 @@ class PalaceNavigator:
         while self.frames:
             f = self.frames[0]
             ta, tl = f.t + cfg.attitude_delay_s, f.t + cfg.laser_delay_s
-            if self.att.newest < ta or not self.lasers or self.lasers[-1].t < tl - 1e-9:
+            if self.att.newest_t < ta or not self.lasers or self.lasers[-1].t < tl - 1e-9:
                 return  # the samples that describe this frame have not arrived yet
             self.frames.popleft()
             euler = self.att.at(ta)
@@ -274,6 +269,7 @@ class PalaceNavigator:
                 self.recorder("track_init", f.t, x=res.x, y=res.y, init_position=pos, kind=1)
                 self.mpe.initialize((res.x, res.y), laser.range, C_bn, pos, laser.beam_offset)
                 self._rebase = None
+                self.h.tracking_pending = self.tracking_pending
         fix = self.mpe.estimate(f.t, (res.x, res.y), laser.range, C_bn, laser.beam_offset)
         self._mpe_times.append(f.t)
         pred = self._position_at(f.t, "estimate")
@@ -329,6 +325,7 @@ class PalaceNavigator:
         uv0 = (float(self.tracker.x), float(self.tracker.y))
         self.mpe.initialize(uv0, laser.range, C_bn, pos, laser.beam_offset)
         self._request = None
+        self.h.tracking_pending = self.tracking_pending
         self.h.tracking = True
         self.h.tracked_px = uv0
         self.h.coherence = 1.0
@@ -340,9 +337,12 @@ class PalaceNavigator:
 
     # ---------------------------------------------------------------- outputs
     def estimate(self, t: float) -> NavEstimate:
-        e = self.att.e[(self.att.k - 1) % self.att.n] if self.att.k else np.zeros(3)
+        """The filter's state carried from its last IMU update to ``t`` with that update's acceleration
+        (the filter itself is not changed); the latest attitude solution."""
+        e = self.att.newest() if self.att.k else np.zeros(3)
         f = self.filter
-        return NavEstimate(t=t, position=f.p.copy(), velocity=f.v.copy(), attitude=e.copy(),
+        p, v = propagate(f.p, f.v, f.accel, t - f.t if f.t is not None else 0.0)
+        return NavEstimate(t=t, position=p, velocity=v, attitude=e.copy(),
                            covariance=f.covariance(), valid=f.initialized, source=self.source)
 
     def mpe_rate(self, t: float, window: float = 1.0) -> float:

@@ -30,12 +30,13 @@ from typing import Callable
 
 import numpy as np
 
+from visnav.estimation.history import History
 from visnav.estimation.pmf import PointMassFilter
 from visnav.estimation.position_filter import PositionFilter, accel_ned
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
-                                 NavEstimate)
-from visnav.navigation.palace import _AttitudeHistory
+                                 NavEstimate, NavInit)
+from visnav.navigation.base import CommandDispatch, propagate
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
 from visnav.log_schema import register_stream
@@ -125,40 +126,10 @@ class _EskfBackend:
         return x.t, x.position.copy(), x.velocity.copy(), x.euler.copy(), self.kf.P[:6, :6].copy()
 
 
-class _History:
-    """Ring buffer of (t, position, euler) of the filter for look-ups at frame instants."""
+class WitasNavigator(CommandDispatch):
+    """The ``navigation/base.Navigator`` of seed 002 ch. 5. It takes no commands: the vision filter engages
+    by itself when GPS samples stop (``gps_timeout_s``)."""
 
-    def __init__(self, n=128):
-        self.t = np.full(n, -np.inf)
-        self.p = np.zeros((n, 3))
-        self.e = np.zeros((n, 3))
-        self.k = 0
-        self.n = n
-
-    def push(self, t, p, e):
-        i = self.k % self.n
-        e = np.asarray(e, float).copy()
-        if self.k:
-            prev = self.e[(self.k - 1) % self.n, 2]
-            e[2] = prev + (e[2] - prev + np.pi) % (2 * np.pi) - np.pi
-        self.t[i], self.p[i], self.e[i] = t, p, e
-        self.k += 1
-
-    def at(self, t):
-        m = min(self.k, self.n)
-        if m == 0:
-            return None
-        idx = np.arange(self.k - m, self.k) % self.n
-        ts = self.t[idx]
-        if t < ts[0] - 0.05 or t > ts[-1] + 0.05:
-            return None
-        p = np.array([np.interp(t, ts, self.p[idx, j]) for j in range(3)])
-        e = np.array([np.interp(t, ts, self.e[idx, j]) for j in range(3)])
-        e[2] = (e[2] + np.pi) % (2 * np.pi) - np.pi
-        return p, e
-
-
-class WitasNavigator:
     def __init__(self, cfg, K: np.ndarray, mount, reference, recorder: Recorder | None = None,
                  rng: np.random.Generator | None = None, gps_timeout_s: float = 0.5):
         """``cfg``: a ``WitasFilterConfig``; ``K``, ``mount``: the camera; ``reference``: the
@@ -173,8 +144,8 @@ class WitasNavigator:
                                  min_inliers=cfg.min_inliers, use_ransac=cfg.ransac, rng=self.rng)
         self.reg = MapRegistration(reference, self.K, mount, min_template_std=cfg.min_template_std)
         self.gps_filter = PositionFilter(accel_noise=0.3)
-        self.att = _AttitudeHistory()
-        self.hist = _History()
+        self.att = History(3, 256, angles=(2,), tolerance=0.02)  # AHRS attitude samples
+        self.hist = History(6, 128, angles=(5,), tolerance=0.05)  # filter (position, euler) for the frame instants
         self.backend = None
         self.pmf: PointMassFilter | None = None
         self.ins_only = None
@@ -191,6 +162,15 @@ class WitasNavigator:
         self._last_u = np.zeros(2)
         self._acc: list = [np.zeros(3), np.zeros(3), 0, 0.0]
         self._ins_log_t = -np.inf
+
+    def initialize(self, init: NavInit) -> None:
+        """Start the GPS-phase filter at an explicit pose (otherwise it starts at the first GPS fix)."""
+        if init.position is None:
+            raise ValueError("WITAS needs a position to start from (NavInit.position)")
+        v = np.zeros(3) if init.velocity is None else np.asarray(init.velocity, float)
+        self.gps_filter.reset(init.t, np.asarray(init.position, float), v)
+        if init.attitude is not None:
+            self.att.push(init.t, np.asarray(init.attitude, float))
 
     # ------------------------------------------------------------------ measurements
     def update(self, m) -> None:
@@ -219,7 +199,7 @@ class WitasNavigator:
                 self._process_frames()
 
     def _ahrs(self):
-        return self.att.e[(self.att.k - 1) % self.att.n] if self.att.k else None
+        return self.att.newest()
 
     def _on_imu(self, m: ImuSample) -> None:
         if not (np.all(np.isfinite(m.accel)) and np.all(np.isfinite(m.gyro))) or (
@@ -243,7 +223,7 @@ class WitasNavigator:
             self._acc = [np.zeros(3), np.zeros(3), 0, m.t]
             self.backend.propagate(m.t, acc, gyr, dt, e)
             t, p, v, eul, _ = self.backend.state()
-            self.hist.push(t, p, eul)
+            self.hist.push(t, np.concatenate((p, eul)))
             self._ins_only_step(m.t, acc, gyr, dt, e)
         elif self.gps_filter.initialized and e is not None:
             self.gps_filter.predict(m.t, accel_ned(euler_to_dcm(e), m.accel))
@@ -311,7 +291,7 @@ class WitasNavigator:
     def _process_frames(self) -> None:
         while self.frames:
             f = self.frames[0]
-            if self.hist.k == 0 or self.hist.t[(self.hist.k - 1) % self.hist.n] < f.t:
+            if self.hist.k == 0 or self.hist.newest_t < f.t:
                 return  # the filter has not reached the frame's instant yet
             self.frames.popleft()
             self._vision(f)
@@ -321,7 +301,7 @@ class WitasNavigator:
         look = self.hist.at(f.t)
         if look is None:
             return
-        p, e = look
+        p, e = look[:3], look[3:]
         C_bn = euler_to_dcm(e)
         cam, C_cn = self.mount.camera_pose(p, C_bn)
         height = -float(cam[2])
@@ -330,7 +310,7 @@ class WitasNavigator:
         if step is None:  # the tracker (re)started on this frame: no displacement measured
             step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "tracker restarted (no features before)")
         look0 = self.hist.at(f.t - 1.0 / c.odometry_hz)
-        u_ins = (p - look0[0])[:2] if look0 is not None else np.zeros(2)
+        u_ins = (p - look0[:3])[:2] if look0 is not None else np.zeros(2)
         if step.ok and np.linalg.norm(step.displacement[:2] - u_ins) > c.odometry_gate_m + 0.15 * np.linalg.norm(u_ins):
             step.reason = (f"displacement {np.round(step.displacement[:2], 1)} m disagrees with the filter's "
                            f"{np.round(u_ins, 1)} m")
@@ -392,7 +372,8 @@ class WitasNavigator:
                                valid=bool(np.all(np.isfinite(p))), source="vision")
         f = self.gps_filter
         e = self._ahrs()
-        return NavEstimate(t=t, position=f.p.copy(), velocity=f.v.copy(),
+        p, v = propagate(f.p, f.v, f.accel, t - f.t if f.t is not None else 0.0)
+        return NavEstimate(t=t, position=p, velocity=v,
                            attitude=np.zeros(3) if e is None else e.copy(), covariance=f.covariance(),
                            valid=f.initialized and e is not None, source="gps")
 

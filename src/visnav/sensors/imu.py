@@ -38,7 +38,7 @@ class Imu:
         self.accel_bias = rng.normal(0.0, accel_bias, 3) if accel_bias > 0 else np.zeros(3)
         self.gyro_bias = rng.normal(0.0, gyro_bias, 3) if gyro_bias > 0 else np.zeros(3)
 
-    def sample(self, t: float, truth_at: TruthAt) -> tuple[ImuSample, AttitudeSample]:
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> tuple[ImuSample, AttitudeSample]:
         s = truth_at(t - self.delay_s)
         n = self.rng.standard_normal(9)
         imu = ImuSample(

@@ -67,7 +67,7 @@ class LaserRangeFinder:
         self.latency_s = latency_s
         self.delay_s = delay_s
 
-    def sample(self, t: float, truth_at: TruthAt) -> RangeSample:
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> RangeSample:
         s = truth_at(t - self.delay_s)
         cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
         for off in self.beam_offsets:
@@ -92,7 +92,7 @@ class Sonar:
         self.max_range = max_range_m
         self.latency_s = latency_s
 
-    def sample(self, t: float, truth_at: TruthAt) -> RangeSample:
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> RangeSample:
         s = truth_at(t)
         C_bn = euler_to_dcm(s.euler)
         r = range_to_ground(s.position, C_bn[:, 2])

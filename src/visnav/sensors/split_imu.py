@@ -22,7 +22,7 @@ class SplitRateImu:
         self._next_accel = -np.inf
         self._accel: np.ndarray | None = None
 
-    def sample(self, t: float, truth_at: TruthAt) -> tuple[ImuSample, AttitudeSample]:
+    def sample(self, t: float, truth_at: TruthAt, world=None) -> tuple[ImuSample, AttitudeSample]:
         s, att = self.imu.sample(t, truth_at)
         if t >= self._next_accel - 1e-9:  # an accelerometer instant has passed: new reading
             self._accel = s.accel

@@ -4,7 +4,8 @@ One fixed dynamics step (``run.dt_s``, 100 Hz); every other block runs at its ow
 integer divisor of it: IMU 100 Hz, mission + position loop 10 Hz, GPS and laser 10 Hz, sonar
 20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered). Each
 measurement is stamped with the instant it describes and delivered after its sensor's latency.
-Truth reaches only the sensors (through ``TruthHistory``) and the log.
+Truth reaches only the sensors (through ``TruthHistory``), the log and an explicit, logged ``NavInit``.
+The parts come from the mission's builder (``sim/missions.py``); the loop builds nothing else.
 """
 
 from __future__ import annotations
@@ -17,25 +18,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from visnav.geometry.camera import PinholeCamera
-from visnav.geometry.mounts import FixedMount
 from visnav.measurements import VehicleState, YacsCommand
-from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import Scenario
 from visnav.sensors.base import TruthHistory
-from visnav.sensors.camera import Camera, PendingFrame
-from visnav.sensors.gps import Gps
-from visnav.sensors.imu import Imu
-from visnav.sensors.rangefinder import LaserRangeFinder, Sonar
-from visnav.sim.clock import rate_divisor
+from visnav.sensors.camera import PendingFrame
+from visnav.sim.clock import rate_divisor as _divisor
 from visnav.sim.log import FlightLog
-from visnav.sim.streams import RMAX_STREAMS
+from visnav.sim.missions import BuildContext
 from visnav.sim.missions import build as build_mission
+from visnav.sim.streams import RMAX_STREAMS
+from visnav.vehicles.base import Environment
 from visnav.vehicles.rmax import RmaxModel
-from visnav.world.scene import build_world
-
-
-_divisor = rate_divisor
 
 
 @dataclass
@@ -57,36 +50,19 @@ class RunResult:
 
 class Simulation:
     def __init__(self, scenario: Scenario, navigator_wrapper=None):
-        """``navigator_wrapper(nav) -> nav``, when given, wraps every navigator the loop and the mission
+        """``navigator_wrapper(nav) -> nav``, when given, wraps the navigator the loop and the mission
         talk to (``visnav record`` puts a recording proxy there)."""
         self.sc = sc = scenario
-        wrap = navigator_wrapper or (lambda nav: nav)
         self.dt = sc.run.dt_s
         self.log = FlightLog(schema=RMAX_STREAMS)
-        seeds = np.random.SeedSequence(sc.run.seed).spawn(8)
-        rng = [np.random.default_rng(s) for s in seeds]
-        self.yaw = np.deg2rad(sc.vehicle.yaw_deg)
-        self.world = build_world(sc.world, rng[0], heading_rad=self.yaw)
-
-        c = sc.sensors.camera
-        self.camera_model = PinholeCamera.ideal(c.width, c.height, c.focal_px)
-        self.mount = FixedMount.depressed(c.depression_deg, lever_arm=tuple(c.lever_arm_m))
-        s = sc.sensors
-        self.imu = Imu(rng[1], **s.imu.model_dump())
-        self.gps = Gps(rng[2], **s.gps.model_dump())
-        self.laser = LaserRangeFinder(rng[3], self.mount, surface=sc.world.surface, **s.laser.model_dump())
-        self.sonar = Sonar(rng[4], **s.sonar.model_dump())
-        self.camera = Camera(self.camera_model, self.mount, rng[5], capture_hz=c.capture_hz,
-                             process_hz=sc.navigation.mpe.rate_hz, noise_sigma=c.noise_sigma, latency_s=c.latency_s,
-                             delay_s=c.delay_s)
-
-        self.nav = wrap(PalaceNavigator(sc.navigation, self.camera_model, self.mount, recorder=self.log.record))
-        parts = build_mission(self)
+        self.parts = parts = build_mission(BuildContext(sc, self.log.record, navigator_wrapper))
+        self.world = parts.world
+        self.sensors = dict(parts.sensors)
+        self.camera = self.sensors.get("camera")
+        self.camera_model, self.mount = parts.camera_model, parts.mount
         self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
-        if parts.navigator is not None:
-            self.nav = wrap(parts.navigator)
-        self._extra_sensors = tuple(parts.sensors)
-        self.uses_camera = parts.uses_camera
+        self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
+        self.notes = list(parts.info.get("notes", []))  # how the scenario was set up (the CLI prints them)
         init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
                             euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
                             specific_force=np.array([0.0, 0.0, -9.81]))
@@ -101,45 +77,55 @@ class Simulation:
     def _emit(self, m, latency: float) -> None:
         if m is None:
             return
+        if isinstance(m, tuple):  # a sensor that delivers several measurements (IMU + attitude)
+            for x in m:
+                self._emit(x, latency)
+            return
         heapq.heappush(self._queue, (m.t + latency, next(self._seq), m))
 
-    def _sensor_schedule(self) -> list[tuple[float, float, object]]:
-        """(period, next time, sample function) of every sensor; each samples truth at its own
-        instants (interpolated between dynamics steps), so its rate need not divide the step."""
+    def _sensor_schedule(self) -> list[list]:
+        """[period, next time, sample function] of every sensor; each samples truth at its own
+        instants (interpolated between dynamics steps), so its rate need not divide the step. The
+        camera renders only while the mission wants frames."""
         h, w = self.history, self.world
+        items = []
+        for name, s in self.sensors.items():
+            if name == "camera":
+                def camera(t, s=s):
+                    if self.mission.camera_wanted(t):
+                        if self._render_pool is not None:
+                            self._emit(s.sample_async(t, h, w, self._render_pool), s.latency_s)
+                        else:
+                            self._emit(s.sample(t, h, w), s.latency_s)
 
-        def imu(t):
-            a, b = self.imu.sample(t, h)
-            self._emit(a, self.imu.latency_s)
-            self._emit(b, self.imu.latency_s)
-
-        def camera(t):
-            if self.uses_camera and self.mission.mode not in ("final", "landed", "abort"):
-                if self._render_pool is not None:
-                    self._emit(self.camera.sample_async(t, h, w, self._render_pool), self.camera.latency_s)
-                else:
-                    self._emit(self.camera.sample(t, h, w), self.camera.latency_s)
-
-        items = [
-            (self.imu.rate_hz, imu),
-            (self.gps.rate_hz, lambda t: self._emit(self.gps.sample(t, h), self.gps.latency_s)),
-            (self.laser.rate_hz, lambda t: self._emit(self.laser.sample(t, h), self.laser.latency_s)),
-            (self.sonar.rate_hz, lambda t: self._emit(self.sonar.sample(t, h), self.sonar.latency_s)),
-            (self.camera.rate_hz, camera),
-        ] + [(s.rate_hz, lambda t, s=s: self._emit(s.sample(t, h), s.latency_s)) for s in self._extra_sensors]
+                items.append((s.rate_hz, camera))
+            else:
+                items.append((s.rate_hz, lambda t, s=s: self._emit(s.sample(t, h, w), s.latency_s)))
         return [[1.0 / r, 0.0, f] for r, f in items]
+
+    def _initialize_navigator(self) -> None:
+        """An explicit start of the navigator (a surveyed pose): logged, then sent."""
+        init = self.parts.nav_init
+        if init is None:
+            return
+        nan3 = np.full(3, np.nan)
+        v = lambda x: nan3 if x is None else np.asarray(x, float)  # noqa: E731
+        self.log.record("nav_init", init.t, source=init.source, position=v(init.position), velocity=v(init.velocity),
+                        attitude=v(init.attitude))
+        self.nav.initialize(init)
 
     def run(self, progress=None) -> RunResult:
         """Fly the scenario; on an exception the run stops and keeps what it has."""
         sc, dt, log = self.sc, self.dt, self.log
         n = int(round(sc.run.duration_s / dt))
         d_pos = _divisor(10.0, dt)  # mission manager (and the PALACE position loop)
-        d_ctrl = _divisor(getattr(self.controller, "rate_hz", 10.0), dt)  # the controller's own rate
+        d_ctrl = _divisor(self.controller.rate_hz, dt)  # the controller's own rate
         d_wind = _divisor(20.0, dt)  # turbulence bandwidth is a few rad/s: 20 Hz updates suffice
         # frames render on a second thread while the loop steps through the camera latency
-        self._render_pool = ThreadPoolExecutor(1) if self.uses_camera and self.camera.latency_s >= dt else None
+        self._render_pool = ThreadPoolExecutor(1) if self.camera is not None and self.camera.latency_s >= dt else None
         schedule = self._sensor_schedule()
-        inject = getattr(self.mission, "actuator_injection", None)
+        inject = self.parts.actuator_injection
+        self._initialize_navigator()
         cmd = YacsCommand(t=0.0)
         ref = None
         wind = self.world.wind.steady.ned
@@ -192,7 +178,7 @@ class Simulation:
                         log.record("actuator", t, controller=np.array([cmd.ail, cmd.ele, cmd.rud, cmd.thr]),
                                    injection=np.asarray(d, float),
                                    applied=np.array([applied.ail, applied.ele, applied.rud, applied.thr]))
-                self.vehicle.step(applied, dt, wind)
+                self.vehicle.step(applied, dt, Environment(wind))
                 if self.vehicle.state.on_ground and touchdown is None and t > 1.0:
                     touchdown = self.vehicle.state
                     self.mission.on_touchdown(t + dt)

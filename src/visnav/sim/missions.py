@@ -1,17 +1,24 @@
-"""Which mission manager, controller and metrics a scenario's ``mission.type`` flies with.
+"""What a scenario's ``mission.type`` flies with: the parts of the R-MAX loop (``sim/loop.py``).
 
-Each builder receives the half-built ``Simulation`` (world, sensors, navigator ready) and returns
-the ``MissionParts``; a new mission registers itself here with ``@register("name")`` (and its
-pydantic config in ``scenarios/schema.py``).
+A builder takes a ``BuildContext`` (the scenario, the log's recorder, the run's random generators) and
+returns the ``MissionParts``: world, sensors, navigator, mission, controller, metrics, start pose,
+and, where the mission has them, an actuator injection and an explicit navigator initialisation. The
+simulation builds nothing else: a builder asks for the textured world (``ctx.textured_world()``) or the
+standard R-MAX sensors (``ctx.rmax_sensors()``) only when its mission uses them. A new mission registers
+its builder here with ``@register("name")`` (and its pydantic config in ``scenarios/schema.py``).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from functools import cached_property
 from typing import Callable
+
+import numpy as np
 
 from visnav.sim.parts import MissionParts  # noqa: F401  (re-exported)
 
-Builder = Callable[[object], "MissionParts"]
+Builder = Callable[["BuildContext"], "MissionParts"]
 REGISTRY: dict[str, Builder] = {}
 
 #: mission type -> "module:Class" of a simulation of its own, for missions that fly another
@@ -44,6 +51,77 @@ def make_simulation(scenario):
     return simulation_class(getattr(scenario.mission, "type", "palace"))(scenario)
 
 
+@dataclass
+class BuildContext:
+    """What a builder gets: the scenario, the log's recorder and the run's random generators."""
+
+    scenario: object
+    record: Callable
+    navigator_wrapper: Callable | None = None  # wraps the navigator (visnav record's proxy) before a mission gets it
+
+    @cached_property
+    def rng(self) -> list[np.random.Generator]:
+        """The R-MAX loop's generators: world, IMU, GPS, laser, sonar, camera, 2 spare."""
+        return [np.random.default_rng(s) for s in np.random.SeedSequence(self.scenario.run.seed).spawn(8)]
+
+    @property
+    def yaw(self) -> float:
+        return float(np.deg2rad(self.scenario.vehicle.yaw_deg))
+
+    def textured_world(self):
+        """The ``[world]`` section's world: textured ground (rendered by the camera) and wind."""
+        from visnav.world.scene import build_world
+
+        return build_world(self.scenario.world, self.rng[0], heading_rad=self.yaw)
+
+    def scenario_wind(self):
+        """The ``[world]`` section's wind alone (no ground drawn), for a mission that renders no ground or
+        brings its own. The gusts draw from the world's generator undrawn by a ground (another realisation
+        than under ``textured_world`` where turbulence is on)."""
+        from visnav.world.scene import build_wind
+
+        return build_wind(self.scenario.world, self.rng[0], heading_rad=self.yaw)
+
+    def wind_world(self):
+        """A world with the ``[world]`` section's wind and no ground (nothing is rendered)."""
+        from visnav.world.scene import World
+
+        return World(ground=None, surface=self.scenario.world.surface, wind=self.scenario_wind())
+
+    def camera_geometry(self):
+        """(PinholeCamera, FixedMount) of ``[sensors.camera]``."""
+        from visnav.io.navigators import rmax_camera
+
+        return rmax_camera(self.scenario)
+
+    def rmax_sensors(self, camera: bool = True) -> dict:
+        """The ``[sensors]`` section: IMU (+ attitude), GPS, laser, sonar and (``camera``) the camera."""
+        from visnav.sensors.camera import Camera
+        from visnav.sensors.gps import Gps
+        from visnav.sensors.imu import Imu
+        from visnav.sensors.rangefinder import LaserRangeFinder, Sonar
+
+        sc, rng = self.scenario, self.rng
+        s = sc.sensors
+        model, mount = self.camera_geometry()
+        out = {"imu": Imu(rng[1], **s.imu.model_dump()), "gps": Gps(rng[2], **s.gps.model_dump()),
+               "laser": LaserRangeFinder(rng[3], mount, surface=sc.world.surface, **s.laser.model_dump()),
+               "sonar": Sonar(rng[4], **s.sonar.model_dump())}
+        if camera:
+            c = s.camera
+            out["camera"] = Camera(model, mount, rng[5], capture_hz=c.capture_hz, process_hz=sc.navigation.mpe.rate_hz,
+                                   noise_sigma=c.noise_sigma, latency_s=c.latency_s, delay_s=c.delay_s)
+        return out
+
+    def navigator(self, name: str, **parts):
+        """The registered navigator ``name`` (``io/navigators.py``) configured by the scenario (wrapped by
+        ``navigator_wrapper`` when given)."""
+        from visnav.io.navigators import make_navigator
+
+        nav = make_navigator(name, self.scenario, self.record, **parts)
+        return nav if self.navigator_wrapper is None else self.navigator_wrapper(nav)
+
+
 def register(name: str) -> Callable[[Builder], Builder]:
     def deco(fn: Builder) -> Builder:
         REGISTRY[name] = fn
@@ -52,59 +130,73 @@ def register(name: str) -> Callable[[Builder], Builder]:
     return deco
 
 
-def build(sim) -> MissionParts:
-    kind = sim.sc.mission.type
+def build(ctx: BuildContext) -> MissionParts:
+    kind = ctx.scenario.mission.type
     if kind not in REGISTRY:
         raise ValueError(f"mission.type {kind!r} has no builder; known: {', '.join(sorted(REGISTRY))}")
-    return REGISTRY[kind](sim)
+    return REGISTRY[kind](ctx)
 
 
 @register("palace")
-def _palace(sim) -> MissionParts:
+def _palace(ctx: BuildContext) -> MissionParts:
     from visnav.analysis.metrics import palace_metrics
     from visnav.control.rmax import RmaxPositionController
     from visnav.mission.palace import PalaceMission
 
-    c = sim.sc.sensors.camera
-    mission = PalaceMission(sim.sc.mission, sim.nav, yaw=sim.yaw, image_size=(c.width, c.height),
-                            recorder=sim.log.record)
-    return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=palace_metrics,
-                        start_position=mission.start_position(), start_yaw=sim.yaw, uses_camera=True)
+    sc = ctx.scenario
+    world = ctx.textured_world()
+    model, mount = ctx.camera_geometry()
+    nav = ctx.navigator("palace")
+    c = sc.sensors.camera
+    mission = PalaceMission(sc.mission, nav, yaw=ctx.yaw, image_size=(c.width, c.height), recorder=ctx.record)
+    return MissionParts(world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
+                        controller=RmaxPositionController(), metrics=palace_metrics,
+                        start_position=mission.start_position(), start_yaw=ctx.yaw, camera_model=model, mount=mount)
 
 
 @register("hover")
-def _hover(sim) -> MissionParts:
+def _hover(ctx: BuildContext) -> MissionParts:
     from visnav.analysis.metrics import hover_metrics
     from visnav.control.rmax import RmaxPositionController
     from visnav.mission.hover import HoverMission
 
-    mission = HoverMission(sim.sc.mission, sim.nav, yaw=sim.yaw, recorder=sim.log.record)
-    return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=hover_metrics,
-                        start_position=mission.start_position(), start_yaw=sim.yaw, uses_camera=True)
+    world = ctx.textured_world()
+    model, mount = ctx.camera_geometry()
+    nav = ctx.navigator("palace")
+    mission = HoverMission(ctx.scenario.mission, nav, yaw=ctx.yaw, recorder=ctx.record)
+    return MissionParts(world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
+                        controller=RmaxPositionController(), metrics=hover_metrics,
+                        start_position=mission.start_position(), start_yaw=ctx.yaw, camera_model=model, mount=mount,
+                        actuator_injection=mission.actuator_injection)
 
 
 @register("pfcm")
-def _pfcm(sim) -> MissionParts:
+def _pfcm(ctx: BuildContext) -> MissionParts:
     from visnav.analysis.path_metrics import pfcm_metrics
     from visnav.control.rmax_path import PathFollowingController
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
 
-    cfg = sim.sc.mission
-    mission = PfcmMission(cfg, recorder=sim.log.record)
-    controller = PathFollowingController(path_loop_gains(cfg), recorder=sim.log.record)
-    return MissionParts(mission=mission, controller=controller, metrics=pfcm_metrics,
-                        start_position=mission.start_position(), start_yaw=mission.start_yaw, uses_camera=False)
+    cfg = ctx.scenario.mission
+    world = ctx.wind_world()  # no camera: no ground to render
+    model, mount = ctx.camera_geometry()
+    mission = PfcmMission(cfg, recorder=ctx.record)
+    controller = PathFollowingController(path_loop_gains(cfg), recorder=ctx.record)
+    # PFCM flies on the PALACE navigator's GPS solution: no camera
+    return MissionParts(world=world, sensors=ctx.rmax_sensors(camera=False), navigator=ctx.navigator("palace"),
+                        mission=mission, controller=controller, metrics=pfcm_metrics,
+                        start_position=mission.start_position(), start_yaw=mission.start_yaw, camera_model=model,
+                        mount=mount)
 
 
 @register("witas-homing")
-def _witas(sim) -> MissionParts:
+def _witas(ctx: BuildContext) -> MissionParts:
     from visnav.sim.witas_parts import build as build_witas
 
-    return build_witas(sim)
+    return build_witas(ctx)
 
 
 @register("pad-landing")
-def _pad(sim) -> MissionParts:
+def _pad(ctx: BuildContext) -> MissionParts:
     from visnav.sim.pad_parts import build as build_pad
 
-    return build_pad(sim)
+    return build_pad(ctx)

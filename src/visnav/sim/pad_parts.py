@@ -12,27 +12,27 @@ import numpy as np
 
 from visnav.mission.pad import PadLandingMission
 
-def build(sim):
+def build(ctx):
     from visnav.analysis.pad_report import pad_metrics
     from visnav.control.rmax import RmaxPositionController
     from visnav.geometry.camera import PinholeCamera
     from visnav.geometry.pad import PadLayout
-    from visnav.navigation.pad import PadNavigator
     from visnav.sensors.imu import Imu
     from visnav.sensors.pad_camera import PadCamera
     from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
     from visnav.sensors.split_imu import SplitRateImu
     from visnav.sim.parts import MissionParts
-    from visnav.vision.pad import PadDetector
     from visnav.world.pad import pad_board
 
-    cfg = sim.sc.mission
+    sc, record = ctx.scenario, ctx.record
+    cfg = sc.mission
     pc, cc, pt, pf, fc = cfg.pad, cfg.camera, cfg.pantilt, cfg.platform, cfg.filter
-    rng = [np.random.default_rng(s) for s in np.random.SeedSequence([sim.sc.run.seed, 15]).spawn(5)]
+    world = ctx.textured_world()  # the ground around the pad (the board is drawn over it)
+    rng = [np.random.default_rng(s) for s in np.random.SeedSequence([sc.run.seed, 15]).spawn(5)]
     layout = PadLayout(tuple(pc.legs_m), tuple(pc.ring_ratio), tuple(pc.inner_ratio))
     shadow = (pc.shadow_direction_deg, pc.shadow_offset_m, pc.shadow_gain) if pc.shadow else None
     board = pad_board(layout, pc.resolution_m, rng[0], shadow=shadow)
-    sim.camera_model = cam = PinholeCamera.ideal(cc.width, cc.height, cc.focal_px)
+    cam = PinholeCamera.ideal(cc.width, cc.height, cc.focal_px)
     ptu = PanTiltUnit(pan=0.0, tilt=math.radians(pt.initial_tilt_deg),
                       pan_limits=tuple(math.radians(a) for a in pt.pan_limits_deg),
                       tilt_limits=tuple(math.radians(a) for a in pt.tilt_limits_deg),
@@ -40,18 +40,16 @@ def build(sim):
                       encoder_resolution=math.radians(pt.encoder_resolution_deg), lever_arm=tuple(cc.lever_arm_m),
                       head_offset=tuple(cc.head_offset_m))
     platform = SpringPlatform(pf.misalignment_deg, pf.natural_hz, pf.damping)
-    sim.camera = PadCamera(cam, board, ptu, platform, rng[1], rate_hz=cc.rate_hz, noise_sigma=cc.noise_sigma,
-                           latency_s=cc.latency_s, blackout_height_m=cfg.blackout_height_m, blackout_s=cfg.blackout_s,
-                           lighting_change_s=pc.lighting_change_s, lighting_gain=pc.lighting_gain,
-                           recorder=sim.log.record)
-    s = sim.sc.sensors.imu
+    camera = PadCamera(cam, board, ptu, platform, rng[1], rate_hz=cc.rate_hz, noise_sigma=cc.noise_sigma,
+                       latency_s=cc.latency_s, blackout_height_m=cfg.blackout_height_m, blackout_s=cfg.blackout_s,
+                       lighting_change_s=pc.lighting_change_s, lighting_gain=pc.lighting_gain, recorder=record)
+    s = sc.sensors.imu
     imu = Imu(rng[2], rate_hz=fc.gyro_hz, accel_noise=s.accel_noise, gyro_noise=s.gyro_noise, accel_bias=s.accel_bias,
               gyro_bias=s.gyro_bias, attitude_noise_deg=s.attitude_noise_deg, latency_s=s.latency_s, delay_s=s.delay_s)
-    sim.imu = SplitRateImu(imu, fc.accel_hz)
-    sim.gps.rate_hz = sim.laser.rate_hz = sim.sonar.rate_hz = 1.0  # not used: GPS-free (sampled, ignored)
-    detector = PadDetector(layout, cam.K, sigma_floor_px=fc.sigma_floor_px, cov_inflation=fc.cov_inflation)
-    nav = PadNavigator(fc, detector, ptu, recorder=sim.log.record)
-    mission = PadLandingMission(cfg, recorder=sim.log.record)
-    sim.pad_layout = layout
-    return MissionParts(mission=mission, controller=RmaxPositionController(), metrics=pad_metrics,
-                        start_position=mission.start_position(), start_yaw=0.0, uses_camera=True, navigator=nav)
+    nav = ctx.navigator("pad", camera=cam, ptu=ptu, layout=layout)
+    mission = PadLandingMission(cfg, recorder=record)
+    # GPS-free: the split-rate IMU (with the attitude solution) and the pan-tilt camera only
+    return MissionParts(world=world, sensors={"imu": SplitRateImu(imu, fc.accel_hz), "camera": camera}, navigator=nav,
+                        mission=mission, controller=RmaxPositionController(), metrics=pad_metrics,
+                        start_position=mission.start_position(), start_yaw=0.0, camera_model=cam,
+                        info={"pad_layout": layout})

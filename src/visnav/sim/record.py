@@ -2,8 +2,9 @@
 
 The loop is not rewritten: the navigator is wrapped in ``RecordingNavigator``, a proxy that passes
 everything through and logs, with one global sequence number, every ``update(m)`` (the measurement and
-the loop time it was delivered at), every mission request (``request_tracking``, ``set_source``, ...,
-with its arguments) and every ``estimate(t)`` / ``health(t)`` query. ``io/replay.py`` feeds them back
+the loop time it was delivered at), every mission request (``command(NavCommand)``: its time, name and
+arguments; older recordings hold the bespoke methods ``request_tracking``, ``set_source``, ...), every
+explicit start (``initialize(NavInit)``) and every ``estimate(t)`` / ``health(t)`` query. ``io/replay.py`` feeds them back
 in the same order, which is what makes a replay reproduce the closed loop's estimates exactly.
 """
 
@@ -51,6 +52,21 @@ class RecordingNavigator:
         if self.recording and t is not None:
             self._writer.add_command(t, self._writer.next_seq(), "health")
         return self._inner.health(t)
+
+    def command(self, request) -> None:
+        """A mission's request (``NavCommand``): logged as method ``command`` with its time, name and arguments."""
+        if self.recording:
+            self._writer.add_command(self._clock(), self._writer.next_seq(), "command",
+                                     kwargs={"t": request.t, "name": request.name, "args": request.args})
+        return self._inner.command(request)
+
+    def initialize(self, init) -> None:
+        """An explicit start (``NavInit``): logged as method ``initialize`` with its fields."""
+        if self.recording:
+            fields = {k: getattr(init, k) for k in ("t", "source", "position", "velocity", "attitude", "state",
+                                                    "covariance")}
+            self._writer.add_command(self._clock(), self._writer.next_seq(), "initialize", kwargs=fields)
+        return self._inner.initialize(init)
 
     def __getattr__(self, name):
         attr = getattr(self._inner, name)

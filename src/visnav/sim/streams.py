@@ -37,6 +37,10 @@ RMAX_STREAMS = {
     "actuator": {"controller": (YACS, "(ail, ele, rud, thr)", "controller output before the sweep injection"),
                  "injection": (YACS, "(ail, ele, rud, thr)", "chirp added at the actuator (loop broken here)"),
                  "applied": (YACS, "(ail, ele, rud, thr)", "what the vehicle received")},
+    "nav_init": {"source": ("text", "", "where the start came from: survey, truth+noise, operator, static, ..."),
+                 "position": ("m", NED, "position the navigator was started at (NaN: not given)"),
+                 "velocity": ("m/s", NED, "velocity the navigator was started at (NaN: not given)"),
+                 "attitude": (EULER[0], EULER[1], "attitude the navigator was started at (NaN: not given)")},
     "touchdown": {"position": ("m", NED, "true position at ground contact"),
                   "speed": ("m/s", "", "true speed at ground contact")},
 }

@@ -22,57 +22,57 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
                 reference_resolution=("m/px", "", "resolution of the degraded reference map"))
 
 
-def build(sim):
+def build(ctx):
     from visnav.analysis.witas_metrics import witas_metrics
     from visnav.control.rmax_path import PathFollowingController
-    from visnav.geometry.camera import PinholeCamera
-    from visnav.geometry.mounts import FixedMount
+    from visnav.io.navigators import NAVIGATORS
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
-    from visnav.navigation.witas import WitasNavigator
     from visnav.scenarios.schema import PfcmMissionConfig
     from visnav.sensors.baro import Baro, Compass
     from visnav.sensors.camera import Camera
     from visnav.sim.parts import MissionParts
     from visnav.world.scene import World
 
-    cfg = sim.sc.mission
+    sc, record = ctx.scenario, ctx.record
+    cfg = sc.mission
     pc, cc, mc = cfg.path, cfg.camera, cfg.map
-    rng = mission_rngs(sim.sc.run.seed)
-    ground, (sn, se, r, centre) = make_ground(cfg, sim.sc.run.seed)
-    sim.world = World(ground=ground, surface="grass", wind=sim.world.wind, detail=None)
+    rng = mission_rngs(sc.run.seed)
+    ground, (sn, se, r, centre) = make_ground(cfg, sc.run.seed)
+    world = World(ground=ground, surface="grass", wind=ctx.scenario_wind(), detail=None)
     reference = reference_map(cfg, ground)
     P, T = loop_waypoints(sn, se, r, pc.altitude_m, centre, pc.direction)
     path = HermitePath.from_waypoints(P, T, scale="arc")
+    notes = []
     if (sn, se) != (pc.size_north_m, pc.size_east_m):  # the map is smaller than the loop asked for: say so
         r0 = min(pc.corner_radius_m, 0.45 * min(pc.size_north_m, pc.size_east_m))
         full = HermitePath.from_waypoints(*loop_waypoints(pc.size_north_m, pc.size_east_m, r0, pc.altitude_m,
                                                           centre, pc.direction), scale="arc")
         note = (f"the WITAS loop was shrunk to fit the map {mc.file}: {pc.size_north_m:.0f} m x {pc.size_east_m:.0f} m "
                 f"-> {sn:.0f} m x {se:.0f} m, loop length {full.length:.0f} m -> {path.length:.0f} m")
-        sim.notes = [*getattr(sim, "notes", []), note]
-        sim.log.record("note", 0.0, message=note)
-    sim.log.record("witas_setup", 0.0, waypoints=P, loop_length=path.length, home=P[0], map_extent=np.array(
+        notes.append(note)
+        record("note", 0.0, message=note)
+    record("witas_setup", 0.0, waypoints=P, loop_length=path.length, home=P[0], map_extent=np.array(
         ground.extent_ned()), reference_resolution=reference.resolution_m)
-    sim.witas_reference = reference
-    sim.witas_path = path
-    # camera, barometer, compass
-    sim.camera_model = PinholeCamera.ideal(cc.width, cc.height, cc.focal_px)
-    sim.mount = FixedMount.depressed(cc.depression_deg, lever_arm=tuple(cc.lever_arm_m))
-    sim.camera = Camera(sim.camera_model, sim.mount, rng[1], capture_hz=25.0, process_hz=cfg.filter.odometry_hz,
-                        noise_sigma=cc.noise_sigma, latency_s=cc.latency_s)
-    sensors = [Baro(rng[2], cfg.baro.rate_hz, cfg.baro.sigma_m, cfg.baro.bias_sigma_m, cfg.baro.bias_tau_s)]
+    # IMU and GPS (lost at gps_loss_s) of the [sensors] section; the mission's camera, barometer, compass
+    std = ctx.rmax_sensors(camera=False)
+    gps = std["gps"]
+    gps.jam_start_s, gps.jam_end_s = cfg.gps_loss_s, None
+    model, mount = NAVIGATORS["witas"].camera(sc)
+    sensors = {"imu": std["imu"], "gps": gps,
+               "camera": Camera(model, mount, rng[1], capture_hz=25.0, process_hz=cfg.filter.odometry_hz,
+                                noise_sigma=cc.noise_sigma, latency_s=cc.latency_s),
+               "baro": Baro(rng[2], cfg.baro.rate_hz, cfg.baro.sigma_m, cfg.baro.bias_sigma_m, cfg.baro.bias_tau_s)}
     if cfg.compass.enabled:
-        sensors.append(Compass(rng[3], cfg.compass.rate_hz, cfg.compass.sigma_deg, cfg.compass.bias_deg))
-    sim.gps.jam_start_s = cfg.gps_loss_s
-    sim.gps.jam_end_s = None
-    nav = WitasNavigator(cfg.filter, sim.camera_model.K, sim.mount, reference, recorder=sim.log.record, rng=rng[4])
+        sensors["compass"] = Compass(rng[3], cfg.compass.rate_hz, cfg.compass.sigma_deg, cfg.compass.bias_deg)
+    nav = ctx.navigator("witas", camera=model, mount=mount, reference=reference)
     # the eq. 4.25 gains without the eq. 4.26 inner roll loop: with it (stiffer lateral loop) seeds 1-8 gave
     # odometry drift median 0.88 % (max 1.92) against 0.67 % (1.35) and PMF max 2.98 m (4.53) against
     # 3.22 m (3.86), home error 0.84 against 1.06 m (docs/results-witas.md)
     pf = PfcmMissionConfig(v_cruise_mps=pc.speed_mps, accel_mps2=pc.accel_mps2, settle_s=cfg.settle_s,
                            hold_s=cfg.hold_s, end_tolerance_m=1.0, roll_compensator=False)
-    mission = PfcmMission(pf, recorder=sim.log.record, path=path)
-    controller = PathFollowingController(path_loop_gains(pf), recorder=sim.log.record)
-    return MissionParts(mission=mission, controller=controller, metrics=witas_metrics,
-                        start_position=mission.start_position(), start_yaw=mission.start_yaw, uses_camera=True,
-                        navigator=nav, sensors=tuple(sensors))
+    mission = PfcmMission(pf, recorder=record, path=path)
+    controller = PathFollowingController(path_loop_gains(pf), recorder=record)
+    return MissionParts(world=world, sensors=sensors, navigator=nav, mission=mission, controller=controller,
+                        metrics=witas_metrics, start_position=mission.start_position(), start_yaw=mission.start_yaw,
+                        camera_model=model, mount=mount,
+                        info={"witas_reference": reference, "witas_path": path, "notes": notes})

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike
 from scipy import signal
 
 from visnav.measurements import VehicleState, YacsCommand
+from visnav.vehicles.base import Environment
 
 #: channel -> (numerator, denominator), highest power first; units in the module docstring.
 RMAX_TRANSFER_FUNCTIONS: dict[str, tuple[np.ndarray, np.ndarray]] = {
@@ -296,11 +297,13 @@ class RmaxModel:
                  (q * sf + r * cf) / ct, -g * az), (fx, fy, fz))
 
     def step(self, command: YacsCommand, dt: float | None = None,
-             wind_ned: ArrayLike | None = None) -> VehicleState:
-        """Advance by ``dt`` (default: the model's dt) under a held command and a steady wind.
+             environment: Environment | None = None) -> VehicleState:
+        """Advance by ``dt`` (default: the model's dt) under a held command, in the wind of ``environment``
+        (held over the step; the R-MAX model has no ground effect: ``rotor_height_m`` is not used).
 
         The eq. 3.4 states move by their exact ZOH discretisation; the translational states by
         RK4 on ``_deriv`` (written out in scalar ``math`` as ``_deriv_fast``)."""
+        wind_ned = None if environment is None else environment.wind_ned
         dt = self.dt if dt is None else float(dt)
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")

@@ -14,7 +14,7 @@ from visnav.world.wind import DrydenTurbulence, SteadyWind, Wind
 
 @dataclass
 class World:
-    ground: GeoImage
+    ground: GeoImage | None  # None: a mission that renders no ground (wind only)
     surface: str
     wind: Wind
     detail: np.ndarray | None = None  # high-passed fine texture tile (wraps around), uint8
@@ -34,7 +34,13 @@ def build_world(cfg, rng: np.random.Generator, heading_rad: float = 0.0) -> Worl
     tile, tres = (None, 0.002)
     if cfg.detail_texture and not cfg.map_file:
         tile, tres = detail_tile(cfg.surface, rng=rng)
+    return World(ground=ground, surface=cfg.surface, wind=build_wind(cfg, rng, heading_rad), detail=tile,
+                 detail_resolution_m=tres)
+
+
+def build_wind(cfg, rng: np.random.Generator, heading_rad: float = 0.0) -> Wind:
+    """The wind of a ``WorldConfig``: steady (from ``wind_from_deg`` relative to the heading) + Dryden gusts."""
     from_deg = np.rad2deg(heading_rad) + cfg.wind_from_deg
     steady = SteadyWind(cfg.wind_speed_mps, from_deg)
     turb = None if cfg.turbulence == "none" else DrydenTurbulence(cfg.turbulence, rng)
-    return World(ground=ground, surface=cfg.surface, wind=Wind(steady, turb), detail=tile, detail_resolution_m=tres)
+    return Wind(steady, turb)

@@ -1,0 +1,120 @@
+"""The one registry of navigators by name: the closed loop (``sim/missions.py``), ``visnav replay`` and
+``visnav bridge`` all build a navigator here, from a scenario's configuration.
+
+``make_navigator(name, sc, recorder, camera=..., mount=..., reference=..., **parts)`` builds it; what is not
+given comes from the scenario (the camera of ``[sensors.camera]`` or of the mission, the WITAS reference
+map degraded from the scenario's ground). A caller that has its own (a recording's ``camera.yaml``, a
+``--map``, the simulation's pan-tilt unit) passes it. Adding a navigator (deck, CONDOR) is one
+``NavigatorSpec`` in ``NAVIGATORS``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class NavigatorSpec:
+    scenario: str  # the built-in scenario whose configuration it takes by default
+    mission_types: tuple[str, ...]  # scenario mission types that fly it
+    needs: tuple[str, ...]  # recording streams a replay needs
+    camera: Callable  # camera(sc) -> (PinholeCamera, mount) of the scenario
+    camera_hz: Callable  # camera_hz(sc) -> frames per second it consumes
+    build: Callable  # build(sc, recorder, camera, mount, **parts) -> navigator
+
+
+def rmax_camera(sc):
+    """The R-MAX loop's camera (``[sensors.camera]``): pinhole model and fixed depressed mount."""
+    from visnav.geometry.camera import PinholeCamera
+    from visnav.geometry.mounts import FixedMount
+
+    c = sc.sensors.camera
+    return (PinholeCamera.ideal(c.width, c.height, c.focal_px),
+            FixedMount.depressed(c.depression_deg, lever_arm=tuple(c.lever_arm_m)))
+
+
+def _rmax_camera_hz(sc) -> float:
+    c = sc.sensors.camera  # every decimation-th captured frame is processed (sensors/camera.Camera)
+    return c.capture_hz / max(1, int(round(c.capture_hz / sc.navigation.mpe.rate_hz)))
+
+
+def _palace(sc, recorder, camera, mount, **_):
+    from visnav.navigation.palace import PalaceNavigator
+
+    return PalaceNavigator(sc.navigation, camera, mount, recorder=recorder)
+
+
+def _witas_camera(sc):
+    from visnav.geometry.camera import PinholeCamera
+    from visnav.geometry.mounts import FixedMount
+
+    cc = sc.mission.camera
+    return (PinholeCamera.ideal(cc.width, cc.height, cc.focal_px),
+            FixedMount.depressed(cc.depression_deg, lever_arm=tuple(cc.lever_arm_m)))
+
+
+def _witas(sc, recorder, camera, mount, reference=None, **_):
+    from visnav.navigation.witas import WitasNavigator
+    from visnav.world.witas_map import make_ground, mission_rngs, reference_map
+
+    cfg = sc.mission
+    if reference is None:  # the same degraded map as the closed loop's
+        reference = reference_map(cfg, make_ground(cfg, sc.run.seed)[0])
+    return WitasNavigator(cfg.filter, camera.K, mount, reference, recorder=recorder, rng=mission_rngs(sc.run.seed)[4])
+
+
+def _pad_camera(sc):
+    from visnav.geometry.camera import PinholeCamera
+
+    cc = sc.mission.camera
+    return PinholeCamera.ideal(cc.width, cc.height, cc.focal_px), None  # the mount is the pan-tilt unit
+
+
+def _pad(sc, recorder, camera, mount, ptu=None, layout=None, **_):
+    from visnav.geometry.pad import PadLayout
+    from visnav.navigation.pad import PadNavigator
+    from visnav.vision.pad import PadDetector
+
+    if ptu is None:
+        raise ValueError("the pad navigator needs its pan-tilt unit (ptu): it points the camera; replay and bridge "
+                         "of the pad landing need pan-tilt frames and a pan-tilt link (not there yet)")
+    cfg = sc.mission
+    pc, fc = cfg.pad, cfg.filter
+    layout = layout or PadLayout(tuple(pc.legs_m), tuple(pc.ring_ratio), tuple(pc.inner_ratio))
+    detector = PadDetector(layout, camera.K, sigma_floor_px=fc.sigma_floor_px, cov_inflation=fc.cov_inflation)
+    return PadNavigator(fc, detector, ptu, recorder=recorder)
+
+
+NAVIGATORS: dict[str, NavigatorSpec] = {
+    "palace": NavigatorSpec("palace-landing", ("palace", "hover", "pfcm"), ("imu", "attitude", "gps"), rmax_camera,
+                            _rmax_camera_hz, _palace),
+    "witas": NavigatorSpec("witas-homing", ("witas-homing",), ("imu", "attitude", "gps", "baro", "frames"),
+                           _witas_camera, lambda sc: float(sc.mission.filter.odometry_hz), _witas),
+    "pad": NavigatorSpec("pad-landing", ("pad-landing",), ("imu", "attitude", "frames"), _pad_camera,
+                         lambda sc: float(sc.mission.camera.rate_hz), _pad),
+}
+
+
+def spec(name: str) -> NavigatorSpec:
+    if name not in NAVIGATORS:
+        raise ValueError(f"unknown navigator {name!r}; known: {', '.join(sorted(NAVIGATORS))}")
+    return NAVIGATORS[name]
+
+
+def navigator_for(mission_type: str) -> str:
+    """The registered navigator a mission type flies with."""
+    for name, s in NAVIGATORS.items():
+        if mission_type in s.mission_types:
+            return name
+    known = "; ".join(f"{n}: {', '.join(s.mission_types)}" for n, s in NAVIGATORS.items())
+    raise ValueError(f"mission.type {mission_type!r} has no registered navigator (registered: {known})")
+
+
+def make_navigator(name: str, sc, recorder=None, camera=None, mount=None, **parts):
+    """The navigator ``name`` configured by Scenario ``sc``; ``camera``/``mount`` default to the scenario's."""
+    s = spec(name)
+    if camera is None:
+        camera, default_mount = s.camera(sc)
+        mount = mount if mount is not None else default_mount
+    return s.build(sc, recorder or (lambda *a, **k: None), camera, mount, **parts)

@@ -1,0 +1,27 @@
+"""What every mission manager shares: it talks to its navigator only through ``command(NavCommand(...))``.
+
+``NavigatorRequests`` sends the requests and keeps what the mission itself asked for: the navigation
+source it set (``source``) and whether it asked for tracking during the current step (a request is
+pending until the navigator's ``health.tracking_pending`` clears).
+"""
+
+from __future__ import annotations
+
+from visnav.measurements import Health, NavCommand
+
+
+class NavigatorRequests:
+    nav: object
+    source: str = "gps"
+    _asked_t: float | None = None
+
+    def _ask(self, t: float, name: str, **args) -> None:
+        self.nav.command(NavCommand(t, name, args))
+        if name == "set-source":
+            self.source = args["source"]
+        elif name in ("request-tracking", "request-tracking-rebase"):
+            self._asked_t = t
+
+    def _pending(self, health: Health, t: float) -> bool:
+        """A tracking request waits for a frame (the navigator says so, or the mission asked this step)."""
+        return bool(health.tracking_pending) or self._asked_t == t
