@@ -32,6 +32,7 @@ from visnav.measurements import (
     NavEstimate,
     RangeSample,
 )
+from visnav.navigation.integrity import NavIntegrity
 from visnav.vision.correlation import PnccTracker
 from visnav.vision.interest import forstner
 from visnav.log_schema import register_stream
@@ -124,6 +125,8 @@ class PalaceNavigator:
         self.last_sonar: RangeSample | None = None
         self._last_imu_t = -np.inf
         self.h = Health()
+        # integrity (issue #18): NIS of every GPS / MPE position update (horizontal, 2 dof) and sonar height
+        self.integrity = NavIntegrity(getattr(cfg, "integrity", None), self.recorder, inflation_streams=("gps", "mpe"))
 
     # ---------------------------------------------------------------- commands (mission manager)
     def request_tracking(self, target_ned=None, init_from: str = "gps") -> None:
@@ -201,6 +204,7 @@ class PalaceNavigator:
             C = euler_to_dcm(e)
             z = -r * C[2, 2]
             self.filter.update_position(np.array([0.0, 0.0, z]), 0.03, axes=(2,))
+            self.integrity.record(m.t, "sonar", float(self.filter.last_nis[0]), 1, True)
 
     def _on_gps(self, m: GpsSample) -> None:
         if not (np.all(np.isfinite(m.position)) and np.all(np.isfinite(m.velocity))):
@@ -209,12 +213,14 @@ class PalaceNavigator:
         self.last_gps = m
         if not self.filter.initialized:
             self.filter.reset(m.t, m.position, m.velocity)
+            self.integrity.start(m.t)
             return
         if self.source == "gps":
             # the fix describes m.t, the filter is at its last IMU time: carry the fix forward over the
             # lag with the velocity (position) and the acceleration the filter integrated (velocity)
             lag = (self.filter.t or m.t) - m.t
             self.filter.update_position(m.position + m.velocity * lag, max(m.sigma, 0.01))
+            self.integrity.record(m.t, "gps", float(np.sum(self.filter.last_nis[:2])), 2, True)
             self.filter.update_velocity(m.velocity + self.filter.accel * lag, 0.05)
 
     # ---------------------------------------------------------------- vision
@@ -282,10 +288,17 @@ class PalaceNavigator:
         self.last_fix, self.last_fix_time = fix, f.t
         self.recorder("mpe", f.t, position=fix.position, camera_position=fix.camera_position,
                       range=laser.range, sigma=fix.sigma_px_m, jump=jump)
-        if self.source == "mpe" and not jump:
+        if self.source == "mpe":
             lag = (self.filter.t or f.t) - f.t
             sigma = self._fix_sigma(fix, laser.range)
-            self.filter.update_position(fix.position + self.filter.v * lag, sigma)
+            z = fix.position + self.filter.v * lag
+            if not jump:
+                self.filter.update_position(z, sigma)
+                nis = float(np.sum(self.filter.last_nis[:2]))
+            else:  # the jump check is this navigator's gate: the fix is counted as rejected
+                sig2 = np.broadcast_to(np.asarray(sigma, float) ** 2, (3,))[:2]
+                nis = float(np.sum((z[:2] - self.filter.p[:2]) ** 2 / (self.filter.P00[:2] + sig2)))
+            self.integrity.record(f.t, "mpe", nis, 2, not jump)
 
     def _fix_sigma(self, fix, range_m: float):
         """σ of the fix per axis for the filter: eq. 3.3's pixel share (``sigma_px_m``, floored at
@@ -352,5 +365,8 @@ class PalaceNavigator:
         if t is not None:
             self.h.mpe_rate_hz = self.mpe_rate(t)
         self.h.source = self.source
+        if t is not None:
+            f = self.filter
+            self.integrity.fill(self.h, t, f.covariance()[:2, :2] if f.initialized else None)
         return self.h
 

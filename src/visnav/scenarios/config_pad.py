@@ -12,6 +12,7 @@ from typing import Literal, Optional
 from pydantic import Field, model_validator
 
 from visnav.scenarios.base import _M
+from visnav.scenarios.config_integrity import PadIntegrityConfig
 
 
 class PadGeometryConfig(_M):
@@ -82,6 +83,7 @@ class PadFilterConfig(_M):
     track_deadband_deg: float = Field(1.0, ge=0, le=20)
     sigma_floor_px: float = Field(0.05, gt=0, le=5)
     cov_inflation: float = Field(1.5, gt=0, le=20)
+    integrity: PadIntegrityConfig = PadIntegrityConfig()
 
 
 class PadMissionConfig(_M):

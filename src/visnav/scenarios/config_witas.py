@@ -12,6 +12,7 @@ from typing import Literal, Optional
 from pydantic import Field
 
 from visnav.scenarios.base import _M
+from visnav.scenarios.config_integrity import WitasIntegrityConfig
 
 
 class WitasPathConfig(_M):
@@ -98,6 +99,7 @@ class WitasFilterConfig(_M):
     compass_sigma_deg: float = Field(2.0, gt=0, le=45)
     init_attitude_error_deg: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0],
                                                  description="roll, pitch, heading error at GPS loss")
+    integrity: WitasIntegrityConfig = WitasIntegrityConfig()
 
 
 class WitasMissionConfig(_M):

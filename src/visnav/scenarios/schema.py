@@ -25,6 +25,7 @@ from visnav.scenarios.config_witas import WitasMissionConfig
 from visnav.scenarios.config_condor import CondorMissionConfig
 from visnav.scenarios.config_geolocation import GeolocationMissionConfig
 from visnav.scenarios.config_pad import PadMissionConfig
+from visnav.scenarios.config_integrity import FaultConfig, PalaceIntegrityConfig
 
 BUILTIN_DIR = Path(__file__).resolve().parent
 
@@ -138,6 +139,7 @@ class NavigationConfig(_M):
     tracker: TrackerConfig = TrackerConfig()
     mpe: MpeConfig = MpeConfig()
     accel_noise: float = Field(0.3, ge=0, le=10, description="process noise of the position filter, m/s^2")
+    integrity: PalaceIntegrityConfig = PalaceIntegrityConfig()
 
 
 class HoverMissionConfig(_M):
@@ -297,6 +299,7 @@ class Scenario(_M):
     sensors: SensorsConfig = SensorsConfig()
     navigation: NavigationConfig = NavigationConfig()
     mission: MissionConfig = PalaceMissionConfig()
+    faults: list[FaultConfig] = Field(default_factory=list, description="injected faults (sensors/faults.py)")
 
     @model_validator(mode="before")
     @classmethod

@@ -20,6 +20,7 @@ import numpy as np
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.measurements import VehicleState, YacsCommand
+from visnav.navigation.integrity import STATE_CODES
 from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import Scenario
 from visnav.sensors.base import TruthHistory
@@ -223,4 +224,5 @@ class Simulation:
         log.record("reference", t, position=ref.position, velocity=ref.velocity, yaw=ref.yaw)
         log.record("command", t, ail=cmd.ail, ele=cmd.ele, rud=cmd.rud, thr=cmd.thr)
         log.record("status", t, mode=mode, source=health.source, coherence=health.coherence,
-                   mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking)
+                   mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking,
+                   integrity=STATE_CODES.get(health.integrity, -1), hpl_m=health.hpl_m, k2=health.consistency_k2)
