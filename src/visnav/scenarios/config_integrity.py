@@ -64,6 +64,27 @@ FAULT_KINDS = ("camera_blackout", "camera_frozen", "camera_brightness", "camera_
                "map_offset", "feature_poor", "wind_gust")
 
 
+_CAMERA = ("camera_blackout", "camera_frozen", "camera_brightness", "camera_blur")
+_IMU = ("imu_gyro_bias", "imu_accel_bias", "imu_drop")
+#: mission type -> the fault kinds its simulation injects (the others are an error: nothing would happen)
+FAULTS_APPLY = {
+    "palace": _CAMERA + _IMU + ("clock_jump", "range_dropout", "range_stuck", "gps_spoof", "wind_gust"),
+    "hover": _CAMERA + _IMU + ("clock_jump", "range_dropout", "range_stuck", "gps_spoof", "wind_gust"),
+    "pfcm": _IMU + ("clock_jump", "gps_spoof", "wind_gust"),
+    "witas-homing": _CAMERA + _IMU + ("clock_jump", "gps_spoof", "map_offset", "feature_poor", "wind_gust"),
+    "pad-landing": _CAMERA + _IMU + ("clock_jump", "wind_gust"),
+}
+
+
+def check_faults_apply(mission_type: str, faults) -> None:
+    """ValueError (one line) when a fault does not apply to the mission."""
+    ok = FAULTS_APPLY.get(mission_type, ())
+    bad = sorted({f.kind for f in faults} - set(ok))
+    if bad:
+        raise ValueError(f"faults {', '.join(bad)} do not apply to mission.type {mission_type!r}; "
+                         f"it takes: {', '.join(ok) or 'none'}")
+
+
 class FaultConfig(_M):
     """One fault: ``kind``, when (``start_s``, ``duration_s``; build-time faults of the map ignore the
     window), and the parameters of its kind (the others are unused)."""

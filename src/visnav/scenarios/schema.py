@@ -25,7 +25,7 @@ from visnav.scenarios.config_witas import WitasMissionConfig
 from visnav.scenarios.config_condor import CondorMissionConfig
 from visnav.scenarios.config_geolocation import GeolocationMissionConfig
 from visnav.scenarios.config_pad import PadMissionConfig
-from visnav.scenarios.config_integrity import FaultConfig, PalaceIntegrityConfig
+from visnav.scenarios.config_integrity import FaultConfig, PalaceIntegrityConfig, check_faults_apply
 
 BUILTIN_DIR = Path(__file__).resolve().parent
 
@@ -395,9 +395,14 @@ def apply_overrides(data: dict, overrides: list[str]) -> dict:
 
 def validate(data: dict) -> Scenario:
     try:
-        return Scenario.model_validate(data)
+        sc = Scenario.model_validate(data)
     except ValidationError as err:
         raise ScenarioError(_format_error(err, data)) from None
+    try:
+        check_faults_apply(sc.mission.type, sc.faults)
+    except ValueError as err:
+        raise ScenarioError(str(err)) from None
+    return sc
 
 
 def builtin_names() -> list[str]:

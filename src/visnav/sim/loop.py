@@ -24,6 +24,7 @@ from visnav.navigation.integrity import STATE_CODES
 from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import Scenario
 from visnav.sensors.base import TruthHistory
+from visnav.sensors.faults import inject_faults
 from visnav.sensors.camera import Camera, PendingFrame
 from visnav.sensors.gps import Gps
 from visnav.sensors.imu import Imu
@@ -88,6 +89,7 @@ class Simulation:
             self.nav = wrap(parts.navigator)
         self._extra_sensors = tuple(parts.sensors)
         self.uses_camera = parts.uses_camera
+        inject_faults(self, sc.faults, rng[7])  # [[faults]]: wraps the sensors and the wind (issue #18)
         init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
                             euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
                             specific_force=np.array([0.0, 0.0, -9.81]))

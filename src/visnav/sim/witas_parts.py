@@ -65,6 +65,7 @@ def build(sim):
     from visnav.scenarios.schema import PfcmMissionConfig
     from visnav.sensors.baro import Baro, Compass
     from visnav.sensors.camera import Camera
+    from visnav.sensors.faults import map_faults
     from visnav.sim.missions import MissionParts
     from visnav.world.scene import World
 
@@ -72,8 +73,9 @@ def build(sim):
     pc, cc, mc = cfg.path, cfg.camera, cfg.map
     rng = mission_rngs(sim.sc.run.seed)
     ground, (sn, se, r, centre) = make_ground(cfg, sim.sc.run.seed)
+    ground = map_faults(ground, sim.sc.faults, "world")  # [[faults]] feature_poor (issue #18)
     sim.world = World(ground=ground, surface="grass", wind=sim.world.wind, detail=None)
-    reference = reference_map(cfg, ground)
+    reference = map_faults(reference_map(cfg, ground), sim.sc.faults, "reference")  # map_offset
     P, T = loop_waypoints(sn, se, r, pc.altitude_m, centre, pc.direction)
     path = HermitePath.from_waypoints(P, T, scale="arc")
     if (sn, se) != (pc.size_north_m, pc.size_east_m):  # the map is smaller than the loop asked for: say so
