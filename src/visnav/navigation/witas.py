@@ -99,7 +99,8 @@ class _AhrsBackend:
 class _EskfBackend:
     """The 12-state error-state KF of appendix A (estimation/eskf.py)."""
 
-    def __init__(self, t, position, velocity, euler, sigma_p=0.5, sigma_v=0.2, sigma_att_deg=1.0):
+    def __init__(self, t, position, velocity, euler, sigma_p=0.5, sigma_v=0.2, sigma_att_deg=1.0,
+                 gate_probability=1.0):
         try:
             from visnav.estimation.eskf import EskfConfig, ErrorStateKF
             from visnav.estimation.ins import NavState, euler_to_quat
@@ -111,7 +112,7 @@ class _EskfBackend:
         sa = math.radians(sigma_att_deg)
         P0 = np.r_[[sigma_p] * 3, [sigma_v] * 3, [sa, sa, 3 * sa], [0.02] * 3]
         cfg = EskfConfig(accel_noise=0.05, gyro_noise=2e-3, accel_bias_noise=1e-3, gravity_mps2=9.81,
-                         earth_rotation=False, gate_probability=1.0)
+                         earth_rotation=False, gate_probability=gate_probability)
         self.kf = ErrorStateKF(s, P0, cfg)
         self.last = (float("nan"), 0, True)  # (NIS, dof, accepted) of the last update (integrity monitor)
 
@@ -289,7 +290,7 @@ class WitasNavigator:
         e = np.zeros(3) if e is None else e.copy()
         err = np.radians(np.asarray(c.init_attitude_error_deg, float))
         if c.backend == "eskf":
-            self.backend = _EskfBackend(f.t, f.p, f.v, e + err)
+            self.backend = _EskfBackend(f.t, f.p, f.v, e + err, gate_probability=c.kf_gate_probability)
         else:
             self.backend = _AhrsBackend(f.t, f.p, f.v, e + err)
             self.backend.offset = err

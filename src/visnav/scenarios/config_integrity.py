@@ -15,7 +15,7 @@ landing); the defaults differ per navigator (alert limit, stale time) and are se
 from __future__ import annotations
 
 import math
-from typing import Literal, Optional
+from typing import Literal
 
 from pydantic import Field, model_validator
 
@@ -92,8 +92,8 @@ class FaultConfig(_M):
     kind: Literal[FAULT_KINDS]  # type: ignore[valid-type]
     start_s: float = Field(0.0, ge=0, le=7200)
     duration_s: float = Field(math.inf, gt=0, description="inf: to the end of the run")
-    sensor: Optional[Literal["imu", "gps", "laser", "sonar", "camera", "baro", "compass"]] = Field(
-        None, description="clock_jump / range_dropout / range_stuck: the stream (default: camera / laser)")
+    sensor: Literal["", "imu", "gps", "laser", "sonar", "camera", "baro", "compass"] = Field(
+        "", description="clock_jump / range_dropout / range_stuck: the stream (default: camera / laser)")
     gain: float = Field(1.6, gt=0, le=10, description="camera_brightness: image gain")
     offset_dn: float = Field(40.0, ge=-255, le=255, description="camera_brightness: added grey levels")
     blur_px: int = Field(9, ge=2, le=101, description="camera_blur: length of the motion-blur kernel")
@@ -122,7 +122,7 @@ class FaultConfig(_M):
         for name in ("offset_m", "centre_m", "size_m"):
             if len(getattr(self, name)) != 2:
                 raise ValueError(f"faults: {self.kind}.{name} must have 2 values (north, east)")
-        if self.kind in ("range_dropout", "range_stuck") and self.sensor not in (None, "laser", "sonar"):
+        if self.kind in ("range_dropout", "range_stuck") and self.sensor not in ("", "laser", "sonar"):
             raise ValueError(f"faults: {self.kind}.sensor must be 'laser' or 'sonar', got {self.sensor!r}")
         if self.kind == "feature_poor" and min(self.size_m) <= 0:
             raise ValueError("faults: feature_poor.size_m must be positive")

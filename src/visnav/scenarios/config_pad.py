@@ -100,6 +100,11 @@ class PadMissionConfig(_M):
     gate_time_s: float = Field(1.0, ge=0, le=30, description="centred this long")
     gate_max_s: float = Field(8.0, ge=0, le=60, description="descend anyway after this long")
     flare_height_m: float = Field(0.35, ge=0, le=5)
+    integrity_unusable_s: float = Field(0.5, ge=0, le=30, description="navigator integrity unusable this long ...")
+    integrity_abort_height_m: float = Field(2.0, ge=0, le=60, description="... above this height: go around "
+                                            "(climb back to start_height_m, approach again when ok); below: land "
+                                            "on dead reckoning")
+    max_go_arounds: int = Field(2, ge=0, le=20, description="more go-arounds -> abort (hold, mission over)")
     flare_rate_mps: float = Field(0.12, gt=0, le=1.5)
     blackout_height_m: Optional[float] = Field(None, ge=0, le=60, description="vision black-out from this height")
     blackout_s: float = Field(3.0, ge=0, le=60)

@@ -183,6 +183,8 @@ class PalaceMissionConfig(_M):
     edge_margin_px: int = Field(60, ge=0, le=300)
     final_descent_mps: float = Field(0.3, gt=0, le=3)
     flare_height_m: float = Field(3.0, ge=0, le=30, description="sink rate eases to the final rate below this")
+    integrity_unusable_s: float = Field(1.0, ge=0, le=60, description="navigator integrity unusable this long "
+                                        "-> fallback to GPS (on MPE) or abort and go around (on GPS)")
 
 
 class PfcmSpiralConfig(_M):

@@ -45,7 +45,7 @@ TARGET = {"camera_blackout": "camera", "camera_frozen": "camera", "camera_bright
 
 
 def target_of(fault) -> str | None:
-    if fault.kind in ("clock_jump", "range_dropout", "range_stuck") and fault.sensor is not None:
+    if fault.kind in ("clock_jump", "range_dropout", "range_stuck") and fault.sensor:
         return fault.sensor
     return TARGET[fault.kind]
 

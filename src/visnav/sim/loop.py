@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from visnav.analysis.integrity_metrics import integrity_metrics
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.measurements import VehicleState, YacsCommand
@@ -215,6 +216,7 @@ class Simulation:
                 self._render_pool = None
         wall = time.perf_counter() - wall0
         metrics = self._metrics(self, wall_time_s=wall, error=error)
+        metrics.update(integrity_metrics(log, sc))  # from the log (issue #18)
         return RunResult(scenario=sc, log=log, metrics=metrics, error=error, interrupted=interrupted)
 
     def _log_step(self, t, truth, est, ref, cmd, mode, health) -> None:
