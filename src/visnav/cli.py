@@ -231,7 +231,7 @@ def faults(
     one Monte Carlo campaign each in DIR/<fault>/ (resumable); writes DIR/faults.csv and DIR/faults.md."""
     import time as _time
 
-    from visnav.analysis.fault_campaign import campaigns, fault_row, faults_for, write_tables
+    from visnav.analysis.fault_campaign import FAULT_COLUMNS, campaigns, fault_row, faults_for, write_tables
     from visnav.analysis.montecarlo import CampaignError, _read_csv
 
     names = [x for f in faults_ for x in f.split(",") if x.strip()]
@@ -261,11 +261,10 @@ def faults(
         raise typer.Exit(130)
     write_tables(out_dir, table, per_fault, scenario, n)
     t = Table(title=f"{scenario}: faults on {n} seeds")
-    for col in ("fault", "runs", "detected_share", "detection_delay_s", "false_alarms", "safe", "unsafe",
-                "worst_error_while_ok_m"):
+    for col in FAULT_COLUMNS:
         t.add_column(col, justify="left" if col == "fault" else "right")
     for r in table:
-        t.add_row(*(f"{v:.3g}" if isinstance(v, float) else str(v) for v in r.values()))
+        t.add_row(*(f"{r[c]:.3g}" if isinstance(r[c], float) else str(r[c]) for c in FAULT_COLUMNS))
     console.print(t)
     console.print(f"fault campaign: {out_dir / 'faults.csv'}, {out_dir / 'faults.md'}")
 

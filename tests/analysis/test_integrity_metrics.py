@@ -71,14 +71,17 @@ def test_outcome_unsafe_landing_and_false_alarm_outside_the_window():
 
 def test_fault_row_aggregates_runs():
     rows = [{"status": "ok", "outcome": "safe", "faults_injected": "1", "faults_detected": "1",
-             "detection_delay_s": "0.5", "false_alarms": "0", "worst_error_while_ok_m": "0.2"},
+             "detection_delay_s": "0.5", "false_alarms": "0", "false_alarm_actions": "0",
+             "worst_error_while_ok_m": "0.2"},
             {"status": "ok", "outcome": "unsafe", "faults_injected": "1", "faults_detected": "0",
-             "detection_delay_s": "", "false_alarms": "2", "worst_error_while_ok_m": "3.0"},
+             "detection_delay_s": "", "false_alarms": "2", "false_alarm_actions": "1",
+             "worst_error_while_ok_m": "3.0"},
             {"status": "ok", "outcome": "safe", "faults_injected": "1", "faults_detected": "1",
-             "detection_delay_s": "1.5", "false_alarms": "0", "worst_error_while_ok_m": "0.1"}]
+             "detection_delay_s": "1.5", "false_alarms": "0", "false_alarm_actions": "0",
+             "worst_error_while_ok_m": "0.1"}]
     r = fault_row("x", rows)
     assert r["runs"] == 3 and r["detected_share"] == pytest.approx(2 / 3)
-    assert r["detection_delay_s"] == pytest.approx(1.0) and r["false_alarms"] == 2
+    assert r["detection_delay_s"] == pytest.approx(1.0) and r["false_alarms"] == 1 and r["navigator_alarms"] == 2
     assert (r["safe"], r["unsafe"]) == (2, 1) and r["worst_error_while_ok_m"] == 3.0
 
 

@@ -134,7 +134,11 @@ def fault_row(name: str, rows: list[dict]) -> dict:
         "fault": name, "runs": len(rows),
         "detected_share": (detected / injected) if injected else float("nan"),
         "detection_delay_s": float(np.median(delays)) if delays else float("nan"),
-        "false_alarms": int(sum(_num(r.get("false_alarms")) for r in ok if math.isfinite(_num(r.get("false_alarms"))))),
+        # alarms the mission acted on (fallback, abort, go-around) outside the fault's window: the ones that
+        # can change an outcome; the navigator's own are in navigator_alarms (faults.md)
+        "false_alarms": int(sum(_num(r.get("false_alarm_actions")) for r in ok
+                                if math.isfinite(_num(r.get("false_alarm_actions"))))),
+        "navigator_alarms": int(sum(_num(r.get("false_alarms")) for r in ok if math.isfinite(_num(r.get("false_alarms"))))),
         "safe": sum(r.get("outcome") == "safe" for r in rows),
         "unsafe": sum(r.get("outcome") != "safe" for r in rows),  # a failed run without an outcome counts unsafe
         "worst_error_while_ok_m": max(worst) if worst else float("nan"),
@@ -144,7 +148,7 @@ def fault_row(name: str, rows: list[dict]) -> dict:
 def write_tables(out: Path, table: list[dict], extra: dict[str, list[dict]], scenario: str, n: int) -> None:
     out = Path(out)
     with (out / "faults.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FAULT_COLUMNS)
+        w = csv.DictWriter(f, fieldnames=FAULT_COLUMNS, extrasaction="ignore")
         w.writeheader()
         for r in table:
             w.writerow({k: ("" if isinstance(r[k], float) and math.isnan(r[k]) else
@@ -160,10 +164,14 @@ def write_tables(out: Path, table: list[dict], extra: dict[str, list[dict]], sce
         viol = sum(_num(r.get("hpl_bound_violations")) for r in none)
         samples = sum(_num(r.get("hpl_samples_ok")) for r in none)
         acts = sum(_num(r.get("false_alarm_actions")) for r in none)
+        navs = sum(_num(r.get("false_alarms")) for r in none)
         lines += ["", f"Fault-free: HPL exceeded by the true horizontal error in {int(viol)} of {int(samples)} "
                       f"mission steps while `ok` ({100 * viol / samples if samples else float('nan'):.3f} %); "
-                      f"{int(acts)} false alarms the mission acted on (fallback, abort, go-around)."]
-    lines += ["", "Per run (outcome and reason):", ""]
+                      f"{int(acts)} false alarms the mission acted on (fallback, abort, go-around); "
+                      f"{int(navs)} navigator alarms outside a fault (state left `ok`) that it did not need to act on."]
+    lines += ["", "`false_alarms`: alarms the mission acted on outside the fault's window (+5 s); navigator alarms "
+                  "per fault: " + ", ".join(f"{r['fault']} {r['navigator_alarms']}" for r in table) + ".",
+              "", "Per run (outcome and reason):", ""]
     for name, rows in extra.items():
         for r in rows:
             lines.append(f"- {name} seed {r.get('seed')}: {r.get('outcome', r.get('status'))}"

@@ -47,8 +47,10 @@ class NavIntegrity:
         """The filter (re)started at ``t``: the stale clock starts here (no update is owed before)."""
         self.monitor._last_accept = max(self.monitor._last_accept, float(t))
 
-    def fill(self, h: Health, t: float, P_h) -> Health:
-        P = None if P_h is None else np.asarray(P_h, float)[:2, :2]
+    def fill(self, h: Health, t: float, P_h, unobserved_var: float = 0.0) -> Health:
+        """``unobserved_var``: variance [m^2] per horizontal axis of an error the filter's covariance does
+        not hold (a bias its aid shares), added to ``P_h`` for the HPL."""
+        P = None if P_h is None else np.asarray(P_h, float)[:2, :2] + unobserved_var * np.eye(2)
         a = self.monitor.assess(t, P)
         h.set_integrity(a)
         if a["integrity"] != self._state:

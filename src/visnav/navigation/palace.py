@@ -127,6 +127,8 @@ class PalaceNavigator:
         self.h = Health()
         # integrity (issue #18): NIS of every GPS / MPE position update (horizontal, 2 dof) and sonar height
         self.integrity = NavIntegrity(getattr(cfg, "integrity", None), self.recorder, inflation_streams=("gps", "mpe"))
+        self._reference_t: float | None = None  # when MPE's ground reference was last set (HPL drift budget)
+        self._reference_var = 0.0  # its error variance then (a re-init from the estimate carries the drift)
 
     # ---------------------------------------------------------------- commands (mission manager)
     def request_tracking(self, target_ned=None, init_from: str = "gps") -> None:
@@ -279,6 +281,7 @@ class PalaceNavigator:
             if pos is not None:
                 self.recorder("track_init", f.t, x=res.x, y=res.y, init_position=pos, kind=1)
                 self.mpe.initialize((res.x, res.y), laser.range, C_bn, pos, laser.beam_offset)
+                self._set_reference(f.t, self._rebase)
                 self._rebase = None
         fix = self.mpe.estimate(f.t, (res.x, res.y), laser.range, C_bn, laser.beam_offset)
         self._mpe_times.append(f.t)
@@ -341,6 +344,7 @@ class PalaceNavigator:
         self.tracker.init(f.image, pt.x, pt.y)
         uv0 = (float(self.tracker.x), float(self.tracker.y))
         self.mpe.initialize(uv0, laser.range, C_bn, pos, laser.beam_offset)
+        self._set_reference(f.t, req["init"])
         self._request = None
         self.h.tracking = True
         self.h.tracked_px = uv0
@@ -361,12 +365,29 @@ class PalaceNavigator:
     def mpe_rate(self, t: float, window: float = 1.0) -> float:
         return sum(1 for s in self._mpe_times if t - window < s <= t) / window
 
+    def _mpe_unobserved_var(self, t: float) -> float:
+        """Off GPS the position comes from MPE (then inertial from it): its ground reference's error and the
+        tracker's drift since it was set are in no covariance; the integrity block's budget for them."""
+        ic = getattr(self.cfg, "integrity", None)
+        if self.source == "gps" or self._reference_t is None or ic is None:
+            return 0.0
+        return self._reference_var + (ic.mpe_drift_mps * max(t - self._reference_t, 0.0)) ** 2
+
+    def _set_reference(self, t: float, init: str) -> None:
+        ic = getattr(self.cfg, "integrity", None)
+        if ic is None:
+            return
+        carried = self._mpe_unobserved_var(t) if init == "estimate" and self.source != "gps" else 0.0
+        self._reference_var = ic.reference_sigma_m**2 + carried
+        self._reference_t = t
+
     def health(self, t: float | None = None) -> Health:
         if t is not None:
             self.h.mpe_rate_hz = self.mpe_rate(t)
         self.h.source = self.source
         if t is not None:
             f = self.filter
-            self.integrity.fill(self.h, t, f.covariance()[:2, :2] if f.initialized else None)
+            self.integrity.fill(self.h, t, f.covariance()[:2, :2] if f.initialized else None,
+                                self._mpe_unobserved_var(t))
         return self.h
 

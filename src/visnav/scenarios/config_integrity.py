@@ -43,6 +43,12 @@ class PalaceIntegrityConfig(IntegrityBlock):
 
     alert_limit_m: float = Field(4.0, gt=0, description="unusable when the HPL exceeds it")
     stale_s: float = Field(1.0, gt=0, description="unusable when no update was accepted for this long")
+    # the MPE error the filter cannot see (its fixes follow the tracked point): the ground reference's error
+    # when it was set and the tracker's drift since (seed 000 §4.1), added to the HPL's covariance
+    reference_sigma_m: float = Field(0.05, ge=0, le=10, description="1-sigma horizontal error of the MPE ground "
+                                     "reference when it is set (GPS fix or estimate)")
+    mpe_drift_mps: float = Field(0.015, ge=0, le=1, description="1-sigma horizontal drift of MPE per second "
+                                 "since the ground reference was set (fault-free campaign: 0.2-0.5 m in 25 s)")
 
 
 class WitasIntegrityConfig(IntegrityBlock):
