@@ -420,9 +420,13 @@ class WitasNavigator:
 
     def health(self, t: float | None = None) -> Health:
         if t is not None:
+            extra = 0.0
             if self.backend is not None:
                 P = self.backend.state()[4]
+                ic = getattr(self.cfg, "integrity", None)
+                if self.pmf is not None and ic is not None and ic.pmf_in_hpl:
+                    extra = float(np.linalg.eigvalsh(self.pmf.estimate()[1]).max())
             else:
                 P = self.gps_filter.covariance() if self.gps_filter.initialized else None
-            self.integrity.fill(self.h, t, None if P is None else P[:2, :2])
+            self.integrity.fill(self.h, t, None if P is None else P[:2, :2], extra)
         return self.h

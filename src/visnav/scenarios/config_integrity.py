@@ -56,6 +56,9 @@ class WitasIntegrityConfig(IntegrityBlock):
 
     alert_limit_m: float = Field(30.0, gt=0, description="unusable when the HPL exceeds it")
     stale_s: float = Field(5.0, gt=0, description="unusable when no update was accepted for this long")
+    pmf_in_hpl: bool = Field(True, description="add the point-mass filter's covariance (largest eigenvalue per "
+                             "axis) to the HPL's: the KF fuses the PMF mean every frame as if its errors were "
+                             "independent, they are not")
 
 
 class PadIntegrityConfig(IntegrityBlock):
