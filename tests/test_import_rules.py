@@ -35,3 +35,55 @@ def test_the_check_sees_a_forbidden_import(tmp_path):
     f = tmp_path / "x.py"
     f.write_text("def f():\n    from visnav.sim.missions import MissionParts\n")
     assert _imports(f) == [(2, "visnav.sim.missions")]
+
+
+# ------------------------------------------------------------------------------- no import cycle
+from visnav.import_graph import cycles, import_graph  # noqa: E402
+
+
+def test_no_import_cycle_module_level_or_deferred():
+    """Issue 13: the module graph has no cycle, neither over the module-level imports nor over all imports
+    (a function-level import still makes two modules depend on each other). Anyone can run the same check:
+    python -c "import visnav.import_graph as g; g.main()"."""
+    top, deferred = import_graph(PKG)
+    assert sum(map(len, top.values())) > 200 and sum(map(len, deferred.values())) > 50  # it saw the package
+    assert cycles(top) == []
+    assert cycles({m: top[m] | deferred[m] for m in top}) == []
+
+
+def _package(tmp_path, files: dict[str, str]) -> Path:
+    root = tmp_path / "pkg"
+    for name, text in {"__init__.py": "", **files}.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(text)
+    return root
+
+
+def test_the_check_sees_cycles_and_tells_deferred_from_module_level(tmp_path):
+    root = _package(tmp_path, {
+        "a.py": "from pkg.b import f\n",
+        "b.py": "def f():\n    from . import c\n",
+        "c.py": "import pkg.a as a\nfrom typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg.d import X\n",
+        "d.py": "from pkg import c\n",
+        "sub/__init__.py": "from .e import g\n",
+        "sub/e.py": "from ..a import f\n",
+    })
+    top, deferred = import_graph(root)
+    assert top["pkg.a"] == {"pkg.b"} and deferred["pkg.b"] == {"pkg.c"}
+    assert top["pkg.c"] == {"pkg.a"} and deferred["pkg.c"] == {"pkg.d"}
+    assert top["pkg.sub"] == {"pkg.sub.e"} and top["pkg.sub.e"] == {"pkg.a"}
+    assert cycles(top) == []  # a -> b only through b's function
+    assert cycles({m: top[m] | deferred[m] for m in top}) == [["pkg.a", "pkg.b", "pkg.c", "pkg.d"]]
+
+
+def test_the_one_line_check_runs(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": str(PKG.parent)}
+    r = subprocess.run([sys.executable, "-c", "import visnav.import_graph as g; g.main()"], capture_output=True,
+                       text=True, env=env, timeout=60)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "module-level imports: 0 cycle(s)" in r.stdout and "all imports (module-level + deferred): 0 cycle(s)" \
+        in r.stdout

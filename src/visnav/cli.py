@@ -351,6 +351,37 @@ def palace_report(
     console.print(f"written: {path}")
 
 
+@app.command(help="Recompute a run's metrics from its log.h5 and scenario.toml (the code that scores a "
+             "simulated, replayed or recorded run) and print them.")
+def metrics(
+    run_dir: str = typer.Argument(..., help="a run directory (visnav run --out DIR)"),
+    json_: bool = typer.Option(False, "--json", help="print the metrics as JSON"),
+    out: Optional[str] = typer.Option(None, "--out", help="also write them as JSON to this file"),
+) -> None:
+    """Recompute a run's metrics from its log."""
+    from visnav.analysis.run_metrics import RunDirError, from_run_dir
+    from visnav.io.runs import _jsonable
+
+    try:
+        m = from_run_dir(run_dir)
+    except (RunDirError, ValueError) as exc:
+        _fail(exc)
+    if out:
+        try:
+            Path(out).write_text(json.dumps(_jsonable(m), indent=2) + "\n")
+        except OSError as exc:
+            _fail(f"cannot write {out}: {exc}")
+    if json_:
+        _print_json(m)
+        return
+    table = Table(title=f"metrics from {run_dir}/log.h5")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for k, v in m.items():
+        table.add_row(k, escape(_fmt(v)))
+    console.print(table)
+
+
 @app.command()
 def scenarios() -> None:
     """List the built-in scenarios."""

@@ -1,6 +1,13 @@
-"""Run metrics, computed from the flight log (truth enters here, never the navigator)."""
+"""Run metrics, computed from the flight log (truth enters here, never the navigator).
+
+Every ``xxx_metrics(log, scenario, *, wall_time_s, error)`` reads only the run's ``FlightLog`` (the same
+data as its ``log.h5``) and the resolved scenario, never the live simulation, so that a run directory, a
+replayed or a recorded flight is scored by the same code (``analysis/run_metrics.py``, ``visnav metrics``).
+"""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -19,6 +26,42 @@ def finish_metrics(out: dict, sim_time_s: float, wall_time_s: float, error: str 
     if error:
         out["error"] = error
     return out
+
+
+def mode_changes(log) -> tuple[np.ndarray, list[str]]:
+    """(times, modes) of the mission's mode changes (its ``mode`` stream)."""
+    m = log.get("mode")
+    if not m:
+        return np.zeros(0), []
+    return np.asarray(m["t"], float), [str(x) for x in m["mode"]]
+
+
+def final_mode(log) -> str:
+    """The mission's last mode: its last mode change, else the mode it logged at its first step."""
+    _, modes = mode_changes(log)
+    if modes:
+        return modes[-1]
+    st = log.get("status")
+    return str(st["mode"][0]) if st else ""
+
+
+def mode_entered(log, mode: str, which: str = "first") -> float | None:
+    """Time the mission entered ``mode`` (its ``first`` or ``last`` entry), None if it never did."""
+    t, modes = mode_changes(log)
+    hits = [float(x) for x, m in zip(t, modes) if m == mode]
+    return (hits[0] if which == "first" else hits[-1]) if hits else None
+
+
+def last_row(log, stream: str, name: str, default=math.nan):
+    """Last value of ``stream.name`` (``default`` when the stream never recorded)."""
+    s = log.get(stream)
+    return s[name][-1] if s and name in s else default
+
+
+def _count(x) -> int | float:
+    """An integer counter, or NaN when the log did not hold it."""
+    x = float(x)
+    return int(x) if math.isfinite(x) else math.nan
 
 
 def mpe_drift(log, horizontal: bool = True) -> tuple[float, np.ndarray]:
@@ -82,16 +125,18 @@ def hover_oscillation(log, mode: str = "hold", settle_s: float = 1.0) -> dict:
     }
 
 
-def palace_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
-    log, m = sim.log, sim.mission
+def palace_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
+    """The PALACE landing (seed 000 §5.4): touch-down, MPE drift and accuracy, vision time, the mission's
+    re-initialisations and fall-backs (its ``palace_progress`` stream), the navigator's rejections (``status``)."""
     truth = log.get("truth")
     sim_time = float(truth["t"][-1]) if truth else 0.0
     td = log.get("touchdown")
-    landed = bool(td) and not m.aborted and error is None
-    point = m.point
+    aborted = mode_entered(log, "abort") is not None
+    landed = bool(td) and not aborted and error is None
+    point = np.array([*scenario.mission.landing_point_m[:2], 0.0])
     out: dict = {
         "landed": landed,
-        "aborted": bool(m.aborted),
+        "aborted": aborted,
         "touchdown_error_m": float(np.linalg.norm(td["position"][0][:2] - point[:2])) if td else float("nan"),
         "touchdown_speed_mps": float(td["speed"][0]) if td else float("nan"),
     }
@@ -100,9 +145,10 @@ def palace_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
     mpe_t = (log.get("mpe") or {}).get("t")
     # the time the drift accumulated over (Table 5.3's "Duration": first MPE fix to the last)
     out["mpe_drift_duration_s"] = float(mpe_t[-1] - mpe_t[0]) if mpe_t is not None and len(mpe_t) else float("nan")
-    out["time_under_vision_s"] = float(m.vision_time)
-    out["reinitializations"] = int(m.reinitializations)
-    out["mpe_fallbacks"] = int(m.fallbacks)
+    # NaN, not 0, from a log without the stream (a log written before it existed): unknown, not none
+    out["time_under_vision_s"] = float(last_row(log, "palace_progress", "vision_time"))
+    out["reinitializations"] = _count(last_row(log, "palace_progress", "reinitializations"))
+    out["mpe_fallbacks"] = _count(last_row(log, "palace_progress", "fallbacks"))
     # MPE accuracy while it flew the aircraft
     mpe, est = log.get("mpe"), log.get("estimate")
     if mpe and truth:
@@ -116,28 +162,29 @@ def palace_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
             e = est["position"][on_mpe, :2] - truth["position"][on_mpe, :2]
             out["nav_error_under_mpe_rms_m"] = float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
     out.update(hover_oscillation(log))
-    h = sim.nav.health()
-    out["rejected_samples"] = int(h.rejected_samples)
-    out["rejected_ranges"] = int(h.rejected_ranges)
-    out["final_mode"] = m.mode
+    out["rejected_samples"] = _count(last_row(log, "status", "rejected_samples"))
+    out["rejected_ranges"] = _count(last_row(log, "status", "rejected_ranges"))
+    out["final_mode"] = final_mode(log)
     return finish_metrics(out, sim_time, wall_time_s, error)
 
 
-def hover_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
+def hover_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
     """Metrics of a hover mission: the §4.2.1 drift of MPE (open or closed loop) during the hold."""
     from visnav.analysis.drift import measure_drift
 
-    log, m, cfg = sim.log, sim.mission, sim.sc.mission
+    cfg = scenario.mission
     truth, mpe = log.get("truth"), log.get("mpe")
-    out: dict = {"altitude_m": float(cfg.altitude_m), "surface": sim.sc.world.surface,
-                 "source": cfg.source, "tracker_lost": m.mode in ("lost",) or any(
-                     x == "lost" for x in (log.get("mode") or {}).get("mode", []))}
-    if mpe and truth and m.t_hold is not None:
-        sel = mpe["t"] >= m.t_hold
+    _, modes = mode_changes(log)
+    out: dict = {"altitude_m": float(cfg.altitude_m), "surface": scenario.world.surface,
+                 "source": cfg.source, "tracker_lost": "lost" in modes}
+    t_hold = mode_entered(log, "hold", "last")  # HoverMission.t_hold: its last entry into the hold
+    if mpe and truth and t_hold is not None:
+        sel = mpe["t"] >= t_hold
         if sel.sum() > 20:
             t = mpe["t"][sel]
             err = mpe["position"][sel] - interp_rows(t, truth["t"], truth["position"])
-            r = measure_drift(t, err[:, :2], mpe["range"][sel], sim.camera_model.fx)
+            fx = float(scenario.sensors.camera.focal_px)  # PinholeCamera.ideal: fx = fy = focal_px
+            r = measure_drift(t, err[:, :2], mpe["range"][sel], fx)
             out.update(drift_m=r.drift_m, drift_px=r.drift_px, drift_duration_s=r.duration_s,
                        mpe_noise_sigma_m=r.noise_sigma_m, mean_range_m=float(np.mean(mpe["range"][sel])))
     out.update(hover_oscillation(log))

@@ -39,13 +39,14 @@ def vision_velocity(vis: dict, max_gap_s: float = 0.11) -> tuple[np.ndarray, np.
     return 0.5 * (t[1:] + t[:-1])[ok], v, np.flatnonzero(ok)
 
 
-def pad_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
-    log = sim.log
+def pad_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
+    from visnav.analysis.metrics import final_mode
+
     tr, est = log.get("truth"), log.get("estimate")
     out: dict = {}
     sim_time = float(tr["t"][-1]) if tr else 0.0
     td = log.get("touchdown")
-    out["landed"] = bool(td) and getattr(sim.mission, "mode", "") == "landed" and not error
+    out["landed"] = bool(td) and final_mode(log) == "landed" and not error
     iv = approach_interval(log)
     if td:
         p = td["position"][0]

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from visnav.analysis.published import THESIS_TABLE_4_1  # noqa: F401  (re-exported)
+
 
 # --------------------------------------------------------------------------- FRF storage
 def _frf_name(key) -> str:
@@ -43,19 +45,6 @@ def load_frfs(path) -> dict:
 
 
 # --------------------------------------------------------------------------- the thesis' numbers
-#: Table 4.1 (flight, 120 s hovers unless shorter): (AGL m, surface, time s, drift m, sigma m, equiv px)
-THESIS_TABLE_4_1 = [
-    (30, "concrete", 120, 0.4626, 0.0635, 10.882), (30, "concrete", 120, 0.6137, 0.0810, 14.438),
-    (31, "concrete", 76.2, 0.4802, 0.0761, 17.217), (19, "concrete", 120, 0.0848, 0.0581, 3.152),
-    (14, "concrete", 120, 0.2346, 0.0434, 11.829), (12, "concrete", 34.3, 0.0789, 0.0227, 16.229),
-    (18, "asphalt", 120, 0.3295, 0.0507, 12.917), (18, "asphalt", 120, 0.1880, 0.0541, 7.373),
-    (12, "asphalt", 120, 0.1011, 0.0325, 5.945), (12, "asphalt", 120, 0.2548, 0.0289, 14.986),
-    (12, "asphalt", 120, 0.3879, 0.0481, 22.812), (12, "asphalt", 120, 0.1991, 0.0354, 11.710),
-    (6, "asphalt", 120, 0.0600, 0.0218, 7.057), (6, "asphalt", 120, 0.0217, 0.0176, 2.560),
-    (4.5, "asphalt", 120, 0.0360, 0.0152, 5.650), (3.5, "asphalt", 120, 0.0769, 0.0164, 15.497),
-    (2, "asphalt", 120, 0.0560, 0.0224, 19.770), (24, "grass", 107.6, 0.0735, 0.0793, 2.411),
-    (17, "grass", 72.1, 0.2167, 0.1711, 14.971),
-]
 #: Figs. 4.2/4.3 (simulation, 30 runs per point): mean and maximum drift per 120 s; Fig. 4.4 flight max
 THESIS_DRIFT_PX = {"sim_mean": 20.0, "sim_max": 34.0, "flight_max": 22.8}
 #: Table 5.1: (AGL m, delay s) -> (lat PM deg, wc, lat GM dB, w180, lon PM, wc, lon GM, w180)

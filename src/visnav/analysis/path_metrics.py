@@ -39,22 +39,48 @@ def path_errors(path, truth: dict) -> dict[str, np.ndarray]:
             "descent": truth["velocity"][:, 2]}
 
 
-def pfcm_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
-    """metrics.json of a PFCM run (issue #4 keys first)."""
-    log, m = sim.log, sim.mission
+def saturation_times(log) -> tuple[float, dict[str, float]]:
+    """Time with at least one YACS channel saturated and per channel, summed over the path controller's
+    updates (``pfcm_control``: its ``dt`` and ``sat_*`` flags) in the order it summed them."""
+    c = log.get("pfcm_control")
+    chans = ("ail", "ele", "rud", "thr")
+    if not c:  # the controller never ran (no valid estimate): nothing saturated
+        return 0.0, dict.fromkeys(chans, 0.0)
+    if "dt" not in c:  # a log from before the controller logged its dt
+        return float("nan"), {}
+    total, per = 0.0, dict.fromkeys(chans, 0.0)
+    flags = np.stack([np.asarray(c[f"sat_{k}"], bool) for k in chans], axis=1)
+    for dt, row in zip(np.asarray(c["dt"], float), flags):
+        if dt > 0:
+            if row.any():
+                total += float(dt)
+            for k, f in zip(chans, row):
+                per[k] += float(dt) if f else 0.0
+    return total, per
+
+
+def pfcm_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
+    """metrics.json of a PFCM run (issue #4 keys first), from the log and the scenario's path."""
+    from visnav.analysis.metrics import final_mode, mode_entered
+    from visnav.mission.pfcm import build_path
+
     truth, ref = log.get("truth"), log.get("pfcm")
     sim_time = float(truth["t"][-1]) if truth else 0.0
     out: dict = {k: float("nan") for k in ("cross_track_rms_m", "cross_track_max_m", "speed_error_rms_mps",
                                            "max_roll_deg", "max_descent_mps")}
-    ctrl = sim.controller
-    out["input_saturation_s"] = float(getattr(ctrl, "saturation_time_s", float("nan")))
-    for c, v in getattr(ctrl, "channel_saturation_s", {}).items():
+    sat, per = saturation_times(log)
+    out["input_saturation_s"] = sat
+    for c, v in per.items():
         out[f"{c}_saturation_s"] = float(v)
-    out["path_completed"] = bool(m.path_completed) and error is None and not m.aborted
+    # PfcmMission: path_completed <=> it entered "hold" (at t_complete); a touch-down is "crashed" (aborted)
+    t_follow, t_complete = mode_entered(log, "follow"), mode_entered(log, "hold")
+    aborted = mode_entered(log, "crashed") is not None
+    out["path_completed"] = t_complete is not None and error is None and not aborted
+    path = build_path(scenario.mission)
     if truth:
         sel = _follow_mask(log, truth["t"])
         if sel.any():
-            e = path_errors(m.path, {k: truth[k][sel] for k in ("position", "velocity")})
+            e = path_errors(path, {k: truth[k][sel] for k in ("position", "velocity")})
             ct = e["cross_track"]
             out["cross_track_rms_m"] = float(np.sqrt(np.mean(ct**2)))
             out["cross_track_max_m"] = float(ct.max())
@@ -70,9 +96,9 @@ def pfcm_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
             speed = np.linalg.norm(np.stack([np.interp(ref["t"], truth["t"], truth["velocity"][:, j])
                                              for j in range(3)], axis=1), axis=1)
             out["speed_error_rms_mps"] = float(np.sqrt(np.mean((speed - ref["v_target"]) ** 2)))
-    out["path_length_m"] = float(m.path.length)
-    out["flight_time_s"] = float((m.t_complete if m.t_complete is not None else sim_time) - (m.t_follow or 0.0))
-    out["final_mode"] = m.mode
+    out["path_length_m"] = float(path.length)
+    out["flight_time_s"] = float((t_complete if t_complete is not None else sim_time) - (t_follow or 0.0))
+    out["final_mode"] = final_mode(log)
     return finish_metrics(out, sim_time, wall_time_s, error)
 
 

@@ -68,9 +68,22 @@ PALACE_LANDING = [
 ]
 
 
-def _table_4_1_rows(altitude_m: float, surface: str):
-    from visnav.analysis.palace_report import THESIS_TABLE_4_1
+#: Table 4.1 (flight, 120 s hovers unless shorter): (AGL m, surface, time s, drift m, sigma m, equiv px)
+THESIS_TABLE_4_1 = [
+    (30, "concrete", 120, 0.4626, 0.0635, 10.882), (30, "concrete", 120, 0.6137, 0.0810, 14.438),
+    (31, "concrete", 76.2, 0.4802, 0.0761, 17.217), (19, "concrete", 120, 0.0848, 0.0581, 3.152),
+    (14, "concrete", 120, 0.2346, 0.0434, 11.829), (12, "concrete", 34.3, 0.0789, 0.0227, 16.229),
+    (18, "asphalt", 120, 0.3295, 0.0507, 12.917), (18, "asphalt", 120, 0.1880, 0.0541, 7.373),
+    (12, "asphalt", 120, 0.1011, 0.0325, 5.945), (12, "asphalt", 120, 0.2548, 0.0289, 14.986),
+    (12, "asphalt", 120, 0.3879, 0.0481, 22.812), (12, "asphalt", 120, 0.1991, 0.0354, 11.710),
+    (6, "asphalt", 120, 0.0600, 0.0218, 7.057), (6, "asphalt", 120, 0.0217, 0.0176, 2.560),
+    (4.5, "asphalt", 120, 0.0360, 0.0152, 5.650), (3.5, "asphalt", 120, 0.0769, 0.0164, 15.497),
+    (2, "asphalt", 120, 0.0560, 0.0224, 19.770), (24, "grass", 107.6, 0.0735, 0.0793, 2.411),
+    (17, "grass", 72.1, 0.2167, 0.1711, 14.971),
+]
 
+
+def _table_4_1_rows(altitude_m: float, surface: str):
     return [r for r in THESIS_TABLE_4_1 if r[1] == surface and abs(r[0] - altitude_m) <= 1.5]
 
 

@@ -22,14 +22,16 @@ def _wrap(a):
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
-def witas_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
-    log, cfg = sim.log, sim.sc.mission
+def witas_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
+    from visnav.analysis.metrics import mode_entered
+
+    cfg = scenario.mission
     tr, est = log.get("truth"), log.get("estimate")
     out: dict = {}
     sim_time = float(tr["t"][-1]) if tr else 0.0
     eng = log.get("vision_engaged")
     setup = log.get("witas_setup")
-    home = np.asarray(setup["home"][0], float) if setup else np.asarray(sim.mission.start_position(), float)
+    home = np.asarray(setup["home"][0], float) if setup else np.full(3, np.nan)  # sim/witas_parts.py logs it
     if not tr or not eng:
         out["returned_home"] = False
         return finish_metrics(out, sim_time, wall_time_s, error or "vision filter never engaged")
@@ -72,8 +74,9 @@ def witas_metrics(sim, wall_time_s: float, error: str | None = None) -> dict:
         out["pitch_error_final_deg"] = float(abs(ae[-1, 1]))
     d_home = float(np.linalg.norm(tp[-1, :2] - home[:2]))
     out["home_error_m"] = d_home
-    out["returned_home"] = bool(d_home <= cfg.home_radius_m and sim.mission.path_completed
-                                and not getattr(sim.mission, "aborted", False))
+    # PfcmMission: the path is completed when it enters "hold"; a touch-down is "crashed" (aborted)
+    completed, crashed = mode_entered(log, "hold") is not None, mode_entered(log, "crashed") is not None
+    out["returned_home"] = bool(d_home <= cfg.home_radius_m and completed and not crashed)
     return finish_metrics(out, sim_time, wall_time_s, error)
 
 
@@ -95,7 +98,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     out = []
     fig, axs = plt.subplots(1, 2, figsize=(14, 7), layout="constrained")
     try:
-        from visnav.sim.witas_parts import make_ground
+        from visnav.world.witas_map import make_ground
 
         ground, _ = make_ground(scenario.mission, scenario.run.seed)
         n0, n1, e0, e1 = ground.extent_ned()

@@ -77,7 +77,8 @@ register_stream("pfcm_control", phi_c=("rad", "", "roll command"), theta_c=("rad
                 i_x=("m", "heading x", "longitudinal integrator (of dv_x)"),
                 i_y=("m s", "heading y", "lateral integrator (of dp_y)"),
                 phi_ff=("rad", "", "feed-forward roll"),
-                **{f"sat_{k}": ("bool", "", f"{k} saturated") for k in ("ail", "ele", "rud", "thr")})
+                **{f"sat_{k}": ("bool", "", f"{k} saturated") for k in ("ail", "ele", "rud", "thr")},
+                dt=("s", "", "time since the previous update that this one integrates (saturation time, integrators)"))
 
 G = 9.81
 
@@ -299,7 +300,7 @@ class PathFollowingController:
             self.record("pfcm_control", t, phi_c=phi_c, theta_c=theta_c, climb_c=w_c, yaw_rate_c=r_c,
                         ail=cmd.ail, ele=cmd.ele, rud=cmd.rud, thr=cmd.thr, dp=dp, dv=dv, i_x=i_x, i_y=i_y,
                         phi_ff=r.phi_ff, sat_ail=sat[0], sat_ele=sat[1],
-                        sat_rud=sat[2], sat_thr=sat[3])
+                        sat_rud=sat[2], sat_thr=sat[3], dt=dt)
         return cmd
 
     @staticmethod

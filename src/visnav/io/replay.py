@@ -93,7 +93,7 @@ def _palace(rec: Recording, opts: ReplayOptions, recorder):
 
 @register_navigator("witas", needs=("imu", "attitude", "gps", "baro", "frames"))
 def _witas(rec: Recording, opts: ReplayOptions, recorder):
-    from visnav.sim.witas_parts import make_ground, mission_rngs, reference_map
+    from visnav.world.witas_map import make_ground, mission_rngs, reference_map
     from visnav.navigation.witas import WitasNavigator
 
     sc = scenario_of(rec, "witas-homing", opts.scenario_overrides)

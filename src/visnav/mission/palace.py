@@ -29,6 +29,10 @@ register_stream("reinit", x=("px", "image, OpenCV (x right)", "new point tracked
                 y=("px", "image, OpenCV (y down)", "new point tracked after a re-initialisation"))
 register_stream("reacquire")  # a time only: the tracker was re-acquired
 register_stream("mpe_end")  # a time only: MPE stopped (below 1 m)
+register_stream("palace_progress",
+                vision_time=("s", "", "time flown with MPE as the navigation source so far (the mission's clock)"),
+                reinitializations=("1", "", "tracker re-initialisations requested so far"),
+                fallbacks=("1", "", "fall-backs from MPE to GPS so far"))
 
 
 class PalaceMission:
@@ -73,6 +77,12 @@ class PalaceMission:
 
     # ------------------------------------------------------------------------------------
     def step(self, t: float, nav: NavEstimate, health: Health) -> tuple[PositionReference, str]:
+        out = self._step(t, nav, health)
+        self.record("palace_progress", t, vision_time=self.vision_time, reinitializations=self.reinitializations,
+                    fallbacks=self.fallbacks)
+        return out
+
+    def _step(self, t: float, nav: NavEstimate, health: Health) -> tuple[PositionReference, str]:
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t
         c = self.cfg

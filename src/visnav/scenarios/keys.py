@@ -8,7 +8,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from visnav.scenarios.schema import Scenario, _describe_field
+from visnav.scenarios.schema import Scenario, _describe_field, not_applicable
 
 # field-name suffix -> unit (longest first: ``_deg_s`` before ``_s``)
 _SUFFIX_UNITS = (
@@ -36,8 +36,9 @@ def _plain(v: Any) -> Any:
 
 
 def settable_keys(sc: Scenario) -> list[dict]:
-    """One dict per leaf key of ``sc`` (dotted ``key``, this scenario's ``value``, the schema's
-    ``default``, ``unit``, ``allowed``, ``description``), in schema order."""
+    """One dict per leaf key of ``sc`` that its mission reads (dotted ``key``, this scenario's ``value``, the
+    schema's ``default``, ``unit``, ``allowed``, ``description``), in schema order; keys its simulation
+    ignores (``schema.NOT_APPLICABLE``) are left out."""
     mission_type = getattr(sc.mission, "type", "palace")
     rows: list[dict] = []
 
@@ -47,6 +48,8 @@ def settable_keys(sc: Scenario) -> list[dict]:
             loc = path + [name]
             if isinstance(value, BaseModel):
                 walk(value, loc)
+                continue
+            if not_applicable(".".join(loc), mission_type) is not None:
                 continue
             default = None if f.default_factory is not None else f.default
             if f.default_factory is not None:

@@ -312,6 +312,88 @@ class Scenario(_M):
 
 
 # ---------------------------------------------------------------------------------------------
+#: Keys of the R-MAX sections that a mission's simulation never reads (grep of ``sc.world / sc.vehicle /
+#: sc.sensors / sc.navigation`` in sim/ and of what its builder replaces): mission.type -> [(key prefix,
+#: keys under it that do apply, where the mission takes that instead)]. Setting one of them to anything but
+#: its default is an error (a resolved scenario.toml, which holds every key at its default, still loads).
+_WIND = ("wind_speed_mps", "wind_from_deg", "turbulence")
+
+
+def _fixed_wing(world: str) -> list[tuple[str, tuple[str, ...], str]]:
+    return [("world", _WIND, f"its world is the wind (world.{', world.'.join(_WIND)}) and {world}"),
+            ("vehicle", (), "its aircraft is mission.airframe.*"),
+            ("sensors", (), "its sensors are mission.camera.*, mission.gimbal.* and its telemetry link"),
+            ("navigation", (), "its estimation is configured under mission.*")]
+
+
+NOT_APPLICABLE: dict[str, list[tuple[str, tuple[str, ...], str]]] = {
+    "deck": [
+        ("world", (), "its world is the ship deck, mission.deck.*"),
+        ("vehicle", (), "its vehicle is mission.vehicle.*"),
+        ("sensors.imu", (), "its IMU is mission.imu.*"),
+        ("sensors.camera", (), "its camera is mission.camera.*"),
+        ("sensors", (), "its sensors are mission.imu.* and mission.camera.*"),
+        ("navigation", (), "its filter is mission.filter.*"),
+    ],
+    "condor": _fixed_wing("mission.target.*"),
+    "mav-geolocation": _fixed_wing("mission.map.* and mission.target.*"),
+    "witas-homing": [
+        ("navigation", (), "its navigator is configured by mission.filter.*"),
+        ("sensors.camera", (), "its camera is mission.camera.*"),
+        ("sensors.laser", (), "its navigator takes no range measurement"),
+        ("sensors.sonar", (), "its navigator takes no range measurement"),
+    ],
+    "pad-landing": [
+        ("navigation", (), "its navigator is configured by mission.filter.*"),
+        ("sensors.camera", (), "its camera is mission.camera.* on mission.pantilt.*"),
+        ("sensors.imu.rate_hz", (), "its IMU rates are mission.filter.gyro_hz and mission.filter.accel_hz"),
+        ("sensors.gps", (), "it flies GPS-free"),
+        ("sensors.laser", (), "its navigator takes no range measurement"),
+        ("sensors.sonar", (), "its navigator takes no range measurement"),
+    ],
+    "pfcm": [
+        ("navigation.tracker", (), "it flies on GPS: no camera, no tracker"),
+        ("navigation.mpe", (), "it flies on GPS: no camera, no MPE"),
+    ],
+}
+
+
+def _leaves(data: Any, path: tuple[str, ...] = ()):
+    if isinstance(data, dict):
+        for k, v in data.items():
+            yield from _leaves(v, path + (str(k),))
+    else:
+        yield path
+
+
+def not_applicable(key: str, mission_type: str) -> str | None:
+    """Why the dotted ``key`` does not apply to ``mission_type`` (None: it applies)."""
+    parts = key.split(".")
+    for prefix, keep, hint in NOT_APPLICABLE.get(mission_type, ()):
+        pre = prefix.split(".")
+        if parts[: len(pre)] == pre and not (len(parts) > len(pre) and parts[len(pre)] in keep):
+            return hint
+    return None
+
+
+def _check_applicable(data: dict, sc: Scenario) -> None:
+    """One line for the first key set in ``data`` that ``sc``'s mission ignores (to a non-default value)."""
+    kind = getattr(sc.mission, "type", "palace")
+    if kind not in NOT_APPLICABLE:
+        return
+    default = Scenario(mission=MISSION_TYPES[kind]())
+    for path in _leaves({k: v for k, v in data.items() if k != "mission"}):
+        key = ".".join(path)
+        hint = not_applicable(key, kind)
+        if hint is None:
+            continue
+        value, ref = sc, default
+        for p in path:
+            value, ref = getattr(value, p, None), getattr(ref, p, None)
+        if value != ref:
+            raise ScenarioError(f"{key} does not apply to mission.type {kind!r} ({hint})")
+
+
 def _clean_loc(loc: list[str]) -> list[str]:
     """Drop the discriminator tag pydantic puts in the path of a union member (mission.palace.x)."""
     if len(loc) > 1 and loc[0] == "mission" and loc[1] in MISSION_TYPES:
@@ -400,6 +482,7 @@ def validate(data: dict) -> Scenario:
         sc = Scenario.model_validate(data)
     except ValidationError as err:
         raise ScenarioError(_format_error(err, data)) from None
+    _check_applicable(data, sc)
     try:
         check_faults_apply(sc.mission.type, sc.faults)
     except ValueError as err:

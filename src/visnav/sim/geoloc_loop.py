@@ -120,7 +120,8 @@ class GeolocationSimulation:
             self.log.record("error", getattr(self, "_t", 0.0), message=error)
         self._log_samples()
         wall = time.perf_counter() - wall0
-        return RunResult(scenario=self.sc, log=self.log, metrics=geolocation_metrics(self, wall, error), error=error)
+        return RunResult(scenario=self.sc, log=self.log, error=error,
+                         metrics=geolocation_metrics(self.log, self.sc, wall_time_s=wall, error=error))
 
     def _log_samples(self) -> None:
         """The navigator's samples and RLS estimates, beside the true target (for the report)."""
@@ -130,6 +131,12 @@ class GeolocationSimulation:
                             ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],
                             hough=s["hough_applied"], heading_tel=s["heading_tel"], heading_used=s["heading_used"],
                             height_used=s["height_used"], gps=s["gps"], uv=s["uv"])
+        est, est_m, h = self.nav.estimate(0.0), self.nav.estimate(0.0, "map_based"), self.nav.health(0.0)
+        self.log.record("geoloc_result", getattr(self, "_t", 0.0), sim_time=getattr(self, "sim_time", math.nan),
+                        est_reg=est.position, est_reg_valid=est.valid, est_map=est_m.position, est_map_valid=est_m.valid,
+                        target_sigma=math.sqrt(max(np.trace(est.covariance), 0.0)) if est.valid else math.nan,
+                        rejected=h.rejected_samples, reinits=h.reinitializations,
+                        frames_tracked=self.nav.frames_tracked)
 
     def _true_pixel(self, pos: np.ndarray, C_cn: np.ndarray) -> np.ndarray:
         p = (np.array([self.target[0], self.target[1], 0.0]) - pos) @ C_cn

@@ -215,7 +215,7 @@ class Simulation:
                 self._render_pool.shutdown(wait=True, cancel_futures=True)
                 self._render_pool = None
         wall = time.perf_counter() - wall0
-        metrics = self._metrics(self, wall_time_s=wall, error=error)
+        metrics = self._metrics(self.log, self.sc, wall_time_s=wall, error=error)  # from the log only
         metrics.update(integrity_metrics(log, sc))  # from the log (issue #18)
         return RunResult(scenario=sc, log=log, metrics=metrics, error=error, interrupted=interrupted)
 
@@ -229,4 +229,5 @@ class Simulation:
         log.record("command", t, ail=cmd.ail, ele=cmd.ele, rud=cmd.rud, thr=cmd.thr)
         log.record("status", t, mode=mode, source=health.source, coherence=health.coherence,
                    mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking,
+                   rejected_samples=health.rejected_samples, rejected_ranges=health.rejected_ranges,
                    integrity=STATE_CODES.get(health.integrity, -1), hpl_m=health.hpl_m, k2=health.consistency_k2)

@@ -7,10 +7,9 @@ pydantic config in ``scenarios/schema.py``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable
 
-import numpy as np
+from visnav.sim.parts import MissionParts  # noqa: F401  (re-exported)
 
 Builder = Callable[[object], "MissionParts"]
 REGISTRY: dict[str, Builder] = {}
@@ -27,34 +26,22 @@ SIMULATIONS: dict[str, str] = {
 }
 
 
+#: the R-MAX loop, which flies every mission type not in ``SIMULATIONS`` (named, not imported: sim/loop.py
+#: imports this module's ``build``, and the package's imports have no cycle, tests/test_import_rules.py)
+RMAX_SIMULATION = "visnav.sim.loop:Simulation"
+
+
 def simulation_class(mission_type: str):
     """The simulation class that flies ``mission_type`` (the R-MAX ``Simulation`` by default)."""
     import importlib
 
-    target = SIMULATIONS.get(mission_type)
-    if target is None:
-        from visnav.sim.loop import Simulation
-
-        return Simulation
-    module, name = target.split(":")
+    module, name = SIMULATIONS.get(mission_type, RMAX_SIMULATION).split(":")
     return getattr(importlib.import_module(module), name)
 
 
 def make_simulation(scenario):
     """Build the simulation for a validated ``Scenario``."""
     return simulation_class(getattr(scenario.mission, "type", "palace"))(scenario)
-
-
-@dataclass
-class MissionParts:
-    mission: object  # .step(t, nav, health) -> (reference, mode); .done; .mode; .on_touchdown(t)
-    controller: object  # .command(t, nav, reference) -> command
-    metrics: Callable  # metrics(sim, wall_time_s, error) -> dict
-    start_position: np.ndarray
-    start_yaw: float = 0.0
-    uses_camera: bool = True
-    navigator: object | None = None  # a mission's own navigator (replaces the PALACE one)
-    sensors: tuple = ()  # extra sensors: .rate_hz, .latency_s, .sample(t, truth_at) -> measurement
 
 
 def register(name: str) -> Callable[[Builder], Builder]:

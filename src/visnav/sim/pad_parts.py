@@ -22,7 +22,7 @@ def build(sim):
     from visnav.sensors.pad_camera import PadCamera
     from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
     from visnav.sensors.split_imu import SplitRateImu
-    from visnav.sim.missions import MissionParts
+    from visnav.sim.parts import MissionParts
     from visnav.vision.pad import PadDetector
     from visnav.world.pad import pad_board
 

@@ -10,7 +10,8 @@ import numpy as np
 
 from visnav.guidance.hermite import HermitePath
 from visnav.log_schema import register_stream
-from visnav.mission.witas import fit_loop, loop_waypoints
+from visnav.mission.witas import loop_waypoints
+from visnav.world.witas_map import make_ground, mission_rngs, reference_map  # noqa: F401  (re-exported)
 
 register_stream("note", message=("text", "", "how the scenario was set up (e.g. the loop shrunk to fit the map)"))
 register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),
@@ -19,40 +20,6 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
                 home=("m", "NED world (origin at the scenario's home)", "home (the first waypoint)"),
                 map_extent=("m", "NED: north min, north max, east min, east max", "extent of the ground map"),
                 reference_resolution=("m/px", "", "resolution of the degraded reference map"))
-
-
-def make_ground(cfg, seed: int):
-    """The world raster of a ``WitasMissionConfig`` and the loop fitted on it (sizes, radius, centre).
-    Deterministic in ``seed`` (the report rebuilds it to draw the tracks on the map)."""
-    from visnav.world.maps import GeoImage
-    from visnav.world.rural import rural_map
-
-    pc, cc, mc = cfg.path, cfg.camera, cfg.map
-    footprint = cc.height * pc.altitude_m / cc.focal_px
-    if mc.file:
-        ground = GeoImage.load(mc.file)
-        return ground, fit_loop(pc, ground.extent_ned(), footprint)
-    sn, se = pc.size_north_m, pc.size_east_m
-    r = min(pc.corner_radius_m, 0.45 * min(sn, se))
-    size = max(sn, se) + 2 * (pc.margin_m + footprint) + 100.0
-    pond = (0.0, se / 2.0) if mc.pond else None  # under the east leg (the thesis' leg 3-4)
-    rng = np.random.default_rng(np.random.SeedSequence([seed, 5]).spawn(6)[0])
-    return rural_map(size, mc.resolution_m, rng, pond_ne=pond), (sn, se, r, (0.0, 0.0))
-
-
-def mission_rngs(seed: int) -> list[np.random.Generator]:
-    """The mission's generators (ground, camera, baro, compass, navigator, spare) from the run seed; the
-    replay rebuilds the navigator's (index 4) from the recorded scenario."""
-    return [np.random.default_rng(s) for s in np.random.SeedSequence([seed, 5]).spawn(6)]
-
-
-def reference_map(cfg, ground):
-    """The navigator's degraded reference map of the world raster ``ground`` (``mission.map`` keys)."""
-    from visnav.world.maps import degrade_reference
-
-    mc = cfg.map
-    return degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
-                             mc.reference_gamma, mc.reference_blur_m)
 
 
 def build(sim):
@@ -66,7 +33,7 @@ def build(sim):
     from visnav.sensors.baro import Baro, Compass
     from visnav.sensors.camera import Camera
     from visnav.sensors.faults import map_faults
-    from visnav.sim.missions import MissionParts
+    from visnav.sim.parts import MissionParts
     from visnav.world.scene import World
 
     cfg = sim.sc.mission

@@ -1,0 +1,85 @@
+"""The metrics of a run from its log: ``mission.type`` -> ``xxx_metrics(log, scenario, *, wall_time_s, error)``.
+
+Every metrics function reads the run's ``FlightLog`` (the same data as its ``log.h5``) and the resolved
+scenario, never the live simulation, so a run directory, a replayed or a recorded flight is scored by the
+same code: ``metrics_for(scenario)(log, scenario, wall_time_s=..., error=...)``, ``visnav metrics RUN_DIR``
+(``from_run_dir``). Targets are named ("module:function") and imported on use, like
+``sim/missions.SIMULATIONS``; a new mission adds its line here (or calls ``register_metrics``).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import math
+from pathlib import Path
+from typing import Callable
+
+MetricsFn = Callable[..., dict]
+
+METRICS: dict[str, str] = {
+    "palace": "visnav.analysis.metrics:palace_metrics",
+    "hover": "visnav.analysis.metrics:hover_metrics",
+    "pfcm": "visnav.analysis.path_metrics:pfcm_metrics",
+    "witas-homing": "visnav.analysis.witas_metrics:witas_metrics",
+    "pad-landing": "visnav.analysis.pad_report:pad_metrics",
+    "mav-geolocation": "visnav.analysis.geolocation_metrics:geolocation_metrics",
+}
+
+
+class RunDirError(ValueError):
+    """A run directory that cannot be scored (missing, or without a readable log.h5 / scenario.toml)."""
+
+
+def register_metrics(mission_type: str, target: str | MetricsFn) -> None:
+    """Name the metrics function of ``mission_type`` ("module:function", or the function itself)."""
+    METRICS[mission_type] = target if isinstance(target, str) else f"{target.__module__}:{target.__qualname__}"
+
+
+def metrics_function(mission_type: str) -> MetricsFn:
+    """The ``xxx_metrics(log, scenario, *, wall_time_s, error)`` of ``mission_type`` (ValueError: none)."""
+    target = METRICS.get(mission_type)
+    if target is None:
+        raise ValueError(f"no metrics from the log for mission.type {mission_type!r} yet; "
+                         f"known: {', '.join(sorted(METRICS))}")
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def compute_metrics(log, scenario, *, wall_time_s: float = math.nan, error: str | None = None) -> dict:
+    """The metrics of ``scenario``'s mission from ``log`` (a ``FlightLog``)."""
+    from visnav.analysis.integrity_metrics import integrity_metrics
+
+    out = metrics_function(scenario.mission.type)(log, scenario, wall_time_s=wall_time_s, error=error)
+    out.update(integrity_metrics(log, scenario))  # issue #18: every R-MAX navigator logs its integrity
+    return out
+
+
+def from_run_dir(run_dir: str | Path) -> dict:
+    """Recompute the metrics of a run directory from its ``log.h5`` and ``scenario.toml``. The wall time and
+    the error are the run's own (``metrics.json``, when there is one); ``RunDirError`` names what is missing."""
+    from visnav.scenarios.schema import ScenarioError, load_scenario
+    from visnav.sim.log import FlightLog
+
+    d = Path(run_dir)
+    if not d.is_dir():
+        raise RunDirError(f"{d}: not a run directory (no such folder)")
+    for f in ("log.h5", "scenario.toml"):
+        if not (d / f).is_file():
+            raise RunDirError(f"{d}: no {f} (a run directory of `visnav run` holds log.h5 and scenario.toml)")
+    try:
+        sc = load_scenario(str(d / "scenario.toml"))
+    except ScenarioError as exc:
+        raise RunDirError(f"{d / 'scenario.toml'}: {exc}") from None
+    try:
+        log = FlightLog.from_hdf5(d / "log.h5")
+    except (OSError, KeyError, ValueError) as exc:
+        raise RunDirError(f"{d / 'log.h5'}: not a readable flight log ({exc})") from None
+    wall = math.nan  # the run's own wall time, when its metrics.json says
+    try:
+        w = json.loads((d / "metrics.json").read_text()).get("wall_time_s")
+        wall = float(w) if w is not None else math.nan
+    except (OSError, ValueError, TypeError, AttributeError):
+        pass  # no or a broken metrics.json: the metrics without the run's wall time
+    err = log.get("error")  # the loop logs the exception that stopped a run
+    return compute_metrics(log, sc, wall_time_s=wall, error=str(err["message"][-1]) if err else None)

@@ -1,0 +1,45 @@
+"""The WITAS homing world: the ground raster (procedural rural map or ``mission.map.file``) with the loop
+fitted on it, and the navigator's degraded reference map. Deterministic in the run seed: the simulation
+(``sim/witas_parts.py``), the replay (``io/replay.py``) and the report (``analysis/witas_metrics.py``)
+rebuild the same one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visnav.mission.witas import fit_loop
+
+
+def make_ground(cfg, seed: int):
+    """The world raster of a ``WitasMissionConfig`` and the loop fitted on it (sizes, radius, centre).
+    Deterministic in ``seed`` (the report rebuilds it to draw the tracks on the map)."""
+    from visnav.world.maps import GeoImage
+    from visnav.world.rural import rural_map
+
+    pc, cc, mc = cfg.path, cfg.camera, cfg.map
+    footprint = cc.height * pc.altitude_m / cc.focal_px
+    if mc.file:
+        ground = GeoImage.load(mc.file)
+        return ground, fit_loop(pc, ground.extent_ned(), footprint)
+    sn, se = pc.size_north_m, pc.size_east_m
+    r = min(pc.corner_radius_m, 0.45 * min(sn, se))
+    size = max(sn, se) + 2 * (pc.margin_m + footprint) + 100.0
+    pond = (0.0, se / 2.0) if mc.pond else None  # under the east leg (the thesis' leg 3-4)
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 5]).spawn(6)[0])
+    return rural_map(size, mc.resolution_m, rng, pond_ne=pond), (sn, se, r, (0.0, 0.0))
+
+
+def mission_rngs(seed: int) -> list[np.random.Generator]:
+    """The mission's generators (ground, camera, baro, compass, navigator, spare) from the run seed; the
+    replay rebuilds the navigator's (index 4) from the recorded scenario."""
+    return [np.random.default_rng(s) for s in np.random.SeedSequence([seed, 5]).spawn(6)]
+
+
+def reference_map(cfg, ground):
+    """The navigator's degraded reference map of the world raster ``ground`` (``mission.map`` keys)."""
+    from visnav.world.maps import degrade_reference
+
+    mc = cfg.map
+    return degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
+                             mc.reference_gamma, mc.reference_blur_m)
