@@ -66,7 +66,8 @@ def test_builtins_and_their_resolved_scenario_toml_still_load(name):
     kind = sc.mission.type
     keys = [r["key"] for r in settable_keys(sc)]
     assert all(not_applicable(k, kind) is None for k in keys)
-    assert keys and all(k.split(".")[0] in ("run", "mission", "world", "vehicle", "sensors", "navigation") for k in keys)
+    assert keys and all(k.split(".")[0] in ("run", "mission", "world", "vehicle", "sensors", "navigation",
+                                                        "faults") for k in keys)
     if kind == "deck":
         assert not any(k.startswith(("world.", "vehicle.", "sensors.", "navigation.")) for k in keys)
         assert "mission.imu.gyro_noise_rad_s" in keys

@@ -96,3 +96,16 @@ def test_inflation_widens_the_hpl_of_an_over_confident_filter():
     assert a["hpl_m"] == pytest.approx(2.0 * horizontal_protection_level(np.eye(2), 0.99))
     with pytest.raises(ValueError, match="window"):
         IntegrityConfig(window=0)
+
+
+def test_inflation_pools_only_the_named_streams():
+    m = IntegrityMonitor(IntegrityConfig(window=5, inflation_streams=("pos",)))
+    for k in range(5):
+        m.record(0.1 * k, "pos", 4.0, 2, True)  # mean NIS / dof = 2
+        m.record(0.1 * k, "baro", 30.0, 1, True)  # a badly tuned vertical stream
+    assert m.inflation() == pytest.approx(2.0)
+    every = IntegrityMonitor(IntegrityConfig(window=5))
+    for k in range(5):
+        every.record(0.1 * k, "pos", 4.0, 2, True)
+        every.record(0.1 * k, "baro", 30.0, 1, True)
+    assert every.inflation() == pytest.approx((5 * 4.0 + 5 * 30.0) / 15)

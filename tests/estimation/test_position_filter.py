@@ -77,3 +77,16 @@ def test_predict_equals_the_constant_acceleration_model_in_array_form():
         np.testing.assert_array_equal(f.p, p)
         np.testing.assert_array_equal(f.v, v)
         np.testing.assert_array_equal(np.stack([f.P00, f.P01, f.P11]), np.stack([P00, P01, P11]))
+
+
+def test_last_nis_is_the_normalised_innovation_of_the_update():
+    from visnav.estimation.position_filter import PositionFilter
+
+    f = PositionFilter()
+    f.reset(0.0, [1.0, 2.0, -3.0], [0.0, 0.0, 0.0], sigma_p=0.5)
+    ok = f.update_position([1.3, 1.6, -3.0], 0.4, axes=(0, 1))
+    assert ok and f.last_accepted
+    S = 0.5**2 + 0.4**2
+    np.testing.assert_allclose(f.last_nis, [0.3**2 / S, 0.4**2 / S], rtol=1e-12)
+    rejected = f.update_position([9.0, 2.0, -3.0], 0.01, axes=(0,), gate=3.0)
+    assert not rejected and not f.last_accepted and f.last_nis[0] > 9.0

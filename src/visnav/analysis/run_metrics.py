@@ -50,7 +50,11 @@ def metrics_function(mission_type: str) -> MetricsFn:
 
 def compute_metrics(log, scenario, *, wall_time_s: float = math.nan, error: str | None = None) -> dict:
     """The metrics of ``scenario``'s mission from ``log`` (a ``FlightLog``)."""
-    return metrics_function(scenario.mission.type)(log, scenario, wall_time_s=wall_time_s, error=error)
+    from visnav.analysis.integrity_metrics import integrity_metrics
+
+    out = metrics_function(scenario.mission.type)(log, scenario, wall_time_s=wall_time_s, error=error)
+    out.update(integrity_metrics(log, scenario))  # issue #18: every R-MAX navigator logs its integrity
+    return out
 
 
 def from_run_dir(run_dir: str | Path) -> dict:

@@ -6,7 +6,8 @@
   dangerous case: wrong and sure of it); below the lower ``alpha`` quantile it is over-conservative.
 - The share of updates the filter's own gate rejected over the same window.
 - A consistency factor ``k^2 = max(1, mean(NIS) / dof)`` that inflates the covariance when the
-  innovations say it is too small.
+  innovations say it is too small (pooled over the streams a navigator names in ``inflation_streams``,
+  its horizontal position updates: a vertical baro NIS says nothing of the horizontal error).
 - A horizontal protection level (HPL): with a horizontal error ``e ~ N(0, k^2 P_h)``,
   ``|e|^2 <= lambda_max(k^2 P_h) e^T (k^2 P_h)^-1 e`` and the last factor is chi2(2), so
   ``HPL = k sqrt(lambda_max(P_h) chi2.ppf(p, 2)) = k sqrt(-2 ln(1 - p) lambda_max(P_h))``
@@ -70,6 +71,8 @@ class IntegrityConfig:
     probability: float = 0.999  # the HPL's containment probability
     alert_limit_m: float = math.inf  # unusable when the HPL exceeds it
     stale_s: float = math.inf  # unusable when no accepted update for this long
+    # streams whose NIS inflates the HPL (k^2): the horizontal position streams; None: every stream
+    inflation_streams: tuple[str, ...] | None = None
 
     def __post_init__(self):
         if self.window < 1:
@@ -118,9 +121,12 @@ class IntegrityMonitor:
         return StreamTest(stream, len(acc), s, dof, lo, hi, rej)
 
     def inflation(self) -> float:
-        """k^2 = max(1, mean NIS per degree of freedom) over all streams' windows."""
+        """k^2 = max(1, mean NIS per degree of freedom) over the windows of the ``inflation_streams``."""
         tot_n = tot_d = 0.0
-        for q in self._streams.values():
+        only = self.config.inflation_streams
+        for name, q in self._streams.items():
+            if only is not None and name not in only:
+                continue
             for n, d, ok in q:
                 if ok:
                     tot_n, tot_d = tot_n + n, tot_d + d

@@ -25,6 +25,10 @@ class PositionFilter:
         self.t: float | None = None
         self.accel = np.zeros(3)  # the last kinematic acceleration the filter integrated (NED)
         self.initialized = position is not None
+        # the last update's per-axis normalised innovation squared y^2 / S (the axes it used) and whether
+        # its gate accepted it: the navigators' integrity monitors read them
+        self.last_nis = np.zeros(0)
+        self.last_accepted = True
 
     def reset(self, t: float, position, velocity, sigma_p: float = 0.05, sigma_v: float = 0.05) -> None:
         self.t = t
@@ -65,7 +69,9 @@ class PositionFilter:
         r = np.broadcast_to(np.asarray(sigma, float) ** 2, ax.shape)
         S = self.P00[ax] + r
         y = z - self.p[ax]
-        if gate is not None and np.any(y * y / S > gate * gate):
+        self.last_nis = y * y / S
+        self.last_accepted = not (gate is not None and np.any(self.last_nis > gate * gate))
+        if not self.last_accepted:
             return False
         K0 = self.P00[ax] / S
         K1 = self.P01[ax] / S
@@ -81,6 +87,7 @@ class PositionFilter:
         r = float(sigma) ** 2
         S = self.P11 + r
         y = np.asarray(z, float) - self.v
+        self.last_nis, self.last_accepted = y * y / S, True
         K0 = self.P01 / S
         K1 = self.P11 / S
         self.p += K0 * y

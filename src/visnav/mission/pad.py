@@ -8,6 +8,12 @@ below ``slow_height_m`` (heights of the *estimate*), until the skids touch. Noth
 the pattern leaves the view near the ground: the fixes stop, the filter dead-reckons and the same
 reference carries on (mode ``blind`` only labels the log).
 
+Integrity (issue #18, ``mission/integrity.py``): the navigator ``unusable`` for ``integrity_unusable_s``
+above ``integrity_abort_height_m`` (estimated height) -> ``go-around``: the reference climbs back to
+``start_height_m`` over where it was and the approach starts again once the integrity has been ``ok``
+for 2 s; after ``max_go_arounds`` the landing is aborted (hold, mission over). Below that height the
+landing goes on on dead reckoning (the pattern leaves the view near the ground by design).
+
 ``build(sim)`` is the mission builder registered as ``pad-landing`` in ``sim/missions.py``.
 """
 
@@ -17,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
+from visnav.mission.integrity import IntegrityWatch
 from visnav.log_schema import register_stream
 
 register_stream("nav_cov", cov=("mixed", "position (m, NED), velocity (m/s, NED)", "navigator covariance of the "
@@ -36,6 +43,9 @@ class PadLandingMission:
         self._last_t: float | None = None
         self.touchdown_t: float | None = None
         self._centred_since: float | None = None
+        self.integrity = IntegrityWatch(self.record)
+        self.go_arounds = 0
+        self._dr_logged = False
 
     def start_position(self) -> np.ndarray:
         c = self.cfg
@@ -51,6 +61,26 @@ class PadLandingMission:
         self._last_t = t
         if nav.valid:  # the filter's covariance beside the logged estimate (NEES in the metrics)
             self.record("nav_cov", t, cov=np.asarray(nav.covariance, float))
+        self.integrity.update(t, health)
+        flying = ("approach", "blind", "gate", "final-descent")
+        if self.mode in flying and self.integrity.unusable_for(t) >= c.integrity_unusable_s:
+            h = -float(nav.position[2])
+            if h > c.integrity_abort_height_m:
+                self.go_arounds += 1
+                if self.go_arounds > c.max_go_arounds:
+                    self.integrity.react(t, "abort", f"unusable at {h:.1f} m after {c.max_go_arounds} go-arounds")
+                    self._set("abort", t, f"integrity unusable ({self.integrity.reason}) after "
+                                          f"{c.max_go_arounds} go-arounds")
+                    self.done = True
+                else:
+                    self.integrity.react(t, "go-around", f"unusable at {h:.1f} m")
+                    self._set("go-around", t, f"integrity unusable ({self.integrity.reason}) at {h:.1f} m")
+            elif not self._dr_logged:
+                self._dr_logged = True
+                self.integrity.react(t, "land on dead reckoning", f"unusable at {h:.1f} m")
+        elif self.mode == "go-around" and self.integrity.ok_for(t) >= 2.0 and \
+                -self.ref_p[2] >= c.start_height_m - 0.5:
+            self._set("approach", t, "integrity ok again: approach again")
         if self.mode == "wait":
             if nav.valid:
                 self.ref_p = np.asarray(nav.position, float).copy()
@@ -97,6 +127,9 @@ class PadLandingMission:
                 self.ref_p[2] = -c.gate_height_m
             self.ref_p = self.ref_p + v * dt
             self.ref_p[2] = min(self.ref_p[2], 1.0)  # the reference keeps sinking until the skids touch
+        if self.mode == "go-around":  # climb back over where the reference was
+            v[2] = -c.descent_rate_mps if -self.ref_p[2] < c.start_height_m else 0.0
+            self.ref_p = self.ref_p + v * dt
         self.ref_v = v
         return PositionReference(t=t, position=self.ref_p.copy(), velocity=v, yaw=0.0, source="vision"), self.mode
 

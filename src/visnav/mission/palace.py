@@ -9,6 +9,12 @@ MPE, re-initialising on a point near the image centre when the tracked point nea
 
 Safety (§3.2): back to GPS when MPE jumps or stops updating at 10 Hz (then re-verify before
 switching again); soft abort (climb 5 m on GPS) when the laser return is lost above 1 m.
+
+Integrity (issue #18, ``mission/integrity.py``): the navigator's state ``unusable`` for
+``integrity_unusable_s`` while flying on MPE counts as an MPE failure (back to GPS, re-verify; after
+``max_fallbacks`` a soft abort); while flying on GPS (settle to verify) it aborts the landing and goes
+around (climb ``abort_climb_m`` from where the vehicle is). Below 1 m (final, inertial + sonar) the
+landing carries on: the dead-reckoning HPL grows there by design.
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
 from visnav.mission.base import NavigatorRequests
+from visnav.mission.integrity import IntegrityWatch
 from visnav.log_schema import register_stream
 
 register_stream("reinit", x=("px", "image, OpenCV (x right)", "new point tracked after a re-initialisation"),
@@ -56,6 +63,7 @@ class PalaceMission(NavigatorRequests):
         self.record = recorder or (lambda *a, **k: None)
         self._last_t: float | None = None
         self.final_xy = self.point[:2].copy()
+        self.integrity = IntegrityWatch(self.record)
 
     def start_position(self) -> np.ndarray:
         return self.slope_point(self.cfg.start_height_m)
@@ -85,6 +93,12 @@ class PalaceMission(NavigatorRequests):
         descent_rate = 0.0
         if self.source == "mpe":
             self.vision_time += dt
+        self.integrity.update(t, health)
+        on_gps = self.mode in ("settle", "acquire", "descend_gps", "verify")
+        wait = c.integrity_unusable_s
+        if on_gps and self.integrity.unusable_for(t) >= wait and t - self.t_mode >= wait:
+            self.integrity.react(t, "abort", "unusable on GPS: abort the landing, go around")
+            self._abort(t, f"integrity unusable on GPS ({self.integrity.reason})")
 
         if self.mode == "settle":
             if t - self.t_mode >= c.settle_s:
@@ -183,13 +197,16 @@ class PalaceMission(NavigatorRequests):
             self.laser_lost_since = None
         if self._pending(health, t):
             return True
-        # MPE jumps or stops updating at 10 Hz -> back to GPS, re-verify
-        bad = health.mpe_jump or (t - (self.switch_time or t) > 1.0 and health.mpe_rate_hz < 8.0)
+        # MPE jumps or stops updating at 10 Hz, or the navigator's integrity is unusable -> back to GPS, re-verify
+        lost = self.integrity.unusable_for(t) >= c.integrity_unusable_s
+        bad = health.mpe_jump or lost or (t - (self.switch_time or t) > 1.0 and health.mpe_rate_hz < 8.0)
         if bad:
             if self.bad_since is None:
                 self.bad_since = t
-            elif t - self.bad_since >= 0.3 or health.mpe_jump:
+            elif t - self.bad_since >= 0.3 or health.mpe_jump or lost:
                 self.fallbacks += 1
+                if lost:
+                    self.integrity.react(t, "fallback", "unusable on MPE: back to GPS")
                 if self.fallbacks > c.max_fallbacks:
                     self._abort(t, f"MPE failed {self.fallbacks} times: soft abort on GPS")
                     return False
@@ -198,7 +215,8 @@ class PalaceMission(NavigatorRequests):
                 self.reinitializations += 1
                 self.bad_since = None
                 self.h_ref = h_est
-                self._set("verify", t, "MPE jump or rate below 10 Hz: back to GPS")
+                self._set("verify", t, "integrity unusable on MPE: back to GPS" if lost
+                          else "MPE jump or rate below 10 Hz: back to GPS")
                 return False
         else:
             self.bad_since = None

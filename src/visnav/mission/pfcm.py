@@ -6,6 +6,12 @@ for ``hold_s``) -> done. The path is complete when the control point reaches the
 segment, or the helicopter is within ``end_tolerance_m`` of it along the path. The manager runs at
 10 Hz; it hands the outer loop the live generator (a reference source), so that guidance and
 control both run at the controller's 50 Hz.
+
+Integrity (issue #18, ``mission/integrity.py``): on a GPS-denied homing nothing better than the
+navigator exists on board, and a hover drifts on dead reckoning as much as the path does, so the
+mission carries on along the path on dead reckoning when the navigator says ``unusable`` (its HPL grows,
+the claim stays honest: the homing is judged safe when it does not end far from home claiming ``ok``);
+every change of the state it reacts to is logged in ``integrity_reaction``.
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ import numpy as np
 from visnav.guidance.hermite import HermitePath, helix_waypoints
 from visnav.guidance.pfcm import PfcmGuidance, PfcmLimits, PointHold
 from visnav.measurements import Health, NavEstimate
+from visnav.mission.integrity import IntegrityWatch
 from visnav.log_schema import register_stream
 
 register_stream("pfcm", **{k: ("m/s", "", d) for k, d in (
@@ -112,6 +119,8 @@ class PfcmMission:
         self.path_completed = False
         self.t_follow: float | None = None
         self.t_complete: float | None = None
+        self.integrity = IntegrityWatch(self.record)
+        self._reacted = "ok"
 
     def start_position(self) -> np.ndarray:
         return self.path.start.copy()
@@ -123,6 +132,12 @@ class PfcmMission:
 
     def step(self, t: float, nav: NavEstimate, health: Health):
         c = self.cfg
+        state = self.integrity.update(t, health)
+        if self.integrity.seen_ok and state != self._reacted and (state != "unusable" or
+                                                                 self.integrity.unusable_for(t) >= 1.0):
+            self._reacted = state
+            self.integrity.react(t, "dead reckoning along the path" if state == "unusable" else "none",
+                                 f"HPL {self.integrity.hpl_m:.1f} m")
         if self.mode == "settle" and nav.valid and t - self.t_mode >= c.settle_s:
             self.t_follow = t
             self._set("follow", t, "start the path")

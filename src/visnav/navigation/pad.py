@@ -33,6 +33,7 @@ from visnav.geometry.mounts import PanTiltMount
 from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
 from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavEstimate, NavInit, PanTiltFrame
 from visnav.navigation.base import CommandDispatch
+from visnav.navigation.integrity import NavIntegrity
 from visnav.vision.pad import PadDetector
 from visnav.log_schema import register_stream
 
@@ -98,6 +99,8 @@ class PadNavigator(CommandDispatch):
         self.fixes = 0
         self.rejected = 0
         self._last_imu_t = -math.inf
+        # integrity (issue #18): NIS of every vision position update (3 dof, gated by the filter)
+        self.integrity = NavIntegrity(getattr(cfg, "integrity", None), self.recorder, inflation_streams=("vision",))
 
     # ------------------------------------------------------------------ helpers
     def _R_cb(self, pan: float, tilt: float) -> np.ndarray:
@@ -182,11 +185,13 @@ class PadNavigator(CommandDispatch):
         accepted, nis = False, float("nan")
         if self.kf is None:
             self._start(now if math.isfinite(now) else f.t, p_vis)
+            self.integrity.start(f.t)
             accepted = True
         else:
             lag = max(self.kf.x.t - f.t, 0.0)
             res = self.kf.update_position(p_vis + self.kf.x.velocity * lag, R)
             accepted, nis = res.accepted, res.nis
+            self.integrity.record(f.t, "vision", nis, 3, accepted)
         if accepted:
             self.t_fix = f.t
             self.fixes += 1
@@ -230,4 +235,6 @@ class PadNavigator(CommandDispatch):
                            attitude=o.attitude, covariance=o.covariance, valid=True, source=self.h.source)
 
     def health(self, t: float | None = None) -> Health:
+        if t is not None:
+            self.integrity.fill(self.h, t, self.kf.P[:2, :2] if self.kf is not None else None)
         return self.h

@@ -35,6 +35,7 @@ from visnav.measurements import (
     RangeSample,
 )
 from visnav.navigation.base import CommandDispatch, propagate
+from visnav.navigation.integrity import NavIntegrity
 from visnav.vision.correlation import PnccTracker
 from visnav.vision.interest import forstner
 from visnav.log_schema import register_stream
@@ -95,6 +96,10 @@ class PalaceNavigator(CommandDispatch):
         self.last_sonar: RangeSample | None = None
         self._last_imu_t = -np.inf
         self.h = Health()
+        # integrity (issue #18): NIS of every GPS / MPE position update (horizontal, 2 dof) and sonar height
+        self.integrity = NavIntegrity(getattr(cfg, "integrity", None), self.recorder, inflation_streams=("gps", "mpe"))
+        self._reference_t: float | None = None  # when MPE's ground reference was last set (HPL drift budget)
+        self._reference_var = 0.0  # its error variance then (a re-init from the estimate carries the drift)
 
     # ---------------------------------------------------------------- commands (mission manager)
     def request_tracking(self, target_ned=None, init_from: str = "gps") -> None:
@@ -196,6 +201,7 @@ class PalaceNavigator(CommandDispatch):
             C = euler_to_dcm(e)
             z = -r * C[2, 2]
             self.filter.update_position(np.array([0.0, 0.0, z]), 0.03, axes=(2,))
+            self.integrity.record(m.t, "sonar", float(self.filter.last_nis[0]), 1, True)
 
     def _on_gps(self, m: GpsSample) -> None:
         if not (np.all(np.isfinite(m.position)) and np.all(np.isfinite(m.velocity))):
@@ -204,12 +210,14 @@ class PalaceNavigator(CommandDispatch):
         self.last_gps = m
         if not self.filter.initialized:
             self.filter.reset(m.t, m.position, m.velocity)
+            self.integrity.start(m.t)
             return
         if self.source == "gps":
             # the fix describes m.t, the filter is at its last IMU time: carry the fix forward over the
             # lag with the velocity (position) and the acceleration the filter integrated (velocity)
             lag = (self.filter.t or m.t) - m.t
             self.filter.update_position(m.position + m.velocity * lag, max(m.sigma, 0.01))
+            self.integrity.record(m.t, "gps", float(np.sum(self.filter.last_nis[:2])), 2, True)
             self.filter.update_velocity(m.velocity + self.filter.accel * lag, 0.05)
 
     # ---------------------------------------------------------------- vision
@@ -268,6 +276,7 @@ class PalaceNavigator(CommandDispatch):
             if pos is not None:
                 self.recorder("track_init", f.t, x=res.x, y=res.y, init_position=pos, kind=1)
                 self.mpe.initialize((res.x, res.y), laser.range, C_bn, pos, laser.beam_offset)
+                self._set_reference(f.t, self._rebase)
                 self._rebase = None
                 self.h.tracking_pending = self.tracking_pending
         fix = self.mpe.estimate(f.t, (res.x, res.y), laser.range, C_bn, laser.beam_offset)
@@ -278,10 +287,17 @@ class PalaceNavigator(CommandDispatch):
         self.last_fix, self.last_fix_time = fix, f.t
         self.recorder("mpe", f.t, position=fix.position, camera_position=fix.camera_position,
                       range=laser.range, sigma=fix.sigma_px_m, jump=jump)
-        if self.source == "mpe" and not jump:
+        if self.source == "mpe":
             lag = (self.filter.t or f.t) - f.t
             sigma = self._fix_sigma(fix, laser.range)
-            self.filter.update_position(fix.position + self.filter.v * lag, sigma)
+            z = fix.position + self.filter.v * lag
+            if not jump:
+                self.filter.update_position(z, sigma)
+                nis = float(np.sum(self.filter.last_nis[:2]))
+            else:  # the jump check is this navigator's gate: the fix is counted as rejected
+                sig2 = np.broadcast_to(np.asarray(sigma, float) ** 2, (3,))[:2]
+                nis = float(np.sum((z[:2] - self.filter.p[:2]) ** 2 / (self.filter.P00[:2] + sig2)))
+            self.integrity.record(f.t, "mpe", nis, 2, not jump)
 
     def _fix_sigma(self, fix, range_m: float):
         """σ of the fix per axis for the filter: eq. 3.3's pixel share (``sigma_px_m``, floored at
@@ -324,6 +340,7 @@ class PalaceNavigator(CommandDispatch):
         self.tracker.init(f.image, pt.x, pt.y)
         uv0 = (float(self.tracker.x), float(self.tracker.y))
         self.mpe.initialize(uv0, laser.range, C_bn, pos, laser.beam_offset)
+        self._set_reference(f.t, req["init"])
         self._request = None
         self.h.tracking_pending = self.tracking_pending
         self.h.tracking = True
@@ -348,9 +365,29 @@ class PalaceNavigator(CommandDispatch):
     def mpe_rate(self, t: float, window: float = 1.0) -> float:
         return sum(1 for s in self._mpe_times if t - window < s <= t) / window
 
+    def _mpe_unobserved_var(self, t: float) -> float:
+        """Off GPS the position comes from MPE (then inertial from it): its ground reference's error and the
+        tracker's drift since it was set are in no covariance; the integrity block's budget for them."""
+        ic = getattr(self.cfg, "integrity", None)
+        if self.source == "gps" or self._reference_t is None or ic is None:
+            return 0.0
+        return self._reference_var + (ic.mpe_drift_mps * max(t - self._reference_t, 0.0)) ** 2
+
+    def _set_reference(self, t: float, init: str) -> None:
+        ic = getattr(self.cfg, "integrity", None)
+        if ic is None:
+            return
+        carried = self._mpe_unobserved_var(t) if init == "estimate" and self.source != "gps" else 0.0
+        self._reference_var = ic.reference_sigma_m**2 + carried
+        self._reference_t = t
+
     def health(self, t: float | None = None) -> Health:
         if t is not None:
             self.h.mpe_rate_hz = self.mpe_rate(t)
         self.h.source = self.source
+        if t is not None:
+            f = self.filter
+            self.integrity.fill(self.h, t, f.covariance()[:2, :2] if f.initialized else None,
+                                self._mpe_unobserved_var(t))
         return self.h
 

@@ -37,6 +37,7 @@ from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
                                  NavEstimate, NavInit)
 from visnav.navigation.base import CommandDispatch, propagate
+from visnav.navigation.integrity import NavIntegrity
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
 from visnav.log_schema import register_stream
@@ -70,6 +71,7 @@ class _AhrsBackend:
         self.f.reset(t, position, velocity, sigma_p, sigma_v)
         self.euler = np.asarray(euler, float).copy()
         self.offset = np.zeros(3)  # initial attitude error (the §5.9.1 experiment), kept constant
+        self.last = (float("nan"), 0, True)  # (NIS, dof, accepted) of the last update (integrity monitor)
 
     def propagate(self, t, accel, gyro, dt, ahrs_euler) -> None:
         if ahrs_euler is not None:
@@ -77,14 +79,18 @@ class _AhrsBackend:
         self.f.predict(t, accel_ned(euler_to_dcm(self.euler), accel))
 
     def update_position(self, ne, cov) -> bool:
-        return self.f.update_position(np.r_[ne, 0.0], np.sqrt(np.diag(cov)), axes=(0, 1))
+        ok = self.f.update_position(np.r_[ne, 0.0], np.sqrt(np.diag(cov)), axes=(0, 1))
+        self.last = (float(np.sum(self.f.last_nis)), 2, ok)
+        return ok
 
     def update_baro(self, alt, sigma) -> None:
         self.f.update_position(np.array([0.0, 0.0, -alt]), sigma, axes=(2,))
+        self.last = (float(self.f.last_nis[0]), 1, True)
 
     def update_heading(self, yaw, sigma) -> None:
         """No-op by design: this backend takes its heading from the AHRS attitude solution; only the
         ESKF backend fuses compass samples (seed 002 §5.8.3)."""
+        self.last = (float("nan"), 0, True)
         return None
 
     def state(self):
@@ -94,7 +100,8 @@ class _AhrsBackend:
 class _EskfBackend:
     """The 12-state error-state KF of appendix A (estimation/eskf.py)."""
 
-    def __init__(self, t, position, velocity, euler, sigma_p=0.5, sigma_v=0.2, sigma_att_deg=1.0):
+    def __init__(self, t, position, velocity, euler, sigma_p=0.5, sigma_v=0.2, sigma_att_deg=1.0,
+                 gate_probability=1.0):
         try:
             from visnav.estimation.eskf import EskfConfig, ErrorStateKF
             from visnav.estimation.ins import NavState, euler_to_quat
@@ -106,20 +113,25 @@ class _EskfBackend:
         sa = math.radians(sigma_att_deg)
         P0 = np.r_[[sigma_p] * 3, [sigma_v] * 3, [sa, sa, 3 * sa], [0.02] * 3]
         cfg = EskfConfig(accel_noise=0.05, gyro_noise=2e-3, accel_bias_noise=1e-3, gravity_mps2=9.81,
-                         earth_rotation=False, gate_probability=1.0)
+                         earth_rotation=False, gate_probability=gate_probability)
         self.kf = ErrorStateKF(s, P0, cfg)
+        self.last = (float("nan"), 0, True)  # (NIS, dof, accepted) of the last update (integrity monitor)
+
+    def _keep(self, res):
+        self.last = (float(res.nis), int(np.size(res.innovation)), bool(res.accepted))
+        return res.accepted
 
     def propagate(self, t, accel, gyro, dt, ahrs_euler) -> None:
         self.kf.propagate(accel, gyro, dt)
 
     def update_position(self, ne, cov) -> bool:
-        return self.kf.update_position(ne, cov).accepted
+        return self._keep(self.kf.update_position(ne, cov))
 
     def update_baro(self, alt, sigma) -> None:
-        self.kf.update_baro(alt, sigma)
+        self._keep(self.kf.update_baro(alt, sigma))
 
     def update_heading(self, yaw, sigma) -> None:
-        self.kf.update_heading(yaw, sigma)
+        self._keep(self.kf.update_heading(yaw, sigma))
 
     def state(self):
         x = self.kf.x
@@ -162,6 +174,10 @@ class WitasNavigator(CommandDispatch):
         self._last_u = np.zeros(2)
         self._acc: list = [np.zeros(3), np.zeros(3), 0, 0.0]
         self._ins_log_t = -np.inf
+        # integrity (issue #18): NIS of the GPS-phase position updates, of the PMF -> KF position updates
+        # ("vision", horizontal, 2 dof), of the baro and compass updates
+        self.integrity = NavIntegrity(getattr(cfg, "integrity", None), self.recorder,
+                                      inflation_streams=("gps", "vision"))
 
     def initialize(self, init: NavInit) -> None:
         """Start the GPS-phase filter at an explicit pose (otherwise it starts at the first GPS fix)."""
@@ -190,9 +206,11 @@ class WitasNavigator(CommandDispatch):
             self.baro = m
             if self.backend is not None:  # (in the GPS phase the GPS gives the height)
                 self.backend.update_baro(m.altitude, self.cfg.baro_sigma_m)
+                self.integrity.record(m.t, "baro", *self.backend.last)
         elif isinstance(m, HeadingSample):
             if self.backend is not None and math.isfinite(m.heading):
                 self.backend.update_heading(m.heading, math.radians(self.cfg.compass_sigma_deg))
+                self.integrity.record(m.t, "heading", *self.backend.last)
         elif isinstance(m, Frame):
             if self.backend is not None:
                 self.frames.append(m)
@@ -238,9 +256,11 @@ class WitasNavigator(CommandDispatch):
         f = self.gps_filter
         if not f.initialized:
             f.reset(m.t, m.position, m.velocity)
+            self.integrity.start(m.t)
             return
         lag = (f.t or m.t) - m.t
         f.update_position(m.position + m.velocity * lag, max(m.sigma, 0.05))
+        self.integrity.record(m.t, "gps", float(np.sum(f.last_nis[:2])), 2, f.last_accepted)
         f.update_velocity(m.velocity, 0.05)
 
     def _engage_vision(self, t: float) -> None:
@@ -250,7 +270,7 @@ class WitasNavigator(CommandDispatch):
         e = np.zeros(3) if e is None else e.copy()
         err = np.radians(np.asarray(c.init_attitude_error_deg, float))
         if c.backend == "eskf":
-            self.backend = _EskfBackend(f.t, f.p, f.v, e + err)
+            self.backend = _EskfBackend(f.t, f.p, f.v, e + err, gate_probability=c.kf_gate_probability)
         else:
             self.backend = _AhrsBackend(f.t, f.p, f.v, e + err)
             self.backend.offset = err
@@ -260,6 +280,7 @@ class WitasNavigator(CommandDispatch):
         self.odo_track = f.p.copy()
         self._init_ins_only(f.t, f.p, f.v, e + err)
         self.h.source = "vision"
+        self.integrity.start(t)
         self.recorder("vision_engaged", t, position=f.p.copy(), velocity=f.v.copy(), euler=e + err)
 
     # ------------------------------------------------------------------ INS-only comparison track
@@ -359,6 +380,7 @@ class WitasNavigator(CommandDispatch):
         z = mean + v_kf[:2] * (t_kf - f.t)
         R = P + 0.01 * np.eye(2) if c.use_pmf_covariance else np.eye(2) * c.kf_position_sigma_m**2
         self.backend.update_position(z, R)
+        self.integrity.record(f.t, "vision", *self.backend.last)
 
     def _note(self, text: str) -> None:
         if len(self.h.notes) < 200:
@@ -378,4 +400,14 @@ class WitasNavigator(CommandDispatch):
                            valid=f.initialized and e is not None, source="gps")
 
     def health(self, t: float | None = None) -> Health:
+        if t is not None:
+            extra = 0.0
+            if self.backend is not None:
+                P = self.backend.state()[4]
+                ic = getattr(self.cfg, "integrity", None)
+                if self.pmf is not None and ic is not None and ic.pmf_in_hpl:
+                    extra = float(np.linalg.eigvalsh(self.pmf.estimate()[1]).max())
+            else:
+                P = self.gps_filter.covariance() if self.gps_filter.initialized else None
+            self.integrity.fill(self.h, t, None if P is None else P[:2, :2], extra)
         return self.h

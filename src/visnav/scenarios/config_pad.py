@@ -12,6 +12,7 @@ from typing import Literal, Optional
 from pydantic import Field, model_validator
 
 from visnav.scenarios.base import _M
+from visnav.scenarios.config_integrity import PadIntegrityConfig
 
 
 class PadGeometryConfig(_M):
@@ -82,6 +83,7 @@ class PadFilterConfig(_M):
     track_deadband_deg: float = Field(1.0, ge=0, le=20)
     sigma_floor_px: float = Field(0.05, gt=0, le=5)
     cov_inflation: float = Field(1.5, gt=0, le=20)
+    integrity: PadIntegrityConfig = PadIntegrityConfig()
 
 
 class PadMissionConfig(_M):
@@ -98,6 +100,11 @@ class PadMissionConfig(_M):
     gate_time_s: float = Field(1.0, ge=0, le=30, description="centred this long")
     gate_max_s: float = Field(8.0, ge=0, le=60, description="descend anyway after this long")
     flare_height_m: float = Field(0.35, ge=0, le=5)
+    integrity_unusable_s: float = Field(0.5, ge=0, le=30, description="navigator integrity unusable this long ...")
+    integrity_abort_height_m: float = Field(2.0, ge=0, le=60, description="... above this height: go around "
+                                            "(climb back to start_height_m, approach again when ok); below: land "
+                                            "on dead reckoning")
+    max_go_arounds: int = Field(2, ge=0, le=20, description="more go-arounds -> abort (hold, mission over)")
     flare_rate_mps: float = Field(0.12, gt=0, le=1.5)
     blackout_height_m: Optional[float] = Field(None, ge=0, le=60, description="vision black-out from this height")
     blackout_s: float = Field(3.0, ge=0, le=60)

@@ -12,6 +12,7 @@ from typing import Literal, Optional
 from pydantic import Field
 
 from visnav.scenarios.base import _M
+from visnav.scenarios.config_integrity import WitasIntegrityConfig
 
 
 class WitasPathConfig(_M):
@@ -98,6 +99,9 @@ class WitasFilterConfig(_M):
     compass_sigma_deg: float = Field(2.0, gt=0, le=45)
     init_attitude_error_deg: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0],
                                                  description="roll, pitch, heading error at GPS loss")
+    kf_gate_probability: float = Field(1.0, gt=0, le=1, description="chi-square gate of the PMF -> KF and baro / "
+                                       "compass updates of the eskf backend (1: none, as the thesis)")
+    integrity: WitasIntegrityConfig = WitasIntegrityConfig()
 
 
 class WitasMissionConfig(_M):

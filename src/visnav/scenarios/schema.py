@@ -25,6 +25,7 @@ from visnav.scenarios.config_witas import WitasMissionConfig
 from visnav.scenarios.config_condor import CondorMissionConfig
 from visnav.scenarios.config_geolocation import GeolocationMissionConfig
 from visnav.scenarios.config_pad import PadMissionConfig
+from visnav.scenarios.config_integrity import FaultConfig, PalaceIntegrityConfig, check_faults_apply
 
 BUILTIN_DIR = Path(__file__).resolve().parent
 
@@ -138,6 +139,7 @@ class NavigationConfig(_M):
     tracker: TrackerConfig = TrackerConfig()
     mpe: MpeConfig = MpeConfig()
     accel_noise: float = Field(0.3, ge=0, le=10, description="process noise of the position filter, m/s^2")
+    integrity: PalaceIntegrityConfig = PalaceIntegrityConfig()
 
 
 class HoverMissionConfig(_M):
@@ -181,6 +183,8 @@ class PalaceMissionConfig(_M):
     edge_margin_px: int = Field(60, ge=0, le=300)
     final_descent_mps: float = Field(0.3, gt=0, le=3)
     flare_height_m: float = Field(3.0, ge=0, le=30, description="sink rate eases to the final rate below this")
+    integrity_unusable_s: float = Field(1.0, ge=0, le=60, description="navigator integrity unusable this long "
+                                        "-> fallback to GPS (on MPE) or abort and go around (on GPS)")
 
 
 class PfcmSpiralConfig(_M):
@@ -297,6 +301,7 @@ class Scenario(_M):
     sensors: SensorsConfig = SensorsConfig()
     navigation: NavigationConfig = NavigationConfig()
     mission: MissionConfig = PalaceMissionConfig()
+    faults: list[FaultConfig] = Field(default_factory=list, description="injected faults (sensors/faults.py)")
 
     @model_validator(mode="before")
     @classmethod
@@ -321,6 +326,7 @@ def _fixed_wing(world: str) -> list[tuple[str, tuple[str, ...], str]]:
             ("navigation", (), "its estimation is configured under mission.*")]
 
 
+_NO_FAULTS = "its simulation injects no faults (issue #18: the R-MAX missions)"
 NOT_APPLICABLE: dict[str, list[tuple[str, tuple[str, ...], str]]] = {
     "deck": [
         ("world", (), "its world is the ship deck, mission.deck.*"),
@@ -329,9 +335,10 @@ NOT_APPLICABLE: dict[str, list[tuple[str, tuple[str, ...], str]]] = {
         ("sensors.camera", (), "its camera is mission.camera.*"),
         ("sensors", (), "its sensors are mission.imu.* and mission.camera.*"),
         ("navigation", (), "its filter is mission.filter.*"),
+        ("faults", (), _NO_FAULTS),
     ],
-    "condor": _fixed_wing("mission.target.*"),
-    "mav-geolocation": _fixed_wing("mission.map.* and mission.target.*"),
+    "condor": _fixed_wing("mission.target.*") + [("faults", (), _NO_FAULTS)],
+    "mav-geolocation": _fixed_wing("mission.map.* and mission.target.*") + [("faults", (), _NO_FAULTS)],
     "witas-homing": [
         ("navigation", (), "its navigator is configured by mission.filter.*"),
         ("sensors.camera", (), "its camera is mission.camera.*"),
@@ -478,6 +485,10 @@ def validate(data: dict) -> Scenario:
     except ValidationError as err:
         raise ScenarioError(_format_error(err, data)) from None
     _check_applicable(data, sc)
+    try:
+        check_faults_apply(sc.mission.type, sc.faults)
+    except ValueError as err:
+        raise ScenarioError(str(err)) from None
     return sc
 
 

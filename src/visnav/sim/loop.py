@@ -23,6 +23,9 @@ from visnav.scenarios.schema import Scenario
 from visnav.sensors.base import TruthHistory
 from visnav.sensors.camera import PendingFrame
 from visnav.sim.clock import rate_divisor as _divisor
+from visnav.analysis.integrity_metrics import integrity_metrics
+from visnav.navigation.integrity import STATE_CODES
+from visnav.sensors.faults import inject_faults
 from visnav.sim.log import FlightLog
 from visnav.sim.missions import BuildContext
 from visnav.sim.missions import build as build_mission
@@ -55,9 +58,11 @@ class Simulation:
         self.sc = sc = scenario
         self.dt = sc.run.dt_s
         self.log = FlightLog(schema=RMAX_STREAMS)
-        self.parts = parts = build_mission(BuildContext(sc, self.log.record, navigator_wrapper))
+        ctx = BuildContext(sc, self.log.record, navigator_wrapper)
+        self.parts = parts = build_mission(ctx)
         self.world = parts.world
-        self.sensors = dict(parts.sensors)
+        # [[faults]] (issue #18): the faulted sensors wrapped, gusts added to the world's wind
+        self.sensors = inject_faults(parts.sensors, self.world, sc.faults, ctx.rng[7])
         self.camera = self.sensors.get("camera")
         self.camera_model, self.mount = parts.camera_model, parts.mount
         self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
@@ -198,6 +203,7 @@ class Simulation:
                 self._render_pool = None
         wall = time.perf_counter() - wall0
         metrics = self._metrics(self.log, self.sc, wall_time_s=wall, error=error)  # from the log only
+        metrics.update(integrity_metrics(log, sc))  # from the log (issue #18)
         return RunResult(scenario=sc, log=log, metrics=metrics, error=error, interrupted=interrupted)
 
     def _log_step(self, t, truth, est, ref, cmd, mode, health) -> None:
@@ -210,4 +216,5 @@ class Simulation:
         log.record("command", t, ail=cmd.ail, ele=cmd.ele, rud=cmd.rud, thr=cmd.thr)
         log.record("status", t, mode=mode, source=health.source, coherence=health.coherence,
                    mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking,
-                   rejected_samples=health.rejected_samples, rejected_ranges=health.rejected_ranges)
+                   rejected_samples=health.rejected_samples, rejected_ranges=health.rejected_ranges,
+                   integrity=STATE_CODES.get(health.integrity, -1), hpl_m=health.hpl_m, k2=health.consistency_k2)

@@ -30,6 +30,7 @@ def build(ctx):
     from visnav.scenarios.schema import PfcmMissionConfig
     from visnav.sensors.baro import Baro, Compass
     from visnav.sensors.camera import Camera
+    from visnav.sensors.faults import map_faults
     from visnav.sim.parts import MissionParts
     from visnav.world.scene import World
 
@@ -38,8 +39,9 @@ def build(ctx):
     pc, cc, mc = cfg.path, cfg.camera, cfg.map
     rng = mission_rngs(sc.run.seed)
     ground, (sn, se, r, centre) = make_ground(cfg, sc.run.seed)
+    ground = map_faults(ground, sc.faults, "world")  # [[faults]] feature_poor (issue #18)
     world = World(ground=ground, surface="grass", wind=ctx.scenario_wind(), detail=None)
-    reference = reference_map(cfg, ground)
+    reference = map_faults(reference_map(cfg, ground), sc.faults, "reference")  # map_offset
     P, T = loop_waypoints(sn, se, r, pc.altitude_m, centre, pc.direction)
     path = HermitePath.from_waypoints(P, T, scale="arc")
     notes = []

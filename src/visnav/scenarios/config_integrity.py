@@ -1,0 +1,149 @@
+"""Integrity-monitor blocks of the navigators and the ``[[faults]]`` list of a scenario (issue #18).
+
+``IntegrityBlock``: the settings of ``estimation/integrity.IntegrityMonitor`` a navigator reads from its own
+configuration (``navigation.integrity`` for PALACE, ``mission.filter.integrity`` for WITAS and the pad
+landing); the defaults differ per navigator (alert limit, stale time) and are set by the subclasses.
+
+``FaultConfig``: one injected fault (``sensors/faults.py`` documents every kind and its parameters)::
+
+    [[faults]]
+    kind = "camera_blackout"
+    start_s = 50.0
+    duration_s = 5.0
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from visnav.scenarios.base import _M
+
+
+class IntegrityBlock(_M):
+    window: int = Field(20, ge=1, le=1000, description="updates per stream in the windowed chi-square test")
+    alpha: float = Field(0.001, gt=0, lt=0.5, description="two-sided level of the windowed NIS test")
+    max_rejected_share: float = Field(0.3, ge=0, le=1, description="degraded above this share of gated-out updates")
+    probability: float = Field(0.999, gt=0, lt=1, description="containment probability of the HPL")
+    alert_limit_m: float = Field(math.inf, gt=0, description="unusable when the HPL exceeds it")
+    stale_s: float = Field(math.inf, gt=0, description="unusable when no update was accepted for this long")
+
+    def monitor_config(self):
+        from visnav.estimation.integrity import IntegrityConfig
+
+        return IntegrityConfig(window=self.window, alpha=self.alpha, max_rejected_share=self.max_rejected_share,
+                               probability=self.probability, alert_limit_m=self.alert_limit_m,
+                               stale_s=self.stale_s)
+
+
+class PalaceIntegrityConfig(IntegrityBlock):
+    """PALACE: landing on a point (1 m), MPE at 10 Hz and GPS at 10 Hz."""
+
+    alert_limit_m: float = Field(4.0, gt=0, description="unusable when the HPL exceeds it")
+    stale_s: float = Field(1.0, gt=0, description="unusable when no update was accepted for this long")
+    # the MPE error the filter cannot see (its fixes follow the tracked point): the ground reference's error
+    # when it was set and the tracker's drift since (seed 000 §4.1), added to the HPL's covariance
+    reference_sigma_m: float = Field(0.05, ge=0, le=10, description="1-sigma horizontal error of the MPE ground "
+                                     "reference when it is set (GPS fix or estimate)")
+    mpe_drift_mps: float = Field(0.015, ge=0, le=1, description="1-sigma horizontal drift of MPE per second "
+                                 "since the ground reference was set (fault-free campaign: 0.2-0.5 m in 25 s)")
+
+
+class WitasIntegrityConfig(IntegrityBlock):
+    """WITAS homing: back within 30 m of home (the issue's unsafe homing), PMF -> KF updates at 5 Hz."""
+
+    alert_limit_m: float = Field(30.0, gt=0, description="unusable when the HPL exceeds it")
+    stale_s: float = Field(5.0, gt=0, description="unusable when no update was accepted for this long")
+    pmf_in_hpl: bool = Field(True, description="add the point-mass filter's covariance (largest eigenvalue per "
+                             "axis) to the HPL's: the KF fuses the PMF mean every frame as if its errors were "
+                             "independent, they are not")
+
+
+class PadIntegrityConfig(IntegrityBlock):
+    """Pad landing: within 1 m of the pad centre, vision fixes at 20 Hz."""
+
+    alert_limit_m: float = Field(1.0, gt=0, description="unusable when the HPL exceeds it")
+    stale_s: float = Field(1.0, gt=0, description="unusable when no update was accepted for this long")
+
+
+FAULT_KINDS = ("camera_blackout", "camera_frozen", "camera_brightness", "camera_blur", "imu_gyro_bias",
+               "imu_accel_bias", "imu_drop", "clock_jump", "range_dropout", "range_stuck", "gps_spoof",
+               "map_offset", "feature_poor", "wind_gust")
+
+
+_CAMERA = ("camera_blackout", "camera_frozen", "camera_brightness", "camera_blur")
+_IMU = ("imu_gyro_bias", "imu_accel_bias", "imu_drop")
+#: mission type -> the fault kinds its simulation injects (the others are an error: nothing would happen)
+FAULTS_APPLY = {
+    "palace": _CAMERA + _IMU + ("clock_jump", "range_dropout", "range_stuck", "gps_spoof", "wind_gust"),
+    "hover": _CAMERA + _IMU + ("clock_jump", "range_dropout", "range_stuck", "gps_spoof", "wind_gust"),
+    "pfcm": _IMU + ("clock_jump", "gps_spoof", "wind_gust"),
+    "witas-homing": _CAMERA + _IMU + ("clock_jump", "gps_spoof", "map_offset", "feature_poor", "wind_gust"),
+    "pad-landing": _CAMERA + _IMU + ("clock_jump", "wind_gust"),
+}
+
+
+def check_faults_apply(mission_type: str, faults) -> None:
+    """ValueError (one line) when a fault does not apply to the mission."""
+    ok = FAULTS_APPLY.get(mission_type, ())
+    bad = sorted({f.kind for f in faults} - set(ok))
+    if bad:
+        raise ValueError(f"faults {', '.join(bad)} do not apply to mission.type {mission_type!r}; "
+                         f"it takes: {', '.join(ok) or 'none'}")
+
+
+class FaultConfig(_M):
+    """One fault: ``kind``, when (``start_s``, ``duration_s``; build-time faults of the map ignore the
+    window), and the parameters of its kind (the others are unused)."""
+
+    kind: Literal[FAULT_KINDS]  # type: ignore[valid-type]
+    start_s: float = Field(0.0, ge=0, le=7200)
+    duration_s: float = Field(math.inf, gt=0, description="inf: to the end of the run")
+    sensor: Literal["", "imu", "gps", "laser", "sonar", "camera", "baro", "compass"] = Field(
+        "", description="clock_jump / range_dropout / range_stuck: the stream (default: camera / laser)")
+    gain: float = Field(1.6, gt=0, le=10, description="camera_brightness: image gain")
+    offset_dn: float = Field(40.0, ge=-255, le=255, description="camera_brightness: added grey levels")
+    blur_px: int = Field(9, ge=2, le=101, description="camera_blur: length of the motion-blur kernel")
+    blur_deg: float = Field(0.0, ge=-360, le=360, description="camera_blur: direction in the image (0: along x)")
+    bias: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0],
+                              description="imu_gyro_bias [deg/s] / imu_accel_bias [m/s^2], body FRD")
+    drop_probability: float = Field(1.0, gt=0, le=1, description="imu_drop: share of samples lost")
+    jump_s: float = Field(0.2, ge=-10, le=10, description="clock_jump: added to the stream's time stamps")
+    walk_mps: float = Field(0.5, ge=0, le=20, description="gps_spoof: walk-off speed of the spoofed fix")
+    walk_deg: float = Field(90.0, ge=-360, le=360, description="gps_spoof: walk-off direction from north")
+    lost_after: bool = Field(True, description="gps_spoof: GPS lost when the walk-off ends")
+    offset_m: list[float] = Field(default_factory=lambda: [20.0, 0.0],
+                                  description="map_offset: the reference map shifted north, east [m]")
+    centre_m: list[float] = Field(default_factory=lambda: [0.0, 0.0],
+                                  description="feature_poor: centre of the water area, north, east [m]")
+    size_m: list[float] = Field(default_factory=lambda: [60.0, 60.0],
+                                description="feature_poor: extent of the water area, north, east [m]")
+    speed_mps: float = Field(6.0, ge=0, le=30, description="wind_gust: gust speed added to the wind")
+    from_deg: float = Field(90.0, ge=-360, le=360, description="wind_gust: direction the gust comes from")
+    label: str = Field("", description="name in campaign tables (default: the kind)")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.kind in ("imu_gyro_bias", "imu_accel_bias") and len(self.bias) != 3:
+            raise ValueError(f"faults: {self.kind}.bias must have 3 values (body x, y, z)")
+        for name in ("offset_m", "centre_m", "size_m"):
+            if len(getattr(self, name)) != 2:
+                raise ValueError(f"faults: {self.kind}.{name} must have 2 values (north, east)")
+        if self.kind in ("range_dropout", "range_stuck") and self.sensor not in ("", "laser", "sonar"):
+            raise ValueError(f"faults: {self.kind}.sensor must be 'laser' or 'sonar', got {self.sensor!r}")
+        if self.kind == "feature_poor" and min(self.size_m) <= 0:
+            raise ValueError("faults: feature_poor.size_m must be positive")
+        return self
+
+    @property
+    def name(self) -> str:
+        return self.label or self.kind
+
+    @property
+    def end_s(self) -> float:
+        return self.start_s + self.duration_s
+
+    def active(self, t: float) -> bool:
+        return self.start_s <= t < self.end_s
