@@ -1,0 +1,90 @@
+"""Truth guard for the loops of their own (ship deck, CONDOR, geo-location): as ``test_truth_guard.py`` does
+for the R-MAX loop, the true vehicle states (and the deck's true motion) are read only by the sensors, the
+vehicle and world models that produce them, and the loop's own logging / contact / NavInit code.
+
+The state types are swapped for subclasses whose attribute reads check the module of the reader; a read
+from anywhere else (a navigator, a mission, a controller, guidance) is recorded and raises.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from visnav.scenarios.schema import load_scenario
+from visnav.sim.missions import make_simulation
+
+ALLOWED = ("visnav.sensors.", "visnav.vehicles.", "visnav.world.")
+ALLOWED_EXACT = {"visnav.measurements", "dataclasses", "copy"}
+LEAKS: list[str] = []
+
+
+def _guarded(cls, loop_module: str):
+    """A subclass of the truth type ``cls`` whose attribute reads are checked."""
+
+    def __getattribute__(self, name):
+        if not name.startswith("__"):
+            mod = sys._getframe(1).f_globals.get("__name__", "?")
+            if not (mod.startswith(ALLOWED) or mod in ALLOWED_EXACT or mod == loop_module
+                    or mod == "visnav.sim.fixedwing_common"):
+                LEAKS.append(f"{mod} read truth {cls.__name__}.{name}")
+                raise AssertionError(f"truth read from {mod} ({cls.__name__}.{name})")
+        return object.__getattribute__(self, name)
+
+    return type("Guarded" + cls.__name__, (cls,), {"__getattribute__": __getattribute__})
+
+
+def _guard(monkeypatch, loop_module: str) -> dict:
+    import visnav.measurements as meas
+    import visnav.vehicles.fixedwing as fw
+    import visnav.vehicles.multirotor as mr
+    import visnav.world.deck as wd
+
+    g = {"vs": _guarded(meas.VehicleState, loop_module), "mr": _guarded(mr.MultirotorState, loop_module),
+         "ds": _guarded(wd.DeckState, loop_module)}
+    monkeypatch.setattr(fw, "VehicleState", g["vs"])  # the fixed wing's state
+    monkeypatch.setattr(mr, "MultirotorState", g["mr"])  # the Y6's state
+    monkeypatch.setattr(wd, "DeckState", g["ds"])  # the ship deck's true motion
+    if loop_module == "visnav.sim.deck_loop":
+        import visnav.sim.deck_loop as dl
+
+        monkeypatch.setattr(dl, "VehicleState", g["vs"])  # what the deck loop's truth history holds
+    return g
+
+
+def test_the_guard_catches_a_read_from_elsewhere(monkeypatch):
+    g = _guard(monkeypatch, "visnav.sim.deck_loop")
+    from visnav.world.deck import DeckMotion
+
+    ds = DeckMotion.static().state(0.0)
+    assert isinstance(ds, g["ds"])
+    LEAKS.clear()
+    with pytest.raises(AssertionError, match="truth read from"):
+        _ = ds.position
+    assert LEAKS == [f"{__name__} read truth DeckState.position"]
+    LEAKS.clear()
+
+
+@pytest.mark.parametrize("name, loop, keys", [
+    ("deck-static", "visnav.sim.deck_loop", ["run.duration_s=8"]),  # manual start, hand-over, approach
+    ("deck-moving", "visnav.sim.deck_loop", ["run.duration_s=6"]),
+    ("condor-orbit", "visnav.sim.condor_loop", ["run.duration_s=30", "mission.control.orbit.switch_time_s=20"]),  # GPS, then vision
+    ("mav-geolocation", "visnav.sim.geoloc_loop", ["run.duration_s=25"]),
+])
+def test_no_truth_outside_the_sensors_models_and_the_loop(monkeypatch, name, loop, keys):
+    g = _guard(monkeypatch, loop)
+    LEAKS.clear()
+    sim = make_simulation(load_scenario(name, keys))
+    st = sim.vehicle.state
+    assert isinstance(st, (g["vs"], g["mr"])), type(st)
+    res = sim.run()
+    assert LEAKS == [], LEAKS
+    assert res.error is None, res.error
+    modes = res.log.get("mode")
+    assert modes and len(modes["t"]) >= 1
+    if name == "condor-orbit":
+        assert "vision_orbit" in [str(m) for m in modes["mode"]]
+    est = res.log.get("estimate") or res.log.get("sample")
+    assert est and len(est["t"]) > 0
