@@ -212,8 +212,11 @@ def detect_rings(gray: np.ndarray, block: int = 51, offset: float = 30.0, min_ra
         a_out = cv2.contourArea(c)
         if a_out < np.pi * min_radius_px**2 or not 0.04 < area / a_out < 0.85:
             continue
-        eo, ei = _fit(c.reshape(-1, 2)), _fit(contours[best].reshape(-1, 2))
-        if not (_is_ellipse(c, eo) and _is_ellipse(contours[best], ei)):
+        eo = _fit(c.reshape(-1, 2))
+        if not _is_ellipse(c, eo):  # the outer boundary first: a non-ellipse costs one fit, not two
+            continue
+        ei = _fit(contours[best].reshape(-1, 2))
+        if not _is_ellipse(contours[best], ei):
             continue
         if min(ei[2], ei[3]) < min_inner_px:
             continue
