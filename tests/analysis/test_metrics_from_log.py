@@ -91,11 +91,16 @@ def test_visnav_metrics_recomputes_a_run_directory(tmp_path):
     assert r.exit_code == 0, r.output
     assert json.loads(r.stdout)["cross_track_rms_m"] == pytest.approx(written["cross_track_rms_m"], rel=1e-12)
     assert json.loads((tmp_path / "m.json").read_text())["path_length_m"] == pytest.approx(written["path_length_m"])
+    # the log itself names its run directory
+    assert from_run_dir(run / "log.h5")["cross_track_rms_m"] == pytest.approx(written["cross_track_rms_m"], rel=1e-12)
 
 
 def test_visnav_metrics_on_a_missing_or_broken_directory_is_one_line(tmp_path):
     r = CliRunner().invoke(app, ["metrics", str(tmp_path / "nothing")])
     assert r.exit_code == 2 and "not a run directory" in r.output and "Traceback" not in r.output
+    (tmp_path / "x.json").write_text("{}")
+    r = CliRunner().invoke(app, ["metrics", str(tmp_path / "x.json")])
+    assert r.exit_code == 2 and "a file, not a folder" in r.output and "Traceback" not in r.output
     (tmp_path / "d").mkdir()
     r = CliRunner().invoke(app, ["metrics", str(tmp_path / "d")])
     assert r.exit_code == 2 and "no log.h5" in r.output

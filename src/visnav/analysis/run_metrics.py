@@ -64,8 +64,11 @@ def from_run_dir(run_dir: str | Path) -> dict:
     from visnav.sim.log import FlightLog
 
     d = Path(run_dir)
+    if d.is_file() and d.name == "log.h5":  # the log itself: its folder is the run directory
+        d = d.parent
     if not d.is_dir():
-        raise RunDirError(f"{d}: not a run directory (no such folder)")
+        what = "a file, not a folder" if d.exists() else "no such folder"
+        raise RunDirError(f"{d}: not a run directory ({what})")
     for f in ("log.h5", "scenario.toml"):
         if not (d / f).is_file():
             raise RunDirError(f"{d}: no {f} (a run directory of `visnav run` holds log.h5 and scenario.toml)")
