@@ -7,6 +7,11 @@
   takes over: ``set_source("vision")`` to the navigator, and the configured orbit logic (eq. 5.1-5.3,
   7.1) flies ``radius_m`` on the vision range alone; while the radius is stale the base rate is held
   (never a NaN to the controller).
+* integrity (issue #18, ``mission/integrity.IntegrityWatch``): the navigator ``unusable`` (no vision
+  radius for its ``stale_s``, or a protection level past its alert limit) for ``integrity_unusable_s`` on
+  the vision orbit -> back to the GPS loiter (``set_source("gps")``: the autopilot's own navigation,
+  which never stopped); vision again after ``integrity_ok_s`` ok, at most ``max_fallbacks`` times.
+  Each reaction is logged in ``integrity_reaction``, the mode change in ``mode``.
 
 ``step(t, estimate, health) -> (TurnReference, mode)`` at the autopilot's rate; ``info`` holds the
 outer loop's internals for the log; ``recorder(stream, t, **fields)`` gets the mode changes.
@@ -16,6 +21,7 @@ from __future__ import annotations
 
 from visnav.guidance.orbit import OrbitGains, OrbitGuidance
 from visnav.measurements import FixedWingEstimate, Health, NavCommand, TurnReference
+from visnav.mission.integrity import IntegrityWatch
 
 
 class CondorMission:
@@ -33,6 +39,8 @@ class CondorMission:
         self.switched_at: float | None = None
         self.info: dict = {}
         self._t: float | None = None
+        self.watch = IntegrityWatch(self.record)
+        self.fallbacks = 0
 
     def start(self, t: float) -> None:
         self.record("mode", t, mode=self.mode,
@@ -46,10 +54,26 @@ class CondorMission:
         dt = 1.0 / 50.0 if self._t is None else t - self._t
         self._t = t
         e = estimate
-        if self.mode == "gps_loiter" and t >= o.switch_time_s and health.tracking:
-            self.mode, self.switched_at = "vision_orbit", t
+        self.watch.update(t, health)
+        if self.mode == "vision_orbit" and self.watch.unusable_for(t) >= o.integrity_unusable_s:
+            self.fallbacks += 1
+            self.mode = "gps_loiter"
+            self.nav.command(NavCommand(t, "set_source", {"source": "gps"}))
+            self.watch.react(t, "fallback to GPS", f"unusable {self.watch.unusable_for(t):.1f} s on the vision orbit "
+                                                   f"(fallback {self.fallbacks} of {o.max_fallbacks})")
+            self.record("mode", t, mode=self.mode, reason=f"integrity unusable: back to the GPS loiter "
+                                                          f"({self.watch.reason})")
+            e = self.nav.estimate(t)
+        elif self.mode == "gps_loiter" and t >= o.switch_time_s and health.tracking and (
+                self.fallbacks == 0 or (self.fallbacks < o.max_fallbacks and self.watch.ok_for(t) >= o.integrity_ok_s)):
+            self.mode = "vision_orbit"
+            self.switched_at = t if self.switched_at is None else self.switched_at
             self.nav.command(NavCommand(t, "set_source", {"source": "vision"}))
-            self.record("mode", t, mode=self.mode, reason="custom mode switched on (vision radius in)")
+            why = "custom mode switched on (vision radius in)"
+            if self.fallbacks:
+                why = f"vision again after {self.watch.ok_for(t):.1f} s ok (fallback {self.fallbacks})"
+                self.watch.react(t, "back to vision", why)
+            self.record("mode", t, mode=self.mode, reason=why)
             e = self.nav.estimate(t)
         if self.mode == "gps_loiter":
             if e.radius_valid and e.ground_speed == e.ground_speed:

@@ -24,6 +24,13 @@
 * ``descend`` - past the trajectory's end without contact: thrust along the estimated deck normal,
   sink at ``final_descent_mps`` (not in the thesis, whose runs end at the trajectory's end);
 * ``landed`` / ``missed`` - ``on_touchdown``: the gear met the deck on / off the plate.
+
+Integrity (issue #18, ``mission/integrity.IntegrityWatch``; not in the thesis, whose safety pilot took
+over): on a moving deck the navigator ``unusable`` (no frame fused for ``filter.integrity_stale_s``) for
+``guidance.integrity_unusable_s`` during an approach with more than ``guidance.integrity_commit_s`` to go
+is a go-around (back to ``hover``, one of ``guidance.go_arounds``); no approach starts while it is
+unusable (the hover holds). In the approach's last ``integrity_commit_s`` the landing goes on (the
+lights leave the view near the deck). Each reaction is logged in ``integrity_reaction``.
 """
 
 from __future__ import annotations
@@ -33,6 +40,7 @@ import numpy as np
 from visnav.guidance.deck_approach import (StraightApproach, TauGapApproach, level_deck_geometry, rot_z,
                                            touchdown_acceleration, touchdown_target)
 from visnav.measurements import DeckReference, NavCommand, NavInit, RelativeStateSample
+from visnav.mission.integrity import IntegrityWatch
 
 
 class DeckMission:
@@ -52,6 +60,8 @@ class DeckMission:
         self._go_arounds = 0
         self._n_restarts = 0
         self._seen: dict[str, RelativeStateSample] = {}
+        self.watch = IntegrityWatch(recorder)
+        self._held = False  # an approach start is being held for integrity (logged once per hold)
         self.mode, self.t_mode, self.done = "", 0.0, False
         self._set_mode(0.0, "manual", "pilot holds the start while the filter starts")
 
@@ -77,6 +87,7 @@ class DeckMission:
 
     def step(self, t: float, est, health) -> tuple[DeckReference, str]:
         cfg, g = self.cfg, self.cfg.guidance
+        self.watch.update(t, health)
         mode = self.mode
         pilot_view = None
         if mode == "manual" and cfg.start.pilot == "truth" and "pilot" in self._seen:
@@ -120,6 +131,16 @@ class DeckMission:
             ref = DeckReference(t=t, kind="follow", position=c + pd, velocity=vd,
                                 accel=np.array([a_lead[0], a_lead[1], a_now[2]]), target=c, normal=n_up,
                                 flare_time_left=self.approach.T - tm if tau else None)
+            if (tau and self.watch.unusable_for(t) >= g.integrity_unusable_s
+                    and self.approach.T - tm > g.integrity_commit_s):
+                if self._go_arounds < g.go_arounds:
+                    self._go_arounds += 1
+                    self.watch.react(t, "go-around", f"unusable {self.watch.unusable_for(t):.1f} s, "
+                                                     f"{self.approach.T - tm:.1f} s to go")
+                    self._set_mode(t, "hover", f"integrity unusable: go-around {self._go_arounds}")
+                    return ref, self.mode
+                if self.watch.unusable_for(t) - g.integrity_unusable_s < self.period:  # log it once
+                    self.watch.react(t, "none", "go-arounds used up: the approach goes on")
             if tm >= self.approach.T:
                 if tau and self._go_arounds < g.go_arounds:
                     # no contact at the trajectory's end: back to the start point, a new approach when the
@@ -179,6 +200,12 @@ class DeckMission:
         ok = (near and dl <= np.radians(g.lambda_max_deg)
               and np.radians(g.gamma_min_deg) <= gam <= np.radians(g.gamma_max_deg))
         relaxed = tm >= g.max_wait_s and gam <= np.radians(g.gamma_max_deg)  # late: any heading, never too flat
+        if (ok or relaxed) and self.watch.state == "unusable" and self.watch.seen_ok:
+            if not self._held:
+                self._held = True
+                self.watch.react(t, "hold", "no approach while the navigator is unusable")
+            return
+        self._held = False
         if ok or relaxed:
             self.approach = TauGapApproach(p_ld - c, a_td, g.k_rho, g.k_alpha_beta)
             self._a_td = a_td

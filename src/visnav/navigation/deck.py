@@ -108,7 +108,8 @@ class DeckNavConfig:
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,
                    gate=f.gate, alpha=f.alpha, beta=f.beta, kappa=f.kappa, blob_threshold=c.blob_threshold,
-                   converged_bearing_rms=np.radians(f.converged_bearing_rms_deg))
+                   converged_bearing_rms=np.radians(f.converged_bearing_rms_deg),
+                   integrity=IntegrityConfig(stale_s=f.integrity_stale_s))
 
 
 @dataclass(frozen=True)

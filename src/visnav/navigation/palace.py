@@ -35,7 +35,7 @@ from visnav.measurements import (
     RangeSample,
 )
 from visnav.navigation.base import CommandDispatch, propagate
-from visnav.navigation.integrity import NavIntegrity
+from visnav.navigation.integrity import NavIntegrity, gps_check_from, watch_gps
 from visnav.vision.correlation import PnccTracker
 from visnav.vision.interest import forstner
 from visnav.log_schema import register_stream
@@ -98,6 +98,7 @@ class PalaceNavigator(CommandDispatch):
         self.h = Health()
         # integrity (issue #18): NIS of every GPS / MPE position update (horizontal, 2 dof) and sonar height
         self.integrity = NavIntegrity(getattr(cfg, "integrity", None), self.recorder, inflation_streams=("gps", "mpe"))
+        self.gps_check = gps_check_from(getattr(cfg, "integrity", None))  # GPS walk-off onset
         self._reference_t: float | None = None  # when MPE's ground reference was last set (HPL drift budget)
         self._reference_var = 0.0  # its error variance then (a re-init from the estimate carries the drift)
 
@@ -179,7 +180,8 @@ class PalaceNavigator(CommandDispatch):
         if not self.filter.initialized or self.att.k == 0:
             return
         e = self.att.newest()
-        self.filter.predict(m.t, accel_ned(euler_to_dcm(e), m.accel))
+        self.filter.predict(m.t, a_ned := accel_ned(euler_to_dcm(e), m.accel))
+        self.gps_check.imu(m.t, a_ned)
 
     def _on_range(self, m: RangeSample) -> None:
         r = m.range
@@ -218,7 +220,9 @@ class PalaceNavigator(CommandDispatch):
             lag = (self.filter.t or m.t) - m.t
             self.filter.update_position(m.position + m.velocity * lag, max(m.sigma, 0.01))
             self.integrity.record(m.t, "gps", float(np.sum(self.filter.last_nis[:2])), 2, True)
-            self.filter.update_velocity(m.velocity + self.filter.accel * lag, 0.05)
+            zv = m.velocity + self.filter.accel * lag
+            watch_gps(self.gps_check, self.integrity, m.t, zv)
+            self.filter.update_velocity(zv, 0.05)
 
     # ---------------------------------------------------------------- vision
     def _laser_at(self, t: float) -> RangeSample | None:

@@ -37,7 +37,7 @@ from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
                                  NavEstimate, NavInit)
 from visnav.navigation.base import CommandDispatch, propagate
-from visnav.navigation.integrity import NavIntegrity
+from visnav.navigation.integrity import HandoverCheck, NavIntegrity, gps_check_from, watch_gps
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
 from visnav.log_schema import register_stream
@@ -54,6 +54,11 @@ register_stream("odometry", ok=("bool", "", "the odometry step was used"),
                 displacement=("m", "NED north, east", "camera displacement of the step (eq. 5.5-5.10)"),
                 position=("m", _NED, "odometry-only track (steps summed from the engagement)"),
                 height=("m", "", "height above ground that scaled the step"))
+register_stream("handover_check", offset=("m", "NED north, east", "PMF mean minus the odometry track from the "
+                                                                 "GPS hand-over"),
+                sigma=("m", "", "its expected 1-sigma (hand-over, odometry steps, PMF)"),
+                stat=("1", "", "|offset|^2 / sigma^2, against chi-square(2)"),
+                latched=("m", "NED north, east", "the latched offset (NaN until latched)"))
 register_stream("pmf", position=("m", "NED north, east", "point-mass filter mean (eq. 5.24-5.31)"),
                 cov=("m^2", "NED north, east", "point-mass filter covariance"),
                 registered=("bool", "", "a map registration was used (eq. 5.14-5.15)"),
@@ -111,7 +116,7 @@ class _EskfBackend:
         s = NavState(t=float(t), position=np.asarray(position, float).copy(),
                      velocity=np.asarray(velocity, float).copy(), quat=euler_to_quat(euler))
         sa = math.radians(sigma_att_deg)
-        P0 = np.r_[[sigma_p] * 3, [sigma_v] * 3, [sa, sa, 3 * sa], [0.02] * 3]
+        P0 = np.r_[np.broadcast_to(sigma_p, 3), [sigma_v] * 3, [sa, sa, 3 * sa], [0.02] * 3]
         cfg = EskfConfig(accel_noise=0.05, gyro_noise=2e-3, accel_bias_noise=1e-3, gravity_mps2=9.81,
                          earth_rotation=False, gate_probability=gate_probability)
         self.kf = ErrorStateKF(s, P0, cfg)
@@ -178,6 +183,11 @@ class WitasNavigator(CommandDispatch):
         # ("vision", horizontal, 2 dof), of the baro and compass updates
         self.integrity = NavIntegrity(getattr(cfg, "integrity", None), self.recorder,
                                       inflation_streams=("gps", "vision"))
+        ic = getattr(cfg, "integrity", None)
+        self.gps_check = gps_check_from(ic)  # GPS walk-off onset
+        self.handover = (HandoverCheck(ic.handover_alpha, ic.handover_updates)
+                         if ic is not None and getattr(ic, "handover_check", False) else None)
+        self._odo_var = 0.0  # variance [m^2] per axis of the odometry track from the hand-over
 
     def initialize(self, init: NavInit) -> None:
         """Start the GPS-phase filter at an explicit pose (otherwise it starts at the first GPS fix)."""
@@ -244,7 +254,8 @@ class WitasNavigator(CommandDispatch):
             self.hist.push(t, np.concatenate((p, eul)))
             self._ins_only_step(m.t, acc, gyr, dt, e)
         elif self.gps_filter.initialized and e is not None:
-            self.gps_filter.predict(m.t, accel_ned(euler_to_dcm(e), m.accel))
+            self.gps_filter.predict(m.t, a_ned := accel_ned(euler_to_dcm(e), m.accel))
+            self.gps_check.imu(m.t, a_ned)
 
     def _on_gps(self, m: GpsSample) -> None:
         if not (np.all(np.isfinite(m.position)) and np.all(np.isfinite(m.velocity))):
@@ -261,6 +272,7 @@ class WitasNavigator(CommandDispatch):
         lag = (f.t or m.t) - m.t
         f.update_position(m.position + m.velocity * lag, max(m.sigma, 0.05))
         self.integrity.record(m.t, "gps", float(np.sum(f.last_nis[:2])), 2, f.last_accepted)
+        watch_gps(self.gps_check, self.integrity, m.t, m.velocity)
         f.update_velocity(m.velocity, 0.05)
 
     def _engage_vision(self, t: float) -> None:
@@ -269,15 +281,21 @@ class WitasNavigator(CommandDispatch):
         e = self._ahrs()
         e = np.zeros(3) if e is None else e.copy()
         err = np.radians(np.asarray(c.init_attitude_error_deg, float))
+        # a GPS walk-off flagged before the loss: the hand-over position may be off by what it can have
+        # built (GpsInertialCheck.extra_hpl); the filter and the PMF start that uncertain, so that the
+        # registration moves the position (not the attitude) back
+        walk = self.gps_check.extra_hpl(t)
+        sp = math.hypot(0.5, walk)
         if c.backend == "eskf":
-            self.backend = _EskfBackend(f.t, f.p, f.v, e + err, gate_probability=c.kf_gate_probability)
+            self.backend = _EskfBackend(f.t, f.p, f.v, e + err, sigma_p=[sp, sp, 0.5], gate_probability=c.kf_gate_probability)
         else:
-            self.backend = _AhrsBackend(f.t, f.p, f.v, e + err)
+            self.backend = _AhrsBackend(f.t, f.p, f.v, e + err, sigma_p=sp)
             self.backend.offset = err
         self.t_vision = t
         self._acc = [np.zeros(3), np.zeros(3), 0, f.t]
-        self.pmf = PointMassFilter(f.p[:2], c.pmf_size_m, c.pmf_resolution_m, c.pmf_sigma0_m)
+        self.pmf = PointMassFilter(f.p[:2], c.pmf_size_m, c.pmf_resolution_m, math.hypot(c.pmf_sigma0_m, walk))
         self.odo_track = f.p.copy()
+        self._odo_var = float(np.linalg.eigvalsh(f.covariance()[:2, :2]).max()) + walk * walk
         self._init_ins_only(f.t, f.p, f.v, e + err)
         self.h.source = "vision"
         self.integrity.start(t)
@@ -343,12 +361,15 @@ class WitasNavigator(CommandDispatch):
             self.odo_track = self.odo_track + np.r_[u, 0.0]
             sv = c.process_noise_m + c.process_noise_frac * float(np.linalg.norm(u))
             self.pmf.predict(u, sv)
+            self._odo_var += sv * sv
         else:
             self.skipped_odometry += 1
             self._note(f"{f.t:.1f}s odometry skipped: {step.reason}")
             # no displacement measured: predict with the filter's own displacement and a wider noise
             u = u_ins
-            self.pmf.predict(u, c.process_noise_m + 0.2 * float(np.linalg.norm(u)) + 0.5)
+            sv = c.process_noise_m + 0.2 * float(np.linalg.norm(u)) + 0.5
+            self.pmf.predict(u, sv)
+            self._odo_var += sv * sv
             # the odometry-only track dead-reckons on its last measured displacement
             self.odo_track = self.odo_track + np.r_[self._last_u, 0.0]
         self.recorder("odometry", f.t, ok=step.ok, n_tracked=step.n_tracked, n_inliers=step.n_inliers,
@@ -373,14 +394,31 @@ class WitasNavigator(CommandDispatch):
                 self._note(f"{f.t:.1f}s no registration: {reg.reason}")
         mean, P = self.pmf.estimate()
         self.recorder("pmf", f.t, position=mean, cov=P, registered=registered, ncc_peak=peak, window_m=window)
+        if registered and self.handover is not None:
+            self._check_handover(f.t, mean, P)
         if not (step.ok or registered):
             return  # the PMF only carried the filter's own prediction: nothing to feed back
-        # PMF -> Kalman filter (position at the frame instant, moved to the filter's time by its velocity)
+        # PMF -> Kalman filter (position at the frame instant, moved to the filter's time by its velocity);
+        # a latched hand-over offset keeps the filter in the hand-over's frame
         t_kf, p_kf, v_kf, _, _ = self.backend.state()
         z = mean + v_kf[:2] * (t_kf - f.t)
+        if self.handover is not None and self.handover.offset is not None:
+            z = z - self.handover.offset
         R = P + 0.01 * np.eye(2) if c.use_pmf_covariance else np.eye(2) * c.kf_position_sigma_m**2
         self.backend.update_position(z, R)
         self.integrity.record(f.t, "vision", *self.backend.last)
+
+    def _check_handover(self, t: float, mean, P) -> None:
+        h = self.handover
+        d = np.asarray(mean, float) - self.odo_track[:2]
+        var = self._odo_var + float(np.linalg.eigvalsh(P).max())
+        if h.add(t, d, var):
+            off = float(np.linalg.norm(h.offset))
+            self.integrity.suspect("handover", f"map registration {off:.1f} m from the odometry since the GPS "
+                                   f"hand-over (offset map or wrong start)", lambda _t, off=off: off)
+            self._note(f"{t:.1f}s hand-over offset {np.round(h.offset, 1)} m latched")
+        self.recorder("handover_check", t, offset=d, sigma=math.sqrt(var), stat=h.last_stat,
+                      latched=h.offset if h.offset is not None else np.full(2, np.nan))
 
     def _note(self, text: str) -> None:
         if len(self.h.notes) < 200:

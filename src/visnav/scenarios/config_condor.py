@@ -102,6 +102,10 @@ class OrbitConfig(_M):
     kp_modified: float = Field(0.012, ge=0.0, le=0.1)
     kd_modified: float = Field(0.06, ge=0.0, le=0.5)
     base_limit: float = Field(0.4, ge=0.0, le=1.0, description="eq. 5.2 limit (+-40 %)")
+    integrity_unusable_s: float = Field(2.0, ge=0.0, le=60.0, description="vision orbit: navigator integrity "
+                                        "unusable this long -> back to the GPS loiter (issue #18)")
+    integrity_ok_s: float = Field(5.0, ge=0.0, le=600.0, description="... and back to vision after this long ok")
+    max_fallbacks: int = Field(2, ge=0, le=100, description="GPS fallbacks before the vision orbit is given up")
 
 
 class ControlConfig(_M):

@@ -115,6 +115,8 @@ class DeckFilterConfig(_M):
     motion_scale: float = Field(1.0, ge=0, le=3, description="multiplies the tuned sea state's amplitudes in Q "
                                 "(the filter's assumption; deck.motion_scale is the world's)")
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
+    integrity_stale_s: float = Field(0.5, gt=0, le=60, description="integrity unusable when no frame was fused "
+                                     "for this long (15 frames at 30 Hz; issue #18)")
 
 
 class DeckGuidanceConfig(_M):
@@ -147,6 +149,11 @@ class DeckGuidanceConfig(_M):
                             "returns to the start point and tries again, this many times, before the descend mode")
     go_around_hover_s: float = Field(2.0, ge=0, le=60, description="hover before the next approach of a go-around")
     final_descent_mps: float = Field(0.25, gt=0, le=2)
+    integrity_unusable_s: float = Field(0.5, ge=0, le=30, description="moving deck: navigator integrity unusable "
+                                        "this long during the approach -> go-around (one of go_arounds), and no "
+                                        "approach starts while it is unusable (issue #18)")
+    integrity_commit_s: float = Field(1.0, ge=0, le=30, description="... except in the approach's last seconds "
+                                      "(the lights leave the view near the deck): there it lands on")
     descent_hold: bool = Field(True, description="descend mode: horizontal spring-damper on the touchdown point "
                                 "(tilts the thrust off the deck normal; off: the vehicle drifts, moving seed 17 "
                                 "missed the plate)")

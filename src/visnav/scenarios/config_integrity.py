@@ -49,6 +49,14 @@ class PalaceIntegrityConfig(IntegrityBlock):
                                      "reference when it is set (GPS fix or estimate)")
     mpe_drift_mps: float = Field(0.015, ge=0, le=1, description="1-sigma horizontal drift of MPE per second "
                                  "since the ground reference was set (fault-free campaign: 0.2-0.5 m in 25 s)")
+    gps_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="GPS walk-off onset: level of the GPS-inertial "
+                                   "velocity test (chi-square(2); navigation/integrity.GpsInertialCheck)")
+    gps_check_window_s: float = Field(1.0, gt=0, le=30, description="its window: GPS velocity change vs the "
+                                      "integrated acceleration over this long")
+    gps_velocity_sigma_mps: float = Field(0.03, gt=0, le=5, description="1-sigma GPS velocity noise per axis "
+                                          "(the receiver: 0.02 m/s)")
+    gps_check_accel_sigma_mps2: float = Field(0.05, gt=0, le=5, description="1-sigma error of the navigation-frame "
+                                              "acceleration (accelerometer, attitude) per axis")
 
 
 class WitasIntegrityConfig(IntegrityBlock):
@@ -59,6 +67,19 @@ class WitasIntegrityConfig(IntegrityBlock):
     pmf_in_hpl: bool = Field(True, description="add the point-mass filter's covariance (largest eigenvalue per "
                              "axis) to the HPL's: the KF fuses the PMF mean every frame as if its errors were "
                              "independent, they are not")
+    gps_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="GPS walk-off onset: level of the GPS-inertial "
+                                   "velocity test (chi-square(2); navigation/integrity.GpsInertialCheck)")
+    gps_check_window_s: float = Field(1.0, gt=0, le=30, description="its window: GPS velocity change vs the "
+                                      "integrated acceleration over this long")
+    gps_velocity_sigma_mps: float = Field(0.03, gt=0, le=5, description="1-sigma GPS velocity noise per axis "
+                                          "(the receiver: 0.02 m/s)")
+    gps_check_accel_sigma_mps2: float = Field(0.05, gt=0, le=5, description="1-sigma error of the navigation-frame "
+                                              "acceleration (accelerometer, attitude) per axis")
+    handover_check: bool = Field(True, description="compare the PMF fixes with the odometry from the GPS hand-over; "
+                                 "a persistent offset (map offset, spoofed start) is latched: degraded, HPL + offset, "
+                                 "the Kalman filter kept in the hand-over frame (navigation/integrity.HandoverCheck)")
+    handover_alpha: float = Field(1e-4, gt=0, lt=0.5, description="level of the hand-over test (chi-square(2))")
+    handover_updates: int = Field(3, ge=1, le=100, description="registrations in a row above the bound to latch")
 
 
 class PadIntegrityConfig(IntegrityBlock):

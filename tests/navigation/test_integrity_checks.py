@@ -1,0 +1,140 @@
+"""The detectors the innovations miss (issue #18): a GPS walk-off the filter follows (``GpsInertialCheck``)
+and a map that disagrees with the odometry from the GPS hand-over (``HandoverCheck``), and the latched
+suspicion they leave in ``NavIntegrity``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from visnav.geometry.camera import PinholeCamera
+from visnav.geometry.mounts import FixedMount
+from visnav.measurements import AttitudeSample, GpsSample, Health, ImuSample
+from visnav.navigation.integrity import GpsInertialCheck, HandoverCheck, NavIntegrity
+from visnav.navigation.palace import PalaceNavigator
+from visnav.scenarios.config_integrity import PalaceIntegrityConfig, WitasIntegrityConfig
+from visnav.scenarios.schema import NavigationConfig
+
+
+def _fly(check: GpsInertialCheck, walk_mps: float, t0: float = 5.0, t_end: float = 20.0, noise=0.0, accel_err=0.0,
+         seed=0):
+    """A vehicle swinging north-south (a = 2 sin t); GPS velocity at 10 Hz, walked off east by ``walk_mps`` from
+    ``t0`` (the velocity consistent, as the spoofer does); the IMU integrates at 100 Hz with ``accel_err``."""
+    rng = np.random.default_rng(seed)
+    bias = rng.normal(0, accel_err, 2)
+    for k in range(int(t_end * 100) + 1):
+        t = 0.01 * k
+        check.imu(t, np.array([2.0 * math.sin(t) + bias[0], bias[1], 0.0]))
+        if k % 10 == 0:
+            v = np.array([2.0 * (1 - math.cos(t)), 0.0]) + rng.normal(0, noise, 2)
+            if t >= t0:
+                v = v + np.array([0.0, walk_mps])
+            check.gps(t, v)
+    return check
+
+
+def test_trigger_rate_is_the_chi2_quantile_of_the_velocity_noise_model():
+    c = GpsInertialCheck(alpha=1e-7, window_s=1.0, vel_sigma_mps=0.03, accel_sigma_mps2=0.05)
+    sigma = math.sqrt(2 * 0.03**2 + 0.05**2)
+    assert c.bound == pytest.approx(chi2.ppf(1 - 1e-7, 2), rel=1e-12)
+    assert c.bound == pytest.approx(-2 * math.log(1e-7), rel=1e-9)  # chi2(2): closed form
+    assert c.trigger_rate == pytest.approx(sigma * math.sqrt(-2 * math.log(1e-7)), rel=1e-9)
+    assert c.trigger_rate == pytest.approx(0.3723, abs=1e-3)
+
+
+def test_walk_off_above_the_trigger_rate_is_flagged_below_it_not():
+    rate = GpsInertialCheck().trigger_rate
+    hit = _fly(GpsInertialCheck(), 1.05 * rate)
+    assert hit.detected_t == pytest.approx(5.0, abs=0.05) and hit.rate_mps == pytest.approx(1.05 * rate, rel=1e-3)
+    assert hit.onset == pytest.approx(4.0, abs=0.05)  # the window's start: the walk began after it
+    assert hit.extra_hpl(13.0) == pytest.approx(9.0 * hit.rate_mps, rel=1e-6)  # 8 s of walk + the 1 s window
+    miss = _fly(GpsInertialCheck(), 0.95 * rate)
+    assert miss.onset is None and miss.extra_hpl(13.0) == 0.0
+
+
+def test_no_false_alarm_from_receiver_noise_and_an_accelerometer_error_within_the_model():
+    for seed in range(5):  # 200 s each at 10 Hz: 2000 tests per run at alpha 1e-7
+        c = _fly(GpsInertialCheck(), 0.0, t_end=200.0, noise=0.02, accel_err=0.03, seed=seed)
+        assert c.onset is None
+        assert c.last_stat < c.bound
+    # the 0.5 m/s walk-off of the fault campaign through the same noise: flagged at its start
+    c = _fly(GpsInertialCheck(), 0.5, noise=0.02, accel_err=0.03, seed=1)
+    assert c.detected_t == pytest.approx(5.0, abs=0.15)
+
+
+def test_extra_hpl_stops_growing_when_the_fixes_stop():
+    c = _fly(GpsInertialCheck(), 1.0, t_end=8.0)
+    assert c.extra_hpl(8.0) == pytest.approx(4.0 * c.rate_mps, rel=1e-6)
+    assert c.extra_hpl(60.0) == pytest.approx(c.extra_hpl(8.0))
+
+
+def _palace_spoof(walk_mps, t_end=12.0):
+    nav = PalaceNavigator(NavigationConfig(), PinholeCamera.ideal(640, 480, 1073.0), FixedMount.depressed(60.0))
+    rng = np.random.default_rng(3)
+    states = {}
+    for k in range(int(t_end * 100) + 1):
+        t = 0.01 * k
+        nav.update(AttitudeSample(t=t, euler=np.zeros(3)))
+        nav.update(ImuSample(t=t, accel=np.array([0.0, 0.0, -9.81]), gyro=np.zeros(3)))
+        if k % 10 == 0:
+            w = walk_mps if t >= 4.0 else 0.0
+            nav.update(GpsSample(t=t, position=np.array([0.0, w * max(t - 4.0, 0.0), -10.0]) +
+                                 np.r_[rng.normal(0, 0.02, 2), 0.0],
+                                 velocity=np.r_[rng.normal(0, 0.02, 2), 0.0] + np.array([0.0, w, 0.0]), sigma=0.02))
+        if k % 50 == 25:
+            h = nav.health(t)
+            states[round(t, 2)] = (h.integrity, h.integrity_reason, h.hpl_m)
+    return states
+
+
+def test_palace_flags_a_gps_walk_off_the_filter_follows_and_its_hpl_covers_the_walk():
+    clean = _palace_spoof(0.0)
+    assert {s for t, (s, *_) in clean.items() if t > 1} == {"ok"}
+    walk = _palace_spoof(0.5)
+    assert walk[3.75][0] == "ok"
+    s, why, hpl = walk[6.25]
+    assert s == "degraded" and "walk-off" in why
+    assert hpl > 0.5 * 2.25  # the walk so far (2.25 s at 0.5 m/s) is inside the HPL
+    # 8 s of walk (4 m) + the filter's HPL: past PALACE's 4 m alert limit -> unusable
+    assert walk[11.75][0] == "unusable" and walk[11.75][2] > 0.5 * 7.75
+
+
+def test_handover_check_latches_a_persistent_offset_and_not_noise():
+    h = HandoverCheck(alpha=1e-4, updates=3)
+    assert h.bound == pytest.approx(chi2.ppf(1 - 1e-4, 2), rel=1e-12)
+    rng = np.random.default_rng(0)
+    for k in range(2000):  # fault-free: d ~ N(0, var I)
+        assert not h.add(k * 0.4, rng.normal(0, 2.0, 2), 4.0)
+    assert h.offset is None
+    # two above the bound, then one below: no latch (not persistent)
+    r = math.sqrt(h.bound * 4.0)
+    assert not h.add(0, [1.1 * r, 0], 4.0) and not h.add(0, [1.1 * r, 0], 4.0) and not h.add(0, [0.9 * r, 0], 4.0)
+    assert not h.add(1, [10.0, 0.5], 4.0) and not h.add(2, [10.4, -0.5], 4.0)
+    assert h.add(3, [10.2, 0.0], 4.0)
+    assert h.offset == pytest.approx([10.2, 0.0], abs=1e-9) and h.t == 3
+    assert not h.add(4, [30.0, 0.0], 4.0) and h.offset == pytest.approx([10.2, 0.0])  # latched once
+
+
+def test_suspicion_degrades_and_adds_to_the_hpl_and_goes_unusable_past_the_alert_limit():
+    ni = NavIntegrity(WitasIntegrityConfig())
+    P = np.diag([4.0, 1.0])
+    ni.monitor.record(0.0, "vision", 2.0, 2, True)
+    base = ni.fill(Health(source="vision"), 0.1, P)
+    assert base.integrity == "ok"
+    hpl0 = base.hpl_m
+    ni.suspect("handover", "map off", lambda t: 10.0)
+    h = ni.fill(Health(source="vision"), 0.2, P)
+    assert h.integrity == "degraded" and "map off" in h.integrity_reason
+    assert h.hpl_m == pytest.approx(hpl0 + 10.0, rel=1e-12)
+    ni.suspect("gps_walk", "walk", lambda t: 30.0)  # the largest term counts (same error): 30 m + HPL > 30 m limit
+    h = ni.fill(Health(source="vision"), 0.3, P)
+    assert h.integrity == "unusable" and h.hpl_m == pytest.approx(hpl0 + 30.0, rel=1e-12)
+
+
+def test_config_defaults_give_the_documented_trigger_rate():
+    for c in (PalaceIntegrityConfig(), WitasIntegrityConfig()):
+        from visnav.navigation.integrity import gps_check_from
+        assert gps_check_from(c).trigger_rate == pytest.approx(0.3723, abs=1e-3)
