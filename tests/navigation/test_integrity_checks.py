@@ -138,3 +138,19 @@ def test_config_defaults_give_the_documented_trigger_rate():
     for c in (PalaceIntegrityConfig(), WitasIntegrityConfig()):
         from visnav.navigation.integrity import gps_check_from
         assert gps_check_from(c).trigger_rate == pytest.approx(0.3723, abs=1e-3)
+
+
+def test_a_gap_in_the_fixes_restarts_the_window_instead_of_testing_across_it():
+    c = GpsInertialCheck()
+    for k in range(301):  # 3 s of fixes, then none for 5 s while the vehicle accelerates (the IMU sees it)
+        t = 0.01 * k
+        c.imu(t, np.zeros(3))
+        if k % 10 == 0:
+            c.gps(t, np.zeros(2))
+    for k in range(301, 801):
+        c.imu(0.01 * k, np.array([0.2, 0.0, 0.0]))  # 1 m/s gained by 8 s, felt by the IMU
+    # GPS says 0.5 m/s: 0.1 m/s^2 of accelerometer error over the 5 s gap (2 sigma of the model there), but
+    # 0.5 m/s against the 1 s window's sigma (0.066 m/s) would be far above its bound
+    assert (0.5 / c.sigma) ** 2 > c.bound
+    assert not c.gps(8.0, np.array([0.5, 0.0]))
+    assert c.onset is None and len(c._fixes) == 1

@@ -51,6 +51,7 @@ FAULT_SETS: dict[str, list[dict]] = {
         dict(kind="clock_jump", sensor="camera", start_s=60.0, duration_s=5.0, jump_s=0.2),
         dict(kind="gps_spoof", start_s=2.0, duration_s=6.0, walk_mps=1.0, walk_deg=90.0, lost_after=True),
         dict(kind="map_offset", start_s=8.0, offset_m=[10.0, 0.0], label="map_offset_10m"),
+        dict(kind="map_offset", start_s=8.0, offset_m=[20.0, 0.0], label="map_offset_20m"),
         dict(kind="feature_poor", start_s=45.0, centre_m=[160.0, 0.0], size_m=[80.0, 80.0]),
         dict(kind="wind_gust", start_s=60.0, duration_s=4.0, speed_mps=8.0, from_deg=90.0),
     ],

@@ -141,6 +141,10 @@ class GpsInertialCheck:
         while len(q) > 1 and q[1][0] <= t - self.window_s + 1e-9:
             q.popleft()
         t0, v0, A0 = q[0]
+        if t - t0 > 1.5 * self.window_s:  # a gap in the fixes (jamming): start the window again
+            q.clear()
+            q.append((float(t), v, self._A.copy()))
+            return False
         if self.onset is not None or t - t0 < 0.5 * self.window_s:
             return False
         d = (v - v0) - (self._A - A0)
