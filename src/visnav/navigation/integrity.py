@@ -73,7 +73,8 @@ class NavIntegrity:
             limit = self.monitor.config.alert_limit_m
             if a["hpl_m"] > limit and a["integrity"] != "unusable":
                 a["integrity"] = "unusable"
-                a["integrity_reason"] = f"HPL {a['hpl_m']:.1f} m (+{extra:.1f} m: {why}) above the {limit:g} m alert limit"
+                a["integrity_reason"] = (f"HPL {a['hpl_m']:.1f} m (+{extra:.1f} m: {why}) above the {limit:g} m "
+                                         "alert limit")
             elif a["integrity"] == "ok":
                 a["integrity"], a["integrity_reason"] = "degraded", f"{why} (HPL +{extra:.1f} m)"
             else:

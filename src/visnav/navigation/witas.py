@@ -287,7 +287,8 @@ class WitasNavigator(CommandDispatch):
         walk = self.gps_check.extra_hpl(t)
         sp = math.hypot(0.5, walk)
         if c.backend == "eskf":
-            self.backend = _EskfBackend(f.t, f.p, f.v, e + err, sigma_p=[sp, sp, 0.5], gate_probability=c.kf_gate_probability)
+            self.backend = _EskfBackend(f.t, f.p, f.v, e + err, sigma_p=[sp, sp, 0.5],
+                                        gate_probability=c.kf_gate_probability)
         else:
             self.backend = _AhrsBackend(f.t, f.p, f.v, e + err, sigma_p=sp)
             self.backend.offset = err
