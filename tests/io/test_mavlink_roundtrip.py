@@ -236,15 +236,13 @@ def test_requests_without_a_mapping_fail_with_one_line():
         mm.decode_nav_command(bad, 0.0)
 
 
-mavsdk = pytest.importorskip("mavsdk", reason="the mavsdk wheel is not installed (pip install 'mavsdk>=4.1')")
-
-
 @pytest.mark.realtime
 def test_every_field_after_mavsdk_decoding():
     """MAVSDK plays the autopilot (system 1, component 1, as the bridge's peer); its MavlinkDirect plugin hands
     an application every message of a system, decoded by libmav (fields as JSON; NaN and inf as null), no
     server process needed. (As a ground station with its own system id MAVSDK drops the messages addressed
     to system 1: SET_GPS_GLOBAL_ORIGIN, COMMAND_LONG, COMMAND_ACK.)"""
+    mavsdk = pytest.importorskip("mavsdk", reason="the mavsdk wheel is not installed (pip install 'mavsdk>=4.1')")
     if not hasattr(mavsdk, "Mavsdk"):
         pytest.skip("mavsdk < 4 (the gRPC mavsdk_server API) is installed; this test uses the 4.x C library API")
     from mavsdk import ComponentType, Configuration, Mavsdk

@@ -77,8 +77,8 @@ class BridgeConfig:
     output: str = "odometry"
     frame_id: int = mavlink.MAV_FRAME_LOCAL_FRD
     origin: LocalTangentPlane | None = None  # else the autopilot's GPS_GLOBAL_ORIGIN or its first fix
-    p0_hpa: float | None = None  # pressure at the origin's height; else from the first SCALED_PRESSURE and the
-    # GPS height of that moment (the first pressure itself when no GPS is streamed: take-off on the ground)
+    p0_hpa: float | None = None  # pressure at the origin's height; else from the first SCALED_PRESSURE and the GPS
+    # height of the first fix (the first pressure itself when no fix comes within origin_wait_s: take-off)
     origin_wait_s: float = 2.0  # wait this long for the autopilot's GPS_GLOBAL_ORIGIN before taking a fix
     stall_s: float = 1.0
     stall_output_hz: float = 5.0
@@ -117,6 +117,7 @@ class Bridge:
         self._prev: NavEstimate | None = None
         self._prev_reinit = 0
         self._last_gps = None
+        self._first_baro: float | None = None
         self._ever_valid = False
         self._last_frame_t = -np.inf
         self._last_frame_arrival: float | None = None
@@ -202,9 +203,13 @@ class Bridge:
         elif typ == "SCALED_PRESSURE":
             if self.p0_hpa is None:
                 gps_streaming = self.link.counts_in["GLOBAL_POSITION_INT"] or self.link.counts_in["GPS_RAW_INT"]
-                if gps_streaming and self._last_gps is None:
+                self._first_baro = t_recv if self._first_baro is None else self._first_baro
+                if self._last_gps is None and (gps_streaming or t_recv - self._first_baro < self.cfg.origin_wait_s):
                     self.counts["baro_before_reference"] += 1  # wait for a fix to tie the baro to the origin
                     return None
+                if self._last_gps is None:
+                    self.notify(f"no position fix within {self.cfg.origin_wait_s:g} s of the first pressure: the "
+                                "barometric height is referenced to the height of that moment (take-off)")
                 h = 0.0 if self._last_gps is None else -float(self._last_gps.position[2])
                 self.p0_hpa = mm.reference_pressure(float(msg.press_abs), h)
             m = mm.decode_baro(msg, stamp, self.p0_hpa)

@@ -99,6 +99,25 @@ class SilLink:
         self._pending: dict[int, list] = {}  # seq -> [message, last sent (monotonic), tries]
         self.requests_failed: list[str] = []
         self._lock = threading.Lock()
+        self._send_lock = threading.Lock()
+        self._stop = threading.Event()
+        # the autopilot's receive side runs on its own thread (TIMESYNC answered at once, as a flight
+        # controller does, whatever the simulation loop is doing)
+        self._rx = threading.Thread(target=self._rx_loop, daemon=True, name="sil-autopilot-rx")
+        self._rx.start()
+
+    def _send(self, msg) -> None:
+        with self._send_lock:
+            self.mav.send(msg)
+
+    def _rx_loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                r = self.conn.recv_match(blocking=True, timeout=0.05)
+            except OSError:
+                return
+            if r is not None:
+                self._receive(r)
 
     # ------------------------------------------------------------------ clocks
     def start_clock(self) -> None:
@@ -152,15 +171,15 @@ class SilLink:
             return
         else:
             return
-        mav.send(msg)
+        self._send(msg)
         self.sent += 1
 
     def command(self, cmd) -> None:
         """A mission request: COMMAND_LONG MAV_CMD_USER_1 to the bridge, retried until acknowledged."""
         self._seq += 1
         msg = mm.encode_nav_command(self.mav, cmd, self._seq, 1, BRIDGE_COMPONENT)
-        self.mav.send(msg)
         self._pending[self._seq] = [msg, time.monotonic(), 1]
+        self._send(msg)
         self._service()
 
     def initialize(self, init) -> None:
@@ -171,22 +190,17 @@ class SilLink:
         now = time.monotonic()
         if now >= self._next_hb:
             self._next_hb = now + 1.0
-            self.mav.send(self.mav.heartbeat_encode(mavlink.MAV_TYPE_HELICOPTER, mavlink.MAV_AUTOPILOT_GENERIC,
+            self._send(self.mav.heartbeat_encode(mavlink.MAV_TYPE_HELICOPTER, mavlink.MAV_AUTOPILOT_GENERIC,
                                                     mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0,
                                                     mavlink.MAV_STATE_ACTIVE))
         for seq, p in list(self._pending.items()):  # unacknowledged requests (UDP may lose one)
             if now - p[1] >= REQUEST_RETRY_S:
                 if p[2] >= REQUEST_TRIES:
                     self.requests_failed.append(f"request {seq} not acknowledged after {REQUEST_TRIES} tries")
-                    del self._pending[seq]
+                    self._pending.pop(seq, None)
                     continue
-                self.mav.send(p[0])
+                self._send(p[0])
                 p[1], p[2] = now, p[2] + 1
-        for _ in range(1000):
-            r = self.conn.recv_match(blocking=False)
-            if r is None:
-                return
-            self._receive(r)
 
     def _receive(self, r) -> None:
         typ = r.get_type()
@@ -195,13 +209,13 @@ class SilLink:
             self.bridge_seen = True
         elif typ == "TIMESYNC" and r.tc1 == 0:
             now = time.monotonic()
-            self.mav.send(self.mav.timesync_encode(int((now - self.boot_base) * 1e9), r.ts1))
+            self._send(self.mav.timesync_encode(int((now - self.boot_base) * 1e9), r.ts1))
             self.timesync_answered += 1
             self._ts_rx.append(now)
             del self._ts_rx[:-4]
         elif typ == "COMMAND_LONG" and r.command == mavlink.MAV_CMD_REQUEST_MESSAGE and int(r.param1) == 49:
             o = self.origin
-            self.mav.send(self.mav.gps_global_origin_encode(int(round(o.lat0_deg * 1e7)), int(round(o.lon0_deg * 1e7)),
+            self._send(self.mav.gps_global_origin_encode(int(round(o.lat0_deg * 1e7)), int(round(o.lon0_deg * 1e7)),
                                                             int(round(o.h0_m * 1000)), 0))
         elif typ == "COMMAND_ACK" and r.command == mm.NAV_COMMAND_ID:
             self._pending.pop(int(r.result_param2), None)
@@ -258,10 +272,12 @@ class SilLink:
     def shutdown_bridge(self) -> None:
         """MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, param2 = 2 (shut down the onboard computer): the bridge ends its
         session, writes its logs and exits."""
-        self.mav.send(self.mav.command_long_encode(1, BRIDGE_COMPONENT, mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN,
+        self._send(self.mav.command_long_encode(1, BRIDGE_COMPONENT, mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN,
                                                    0, 0, 2, 0, 0, 0, 0, 0))
 
     def close(self) -> None:
+        self._stop.set()
+        self._rx.join(timeout=1.0)
         self.conn.close()
         self.frames.close()
 
