@@ -6,6 +6,12 @@ clock), a camera reader (frames stamped at capture), and the navigator loop (thi
 at the frame's instant is encoded with ``time_usec`` = that instant in the autopilot's clock and sent;
 the capture-to-send latency is recorded.
 
+Mission requests (COMMAND_LONG MAV_CMD_USER_1, ``io/mavlink_messages``) go through the same queue and are
+applied on the navigator thread between two updates, acknowledged (COMMAND_ACK, ``result_param2`` = the
+request's sequence number); with ``send_health`` the navigator's Health goes out as DEBUG_FLOAT_ARRAY
+"VN_HEALTH" with every estimate and after every request. MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN (param2 = 2)
+addressed to us ends the session. ``BridgeRecording`` writes the log as a replayable recording.
+
 GPS for the navigator: GPS_RAW_INT (the receiver) when the autopilot streams it; GLOBAL_POSITION_INT (the
 autopilot's fused solution) only when it does not -- once the autopilot fuses our output, its fused
 position would otherwise come back to the navigator as if it were GPS.

@@ -6,7 +6,8 @@ simulation is built (the WITAS reference map is degraded from the scenario's gro
 
 Known gaps of live use (see docs/autopilots.md): the navigator's camera model is the scenario's (a
 camera.yaml is used for its time offset only); the PALACE navigator only tracks once a mission commands
-``request-tracking`` (the bridge runs no mission), so over the bridge it is a GPS-phase navigator; the
+``request-tracking`` (the bridge runs no mission: a mission on the autopilot side sends it over MAVLink,
+COMMAND_LONG MAV_CMD_USER_1, docs/autopilots.md; without one it is a GPS-phase navigator); the
 WITAS navigator engages vision when GPS samples stop (its ``gps_timeout_s``) and needs a reference
 map georeferenced at the bridge's NED origin (``--map`` / ``--origin``); the pad navigator needs a
 pan-tilt link (not there yet).

@@ -101,8 +101,8 @@ class SilLink:
         self._lock = threading.Lock()
         self._send_lock = threading.Lock()
         self._stop = threading.Event()
-        # the autopilot's receive side runs on its own thread (TIMESYNC answered at once, as a flight
-        # controller does, whatever the simulation loop is doing)
+        # the autopilot's receive side, HEARTBEAT and request retries run on their own thread (TIMESYNC answered
+        # at once, as a flight controller does, whatever the simulation loop is doing)
         self._rx = threading.Thread(target=self._rx_loop, daemon=True, name="sil-autopilot-rx")
         self._rx.start()
 
@@ -112,6 +112,7 @@ class SilLink:
 
     def _rx_loop(self) -> None:
         while not self._stop.is_set():
+            self._service()
             try:
                 r = self.conn.recv_match(blocking=True, timeout=0.05)
             except OSError:
@@ -142,7 +143,6 @@ class SilLink:
     # ------------------------------------------------------------------ navigator interface
     def update(self, m) -> None:
         self._pace(m.t)
-        self._service()
         mav = self.mav
         if isinstance(m, ImuSample):
             msg = mav.highres_imu_encode(self.boot_us(m.t), *m.accel, *m.gyro, 0, 0, 0, 0, 0, 0, 20.0, 0x3F)
@@ -180,13 +180,13 @@ class SilLink:
         msg = mm.encode_nav_command(self.mav, cmd, self._seq, 1, BRIDGE_COMPONENT)
         self._pending[self._seq] = [msg, time.monotonic(), 1]
         self._send(msg)
-        self._service()
 
     def initialize(self, init) -> None:
         raise ValueError("an explicit navigator start (NavInit) has no MAVLink mapping: a scenario with a nav_init "
                          "cannot fly --sil")
 
     def _service(self) -> None:
+        """HEARTBEAT at 1 Hz and the retries of unacknowledged requests (the receive thread calls it)."""
         now = time.monotonic()
         if now >= self._next_hb:
             self._next_hb = now + 1.0
@@ -242,7 +242,6 @@ class SilLink:
                 self._odo_usec.add(int(r.time_usec))
 
     def estimate(self, t: float) -> NavEstimate:
-        self._service()
         with self._lock:
             last = self._odo[-1] if self._odo else None
         if last is None:
@@ -255,7 +254,6 @@ class SilLink:
     def health(self, t: float | None = None) -> Health:
         """The navigator's newest health; a request it has not applied yet is pending (``tracking_pending``),
         a position jump reported since the last call is kept (``mpe_jump``)."""
-        self._service()
         with self._lock:
             h = Health(**{k: getattr(self.h, k) for k in Health.__dataclass_fields__})
             h.tracking_pending = h.tracking_pending or self.applied < self._seq
@@ -303,7 +301,6 @@ def bridge_command(sc_toml: Path, link: SilLink, out_dir: Path) -> list[str]:
 def _wait_ready(link: SilLink, proc, timeout_s: float, log: Path) -> None:
     t_end = time.monotonic() + timeout_s
     while time.monotonic() < t_end:
-        link._service()
         if link.bridge_seen and link.frames.conn is not None and link.synced():
             return
         if proc is not None and proc.poll() is not None:
@@ -378,7 +375,6 @@ def run_sil(sc, progress=None, notify=None, sim=None, out_dir: str | Path | None
         if time.monotonic() >= next_shutdown:
             link.shutdown_bridge()
             next_shutdown = time.monotonic() + 1.0
-        link._service()
         if proc is not None and proc.poll() is not None:
             break
         if proc is None and metrics_path.is_file() and metrics_path.stat().st_mtime > time.time() - 60:
