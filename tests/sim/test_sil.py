@@ -102,3 +102,12 @@ def test_palace_landing_over_sil_lands_like_in_process():
     assert r.error is None and r.metrics["landed"] and not r.metrics["aborted"]
     assert r.metrics["touchdown_error_m"] < 1.0
     assert r.metrics["sil_stamp_error_ms_max"] < 2.0
+
+
+def test_sil_refuses_missions_without_a_bridge_navigator():
+    from visnav.sim.sil import sil_simulation
+
+    with pytest.raises(ValueError, match="mission.type 'pad-landing' has the pad navigator, which needs a pan-tilt"):
+        sil_simulation(load_scenario("pad-landing"))
+    with pytest.raises(ValueError, match="mission.type 'deck' has none"):
+        sil_simulation(load_scenario("deck-static"))

@@ -55,6 +55,7 @@ P0_HPA = 1013.25  # pressure at the NED origin's height
 ORIGIN = (58.395, 15.575, 0.0)  # the simulation's NED origin as the autopilot reports it
 BRIDGE_COMPONENT = mavlink.MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
 REQUEST_RETRY_S, REQUEST_TRIES = 0.3, 10
+SIL_NAVIGATORS = ("palace", "witas")  # navigators the bridge can run from a scenario alone
 
 
 class SilError(RuntimeError):
@@ -282,8 +283,18 @@ class SilLink:
 
 def sil_simulation(sc):
     """The scenario's simulation with ``SilLink`` in its navigator slot (``sim.sil_link``)."""
+    from visnav.io.navigators import navigator_for
     from visnav.sim.missions import simulation_class
 
+    kind = getattr(sc.mission, "type", "palace")
+    try:
+        name = navigator_for(kind)
+    except ValueError:
+        name = None
+    if name not in SIL_NAVIGATORS:
+        raise ValueError(f"--sil flies missions whose navigator runs behind `visnav bridge` ({', '.join(SIL_NAVIGATORS)}"
+                         f" navigators: palace-landing, hover, pfcm, witas-homing); mission.type {kind!r} has "
+                         + ("the pad navigator, which needs a pan-tilt link" if name == "pad" else "none"))
     frames = FrameStreamServer()
     link = SilLink(free_port(), frames, LocalTangentPlane(*ORIGIN))
     sim = simulation_class(getattr(sc.mission, "type", "palace"))(sc, navigator_wrapper=lambda nav: link)
