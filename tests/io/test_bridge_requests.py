@@ -111,3 +111,39 @@ def test_shutdown_request_ends_the_session():
         assert br.run(duration_s=5.0).get("estimates_out", 0) == 0 and time.monotonic() - t0 < 2.0  # at once
     finally:
         link.close()
+
+
+def test_baro_reference_waits_for_a_fix_that_comes_after_the_first_pressure():
+    """The first SCALED_PRESSURE reached the bridge before any position fix (the SIL's start): the barometric
+    height must still be referenced to the origin (a fix at 60 m above it), not to the height of that moment."""
+    from visnav.geometry.frames import LocalTangentPlane
+
+    link, br, sent, notes = _bridge()
+    try:
+        origin = LocalTangentPlane(58.395, 15.575, 0.0)
+        br.origin = origin
+        tx = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+        p60 = 1013.25 * (1.0 - 60.0 / 44330.77) ** (1.0 / 0.190263)  # ISA at 60 m above a 1013.25 hPa origin
+        parse = lambda m: mavlink.MAVLink(None).parse_buffer(m.pack(tx))[0]  # noqa: E731
+        baro = parse(mavlink.MAVLink_scaled_pressure_message(1_000_000, p60, 0.0, 2000))
+        assert br._decode(baro, 1.0) is None and br.counts["baro_before_reference"] == 1
+        lat, lon, alt = origin.ned_to_geodetic(np.array([0.0, 0.0, -60.0]))
+        link.counts_in["GLOBAL_POSITION_INT"] += 1
+        gps = parse(mavlink.MAVLink_global_position_int_message(1_000_050, int(round(lat * 1e7)), int(round(lon * 1e7)),
+                                                                int(round(alt * 1000)), 60000, 0, 0, 0, 0))
+        assert abs(br._decode(gps, 1.05).position[2] + 60.0) < 0.01
+        m = br._decode(parse(mavlink.MAVLink_scaled_pressure_message(1_000_100, p60, 0.0, 2000)), 1.1)
+        assert abs(m.altitude - 60.0) < 0.01  # 1 mm GPS quantisation, float32 pressure
+    finally:
+        link.close()
+    # no fix at all: after origin_wait_s the height of that moment is the reference, said once
+    link, br, sent, notes = _bridge()
+    try:
+        br.cfg.origin_wait_s = 0.5
+        tx = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+        msg = mavlink.MAVLink(None).parse_buffer(mavlink.MAVLink_scaled_pressure_message(5, 1000.0, 0.0, 2000).pack(tx))[0]
+        assert br._decode(msg, 10.0) is None
+        assert br._decode(msg, 10.6).altitude == 0.0
+        assert sum("no position fix within 0.5 s" in n for n in notes) == 1
+    finally:
+        link.close()
