@@ -8,6 +8,7 @@ independently of them (closed forms, scipy rotations, pymap3d). ``_check`` insis
 names every field of the message.
 """
 
+import gc
 import json
 import math
 import threading
@@ -255,8 +256,8 @@ def test_every_field_after_mavsdk_decoding():
     tx = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=1, source_component=197,
                                     dialect="common")  # as the bridge
     got: dict = {}
+    system = systems = md = None
     try:
-        system = None
         for _ in range(50):  # bounded: 5 s at most; our HEARTBEAT makes MAVSDK see the bridge's system
             tx.mav.send(pairs[0][0])
             time.sleep(0.1)
@@ -275,6 +276,12 @@ def test_every_field_after_mavsdk_decoding():
                 break
     finally:
         tx.close()
+        # nothing MAVSDK handed out may outlive its instance (libmavsdk aborts the process otherwise)
+        if md is not None:
+            md.destroy()
+        md = system = systems = None
+        gc.collect()
+        sdk.destroy()
     n = 0
     for msg, want in pairs:
         typ = msg.get_type()
