@@ -76,8 +76,10 @@ def run(
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier "
                                "run there are removed first)"),
     json_: bool = typer.Option(False, "--json", help="print a machine-readable summary (JSON) on stdout"),
-    sil: bool = typer.Option(False, "--sil", help="software in the loop: the navigator runs behind `visnav bridge` "
-                             "over MAVLink on 127.0.0.1, the simulation plays the autopilot (real time)"),
+    sil: bool = typer.Option(False, "--sil", help="software in the loop: the navigator runs in `visnav bridge` (a "
+                             "subprocess) over MAVLink on 127.0.0.1, the simulation plays the autopilot (real time)"),
+    sil_external: bool = typer.Option(False, "--sil-external", help="with --sil: do not start the bridge, print its "
+                                      "command line and wait for it (start it in another terminal)"),
 ) -> None:
     """Run one closed-loop simulation and write its run directory."""
     from visnav.analysis.published import summary_rows
@@ -91,7 +93,12 @@ def run(
         if map_:  # the mission's own map if it has one (witas-homing fits its loop inside), else the world's
             key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
             sc = load_scenario(scenario, list(set_) + [f"{key}={json.dumps(str(Path(map_).resolve()))}"], seed)
-        sim = make_simulation(sc)
+        if sil or sil_external:
+            from visnav.sim.sil import sil_simulation
+
+            sim = sil_simulation(sc)
+        else:
+            sim = make_simulation(sc)
         out_dir = new_run_dir(sc.run.name, out, force)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _fail(exc)
@@ -108,10 +115,15 @@ def run(
             if int(t * 10) % 10 == 0:
                 prog.update(task, completed=t, info=f"t={t:5.1f}s {sim.mission.mode}")
 
-        if sil:  # the same scenario, its navigator behind the bridge (sim/sil.py)
-            from visnav.sim.sil import run_sil
+        if sil or sil_external:  # the same scenario, its navigator in `visnav bridge` (sim/sil.py)
+            from visnav.sim.sil import SilError, run_sil
 
-            result = run_sil(sc, progress=progress, sim=sim)
+            try:
+                result = run_sil(sc, progress=progress, sim=sim, out_dir=Path(out_dir) / "bridge",
+                                 spawn=not sil_external,
+                                 notify=lambda m: err_console.print(escape(m), soft_wrap=True))
+            except SilError as exc:
+                _fail(exc)
         else:
             result = sim.run(progress=progress)
     try:
@@ -557,6 +569,12 @@ def bridge(
     out: Optional[str] = typer.Option(None, help="log folder (default runs/bridge-<time>): bridge.tlog, metrics.json"),
     set_: List[str] = typer.Option([], "--set", help="override a scenario key of the navigator's scenario"),
     log_frames: bool = typer.Option(False, help="also keep every frame (lossless PNG + frames.csv) in the log folder"),
+    record: bool = typer.Option(True, help="write the log as a recording (OUT/recording: every sample, frame, "
+                                "mission request and estimate the navigator got; `visnav replay OUT --navigator "
+                                "NAME` reruns it)"),
+    health: bool = typer.Option(False, "--health", help="also send the navigator's health (DEBUG_FLOAT_ARRAY "
+                                "VN_HEALTH, docs/autopilots.md) with every estimate: for a mission on the "
+                                "autopilot side (the SIL)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
     import time
@@ -564,14 +582,17 @@ def bridge(
 
     from rich.live import Live
 
-    from visnav.io.bridge import OUTPUTS, Bridge, BridgeConfig, status_line
+    from visnav.io.bridge import OUTPUTS, Bridge, BridgeConfig, BridgeRecording, status_line
     from visnav.io.bridge_navigators import build_navigator
     from visnav.io.camera_source import CameraSourceError, open_source, read_time_offset
     from visnav.io.mavlink_link import MavlinkLink, MavlinkLinkError
     from visnav.io.mavlink_messages import mavlink
+    from visnav.io.navigators import NAVIGATORS
     from visnav.scenarios.schema import ScenarioError
+    from visnav.sim.log import FlightLog
 
     fail = _fail
+    navlog = FlightLog()  # what the navigator records (its own streams), in the bridge's monotonic clock
 
     if output not in OUTPUTS:
         fail(f"--output must be one of {', '.join(OUTPUTS)}, got {output!r}")
@@ -587,10 +608,10 @@ def bridge(
     link = src = None
     try:
         cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
-                           frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
+                           send_health=health, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
         link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=lambda m: console.print(m))
-        built = build_navigator(navigator, map_, set_)
+        built = build_navigator(navigator, map_, set_, recorder=navlog.record)
         src = open_source(camera, fps=fps or built.camera_hz, time_offset_s=offset)
     except (MavlinkLinkError, CameraSourceError, ScenarioError, FileNotFoundError, ValueError) as exc:
         if link is not None:
@@ -598,8 +619,16 @@ def bridge(
         fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
     console.print(f"bridge: {built.scenario} navigator, {mavlink_url} -> {output}, camera {camera} "
                   f"({fps or built.camera_hz:g} Hz); log {out_dir}")
+    rec = None
+    nav = built.navigator
+    if record:
+        try:
+            rec = BridgeRecording(nav, out_dir / "recording", built.sc, *NAVIGATORS[built.name].camera(built.sc))
+        except (OSError, ValueError) as exc:
+            fail(f"cannot write the recording in {out_dir / 'recording'}: {exc}")
+        nav = rec.navigator
     with Live(console=console, transient=False, auto_refresh=False) as live:
-        br = Bridge(link, src, built.navigator, cfg, notify=lambda m: live.console.print(m),
+        br = Bridge(link, src, nav, cfg, record=navlog.record, notify=lambda m: live.console.print(m),
                     on_status=lambda s: live.update(status_line(s), refresh=True))
         try:
             metrics = br.run(duration_s=duration)
@@ -609,11 +638,19 @@ def bridge(
         finally:
             link.close()
             src.close()
+    try:
+        if rec is not None:
+            rec.close()
+        navlog.to_hdf5(out_dir / "navigator.h5", attrs={"clock": "the bridge's monotonic clock [s]"})
+    except KeyboardInterrupt:
+        pass
     br.write_metrics(out_dir / "metrics.json")
     lat = metrics["latency_capture_to_send_ms"]
     console.print(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
                   f"{lat['median']:.1f} ms, p95 {lat['p95']:.1f} ms; reset_counter {metrics['reset_counter']}; "
-                  f"written {out_dir / 'metrics.json'}, {out_dir / 'bridge.tlog'}")
+                  f"written {out_dir / 'metrics.json'}, {out_dir / 'bridge.tlog'}"
+                  + (f", {out_dir / 'recording'} (visnav replay {out_dir / 'recording'} --navigator {built.name})"
+                     if rec is not None else ""))
 
 
 @app.command("sil-autopilot")

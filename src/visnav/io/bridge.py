@@ -6,6 +6,12 @@ clock), a camera reader (frames stamped at capture), and the navigator loop (thi
 at the frame's instant is encoded with ``time_usec`` = that instant in the autopilot's clock and sent;
 the capture-to-send latency is recorded.
 
+Mission requests (COMMAND_LONG MAV_CMD_USER_1, ``io/mavlink_messages``) go through the same queue and are
+applied on the navigator thread between two updates, acknowledged (COMMAND_ACK, ``result_param2`` = the
+request's sequence number); with ``send_health`` the navigator's Health goes out as DEBUG_FLOAT_ARRAY
+"VN_HEALTH" with every estimate and after every request. MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN (param2 = 2)
+addressed to us ends the session. ``BridgeRecording`` writes the log as a replayable recording.
+
 GPS for the navigator: GPS_RAW_INT (the receiver) when the autopilot streams it; GLOBAL_POSITION_INT (the
 autopilot's fused solution) only when it does not -- once the autopilot fuses our output, its fused
 position would otherwise come back to the navigator as if it were GPS.
@@ -43,7 +49,26 @@ from visnav.io import mavlink_messages as mm
 from visnav.io.camera_source import FrameSource
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_messages import mavlink
-from visnav.measurements import Frame, NavEstimate
+from visnav.log_schema import register_stream
+from visnav.measurements import Frame, NavCommand, NavEstimate
+
+register_stream(
+    "bridge_estimate", position=("m", "NED about the bridge's origin", "the estimate sent (float64, before encoding)"),
+    velocity=("m/s", "NED", "velocity of the estimate sent"),
+    euler=("rad", "3-2-1 Euler angles of body FRD relative to NED", "attitude of the estimate sent"),
+    valid=("bool", "", "the estimate was valid"), time_usec=("us", "the autopilot's time since boot",
+                                                             "time_usec the messages carried (t in its clock)"),
+    quality=("1", "", "ODOMETRY quality 0..100"), reset_counter=("1", "", "reset_counter sent"),
+    frame_index=("1", "", "the frame whose estimate it is (-1: the inertial estimate of a camera stall)"))
+
+
+@dataclass(frozen=True)
+class NavRequest:
+    """A mission request that came over MAVLink (COMMAND_LONG MAV_CMD_USER_1, io/mavlink_messages.py)."""
+
+    seq: int
+    cmd: NavCommand
+    src: tuple[int, int]
 
 OUTPUTS = ("odometry", "vision", "gps-input")
 DEFAULT_RATES_HZ = {  # what the navigators consume (seed 002: IMU 50-100 Hz, attitude, baro, GPS until lost)
@@ -58,8 +83,8 @@ class BridgeConfig:
     output: str = "odometry"
     frame_id: int = mavlink.MAV_FRAME_LOCAL_FRD
     origin: LocalTangentPlane | None = None  # else the autopilot's GPS_GLOBAL_ORIGIN or its first fix
-    p0_hpa: float | None = None  # pressure at the origin's height; else from the first SCALED_PRESSURE and the
-    # GPS height of that moment (the first pressure itself when no GPS is streamed: take-off on the ground)
+    p0_hpa: float | None = None  # pressure at the origin's height; else from the first SCALED_PRESSURE and the GPS
+    # height of the first fix (the first pressure itself when no fix comes within origin_wait_s: take-off)
     origin_wait_s: float = 2.0  # wait this long for the autopilot's GPS_GLOBAL_ORIGIN before taking a fix
     stall_s: float = 1.0
     stall_output_hz: float = 5.0
@@ -69,17 +94,21 @@ class BridgeConfig:
     rates_hz: dict = field(default_factory=lambda: dict(DEFAULT_RATES_HZ))
     status_period_s: float = 1.0
     frame_log: Path | None = None  # a folder: every frame as lossless PNG + frames.csv (index, t, capture_t)
+    send_health: bool = False  # the navigator's Health as DEBUG_FLOAT_ARRAY "VN_HEALTH" with every estimate
 
 
 class Bridge:
     def __init__(self, link: MavlinkLink, camera: FrameSource | None, navigator, cfg: BridgeConfig | None = None,
                  notify: Callable[[str], None] = print, on_status: Callable[[dict], None] | None = None,
-                 on_sent: Callable[[float, NavEstimate, object], None] | None = None):
+                 on_sent: Callable[[float, NavEstimate, object], None] | None = None,
+                 record: Callable | None = None):
+        """``record(stream, t, **fields)``: where every estimate sent is logged (stream ``bridge_estimate``,
+        t = the instant it describes in our clock); the CLI gives its ``navigator.h5`` log."""
         self.link, self.camera, self.nav = link, camera, navigator
         self.cfg = cfg or BridgeConfig()
         if self.cfg.output not in OUTPUTS:
             raise ValueError(f"output must be one of {', '.join(OUTPUTS)}, got {self.cfg.output!r}")
-        self.notify, self.on_status, self.on_sent = notify, on_status, on_sent
+        self.notify, self.on_status, self.on_sent, self.record = notify, on_status, on_sent, record
         self.origin = self.cfg.origin
         self.p0_hpa = self.cfg.p0_hpa
         self.q: queue.Queue = queue.Queue(maxsize=10000)
@@ -88,11 +117,13 @@ class Bridge:
         self.reset_counter = 0
         self.counts = Counter()  # measurements_in, unsynced, rejected, frames, frames_out_of_order, ...
         self.latency_ms: deque[float] = deque(maxlen=20000)
+        self.arrival_ms: deque[float] = deque(maxlen=20000)  # frame arrival (capture_t) -> sent: the bridge's own part
         self.proc_ms: deque[float] = deque(maxlen=20000)
         self.sent_stamps: deque[tuple[float, int]] = deque(maxlen=20000)  # (our t, time_usec sent)
         self._prev: NavEstimate | None = None
         self._prev_reinit = 0
         self._last_gps = None
+        self._first_baro: float | None = None
         self._ever_valid = False
         self._last_frame_t = -np.inf
         self._last_frame_arrival: float | None = None
@@ -103,6 +134,7 @@ class Bridge:
         self._origin_req_next = 0.0
         self._t0 = time.monotonic()
         self._rate_mark = (self._t0, Counter(), 0)
+        self.requests_applied = 0  # sequence number of the newest mission request applied
         link.on_link_up.append(self._on_link_up)
         link.request_intervals(self.cfg.rates_hz)
 
@@ -147,6 +179,20 @@ class Bridge:
 
     def _decode(self, msg, t_recv: float):
         typ, stamp = msg.get_type(), self.link.stamp
+        if typ == "COMMAND_LONG" and msg.command == mm.NAV_COMMAND_ID:
+            try:
+                seq, cmd = mm.decode_nav_command(msg, t_recv)
+            except mm.NoMavlinkMapping as e:
+                self.notify(f"mission request refused: {e}")
+                self._ack(msg, mavlink.MAV_RESULT_UNSUPPORTED)
+                return None
+            return NavRequest(seq, cmd, (msg.get_srcSystem(), msg.get_srcComponent()))
+        if (typ == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN
+                and int(round(msg.param2)) == 2 and msg.target_component in (0, self.link.mav.srcComponent)):
+            self._ack(msg, mavlink.MAV_RESULT_ACCEPTED)
+            self.notify("shutdown of the onboard computer requested: the bridge ends its session")
+            self.stop.set()  # MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN param2 = 2 (shut down the companion computer)
+            return None
         if typ == "GPS_GLOBAL_ORIGIN":
             self._autopilot_origin = True
             if self.origin is None:
@@ -163,9 +209,13 @@ class Bridge:
         elif typ == "SCALED_PRESSURE":
             if self.p0_hpa is None:
                 gps_streaming = self.link.counts_in["GLOBAL_POSITION_INT"] or self.link.counts_in["GPS_RAW_INT"]
-                if gps_streaming and self._last_gps is None:
+                self._first_baro = t_recv if self._first_baro is None else self._first_baro
+                if self._last_gps is None and (gps_streaming or t_recv - self._first_baro < self.cfg.origin_wait_s):
                     self.counts["baro_before_reference"] += 1  # wait for a fix to tie the baro to the origin
                     return None
+                if self._last_gps is None:
+                    self.notify(f"no position fix within {self.cfg.origin_wait_s:g} s of the first pressure: the "
+                                "barometric height is referenced to the height of that moment (take-off)")
                 h = 0.0 if self._last_gps is None else -float(self._last_gps.position[2])
                 self.p0_hpa = mm.reference_pressure(float(msg.press_abs), h)
             m = mm.decode_baro(msg, stamp, self.p0_hpa)
@@ -232,7 +282,38 @@ class Bridge:
                 th.join(timeout=1.0)
         return self.metrics()
 
+    def _ack(self, msg, result: int) -> None:
+        L = self.link
+        L.send(L.mav.command_ack_encode(msg.command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
+
+    def _apply_request(self, r: NavRequest) -> None:
+        """A mission request: applied once (a retry with the same sequence number is acknowledged again),
+        answered with COMMAND_ACK, and the navigator's health sent right after it."""
+        L = self.link
+        result = mavlink.MAV_RESULT_ACCEPTED
+        if r.seq > self.requests_applied:
+            try:
+                with self.nav_lock:
+                    self.nav.command(r.cmd)
+                self.counts["requests_applied"] += 1
+            except ValueError as e:  # the navigator does not know it
+                result = mavlink.MAV_RESULT_DENIED
+                self.notify(f"mission request {r.cmd.name} refused by the navigator: {e}")
+            self.requests_applied = r.seq
+        else:
+            self.counts["requests_repeated"] += 1
+        L.send(L.mav.command_ack_encode(mm.NAV_COMMAND_ID, result, 0, r.seq, *r.src))  # result_param2: the seq
+        if self.cfg.send_health:
+            t = time.monotonic()
+            usec = L.peer_usec(t)
+            if usec is not None and usec > 0:
+                with self.nav_lock:
+                    h = self.nav.health(t)
+                L.send(mm.encode_health(L.mav, h, usec, self.requests_applied))
+
     def _consume(self, item) -> None:
+        if isinstance(item, NavRequest):
+            return self._apply_request(item)
         if not hasattr(item, "capture_t"):  # a MAVLink measurement
             with self.nav_lock:
                 self.nav.update(item)
@@ -255,8 +336,10 @@ class Bridge:
             self.nav.update(Frame(t=item.t, image=item.image, index=item.index))
             est = self.nav.estimate(item.t)
         self.proc_ms.append((time.perf_counter() - t0) * 1e3)
-        if self._send(est):  # capture (the instant the frame shows) -> ODOMETRY on the wire
-            self.latency_ms.append((time.monotonic() - item.t) * 1e3)
+        if self._send(est, frame_index=item.index):  # capture (the instant the frame shows) -> ODOMETRY on the wire
+            now = time.monotonic()
+            self.latency_ms.append((now - item.t) * 1e3)
+            self.arrival_ms.append((now - item.capture_t) * 1e3)
 
     def _watch_camera(self, now: float) -> None:
         if self.camera is None or self._last_frame_arrival is None:
@@ -319,7 +402,7 @@ class Bridge:
             if d2 > self.cfg.jump_sigma**2 and float(np.linalg.norm(e)) > self.cfg.jump_min_m:
                 self._bump(f"estimate jumped {np.linalg.norm(e):.2f} m ({np.sqrt(d2):.1f} sigma)")
 
-    def _send(self, est: NavEstimate, stalled: bool = False) -> bool:
+    def _send(self, est: NavEstimate, stalled: bool = False, frame_index: int = -1) -> bool:
         L = self.link
         usec = L.peer_usec(est.t)
         if usec is None or usec <= 0:
@@ -342,11 +425,18 @@ class Bridge:
                 return False
             unix = time.time() - (time.monotonic() - est.t)
             msgs = [mm.encode_gps_input(L.mav, est, self.origin, usec, unix)]
+        if self.cfg.send_health:
+            msgs.append(mm.encode_health(L.mav, health, usec, self.requests_applied, frame_index))
         for m in msgs:
             L.send(m)
             if self.on_sent:
                 self.on_sent(est.t, est, m)
         self.sent_stamps.append((est.t, usec))
+        if self.record is not None:
+            self.record("bridge_estimate", est.t, position=np.asarray(est.position, float),
+                        velocity=np.asarray(est.velocity, float), euler=np.asarray(est.attitude, float),
+                        valid=bool(est.valid), time_usec=int(usec), quality=int(q), reset_counter=self.reset_counter,
+                        frame_index=int(frame_index))
         self.counts["estimates_out"] += 1
         return True
 
@@ -372,6 +462,7 @@ class Bridge:
         dt = max(time.monotonic() - self._t0, 1e-6)
         lat = np.array(self.latency_ms) if self.latency_ms else np.array([np.nan])
         proc = np.array(self.proc_ms) if self.proc_ms else np.array([np.nan])
+        arr = np.array(self.arrival_ms) if self.arrival_ms else np.array([np.nan])
         return {
             "link_ok": self.link.link_ok,
             "rate_in_hz": {k: round(v / dt, 2) for k, v in sorted(self.link.counts_in.items())},
@@ -379,6 +470,7 @@ class Bridge:
             "latency_capture_to_send_ms": {"median": float(np.median(lat)), "p95": float(np.percentile(lat, 95)),
                                            "n": len(self.latency_ms)},
             "processing_ms": {"median": float(np.median(proc)), "p95": float(np.percentile(proc, 95))},
+            "latency_arrival_to_send_ms": {"median": float(np.median(arr)), "p95": float(np.percentile(arr, 95))},
             "timesync_offset_ms": self.link.sync.offset_ms(), "timesync_rtt_ms": self.link.sync.rtt_ms(),
             "reset_counter": self.reset_counter, "malformed_packets": self.link.malformed,
             "link_losses": self.link.link_lost_count, **{k: int(v) for k, v in sorted(self.counts.items())},
@@ -386,6 +478,61 @@ class Bridge:
 
     def write_metrics(self, path: str | Path) -> None:
         Path(path).write_text(json.dumps(self.metrics(), indent=2, default=float))
+
+
+class BridgeRecording:
+    """The bridge's log in the recorded-flight format (``io/recording.py``), replayable with ``visnav replay
+    DIR --navigator NAME``: a ``sim/record.RecordingNavigator`` around the navigator, so every sample,
+    frame (lossless PNG, written on a background thread: no latency), mission request and estimate / health
+    query is logged with one sequence number in the order the navigator got it; an estimate row carries the
+    instant it was asked for (a frame's exposure, asked after later samples arrived: ``args`` ``t``). Times
+    are the bridge's monotonic clock. ``camera.yaml`` is the navigator's camera (time offset 0: the frame
+    stamps already include the camera.yaml offset), ``scenario.toml`` its resolved scenario."""
+
+    def __init__(self, navigator, out_dir: str | Path, sc, camera, mount):
+        from visnav.io.recording_writer import RecordingWriter
+        from visnav.sim.record import RecordingNavigator
+
+        self.sc, self.camera, self.mount = sc, camera, mount
+        self._images: queue.Queue = queue.Queue()
+        self._th = threading.Thread(target=self._write_images, daemon=True, name="recording-frames")
+        self._th.start()
+        self.writer = RecordingWriter(out_dir, image_writer=self._queue_image)
+
+        class _Proxy(RecordingNavigator):
+            def estimate(self, t: float):
+                if self.recording:
+                    self._writer.add_command(self._clock(), self._writer.next_seq(), "estimate", kwargs={"t": t})
+                return self._inner.estimate(t)
+
+            def health(self, t: float | None = None):
+                if self.recording and t is not None:
+                    self._writer.add_command(self._clock(), self._writer.next_seq(), "health", kwargs={"t": t})
+                return self._inner.health(t)
+
+        self.navigator = _Proxy(navigator, self.writer, time.monotonic)
+        self.dir = Path(out_dir)
+
+    def _queue_image(self, path: str, image) -> bool:
+        self._images.put((path, image))
+        return True
+
+    def _write_images(self) -> None:
+        import cv2
+
+        while True:
+            item = self._images.get()
+            if item is None:
+                return
+            cv2.imwrite(item[0], item[1], [cv2.IMWRITE_PNG_COMPRESSION, 1])
+
+    def close(self) -> Path:
+        from visnav.scenarios.schema import to_toml
+
+        self.navigator.recording = False
+        self._images.put(None)
+        self._th.join()
+        return self.writer.close(self.camera, self.mount, 0.0, None, to_toml(self.sc))
 
 
 def status_line(s: dict) -> str:

@@ -6,7 +6,8 @@ simulation is built (the WITAS reference map is degraded from the scenario's gro
 
 Known gaps of live use (see docs/autopilots.md): the navigator's camera model is the scenario's (a
 camera.yaml is used for its time offset only); the PALACE navigator only tracks once a mission commands
-``request-tracking`` (the bridge runs no mission), so over the bridge it is a GPS-phase navigator; the
+``request-tracking`` (the bridge runs no mission: a mission on the autopilot side sends it over MAVLink,
+COMMAND_LONG MAV_CMD_USER_1, docs/autopilots.md; without one it is a GPS-phase navigator); the
 WITAS navigator engages vision when GPS samples stop (its ``gps_timeout_s``) and needs a reference
 map georeferenced at the bridge's NED origin (``--map`` / ``--origin``); the pad navigator needs a
 pan-tilt link (not there yet).
@@ -24,9 +25,11 @@ class BuiltNavigator:
     camera_hz: float
     scenario: str  # the run name of its scenario
     sc: object  # the resolved Scenario (``sim.missions.make_simulation(sc)`` builds its simulated world)
+    name: str = ""  # its name in the registry io/navigators.py (what `visnav replay --navigator` takes)
 
 
-def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None) -> BuiltNavigator:
+def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None,
+                    recorder=None) -> BuiltNavigator:
     """Raises ScenarioError / FileNotFoundError / ValueError with a one-line message on bad input."""
     from visnav.io.navigators import NAVIGATORS
     from visnav.scenarios.schema import load_scenario
@@ -37,12 +40,13 @@ def build_navigator(name: str, map_path: str | None = None, overrides: list[str]
     if map_path:
         key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
         sc = load_scenario(scenario, sets + [f"{key}={Path(map_path).resolve()}"])
-    return navigator_from_scenario(sc)
+    return navigator_from_scenario(sc, recorder)
 
 
-def navigator_from_scenario(sc) -> BuiltNavigator:
+def navigator_from_scenario(sc, recorder=None) -> BuiltNavigator:
     """The registered navigator a validated Scenario's mission flies with (and the camera rate it consumes)."""
     from visnav.io.navigators import NAVIGATORS, make_navigator, navigator_for
 
     name = navigator_for(getattr(sc.mission, "type", "palace"))
-    return BuiltNavigator(make_navigator(name, sc), float(NAVIGATORS[name].camera_hz(sc)), sc.run.name, sc)
+    return BuiltNavigator(make_navigator(name, sc, recorder), float(NAVIGATORS[name].camera_hz(sc)), sc.run.name, sc,
+                          name)

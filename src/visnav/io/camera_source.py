@@ -1,5 +1,6 @@
 """Live frame sources for the bridge: anything ``cv2.VideoCapture`` opens, a folder of images, or a callable.
 
+``vnframes://HOST:PORT`` is a frame stream over TCP with the sender's exposure stamps (the SIL camera).
 Every frame is stamped in our monotonic clock at capture: ``t = monotonic() + time_offset_s`` (the
 camera.yaml ``time_offset_s`` of the recorded-flight format: t_imu = t_camera + time_offset_s; a
 negative value says the frame describes an instant before it reached us). ``capture_t`` (the instant
@@ -9,6 +10,7 @@ the frame reached us) is kept separately: the latency budget is measured from it
 from __future__ import annotations
 
 import math
+import struct
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -144,8 +146,146 @@ class CallableSource(FrameSource):
         return None if img is None else self._stamp(img, exposed)
 
 
+# ----------------------------------------------------------------------------- frames over a local socket
+FRAME_STREAM_SCHEME = "vnframes://"
+FRAME_HEADER = struct.Struct("<4sIdHH")  # magic b"VNF1", index, exposure [s, the host's CLOCK_MONOTONIC], w, h
+FRAME_MAGIC = b"VNF1"
+
+
+class FrameStreamSource(FrameSource):
+    """``vnframes://HOST:PORT``: a camera that serves its frames over TCP (the SIL camera, ``FrameStreamServer``):
+    per frame a header (``FRAME_HEADER``: magic, index, exposure instant in the host's CLOCK_MONOTONIC
+    seconds, width, height) and width x height 8-bit gray pixels. The exposure stamp is the sender's:
+    CLOCK_MONOTONIC is the same clock in every process of one machine, so this is for a camera process on the
+    same computer (a hardware-stamped camera driver, the simulator). Connects with retries for
+    ``connect_s``; CameraSourceError (one line) when nothing listens."""
+
+    def __init__(self, spec: str, connect_s: float = 10.0, **kw):
+        super().__init__(**kw)
+        import socket
+
+        host, _, port = spec[len(FRAME_STREAM_SCHEME):].rpartition(":")
+        try:
+            addr = (host or "127.0.0.1", int(port))
+        except ValueError:
+            raise CameraSourceError(f"camera {spec!r}: expected {FRAME_STREAM_SCHEME}HOST:PORT") from None
+        t_end = time.monotonic() + connect_s
+        while True:
+            try:
+                self.sock = socket.create_connection(addr, timeout=1.0)
+                break
+            except OSError as e:
+                if time.monotonic() >= t_end:
+                    raise CameraSourceError(f"camera {spec!r}: cannot connect ({e.strerror or e})") from None
+                time.sleep(0.1)
+        self.sock.settimeout(None)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.spec = spec
+
+    def _recv(self, n: int) -> bytes | None:
+        buf = bytearray()
+        while len(buf) < n:
+            try:
+                chunk = self.sock.recv(n - len(buf))
+            except OSError:
+                return None
+            if not chunk:
+                return None
+            buf += chunk
+        return bytes(buf)
+
+    def read(self) -> Captured | None:
+        head = self._recv(FRAME_HEADER.size)
+        if head is None:
+            return None
+        magic, index, exposed, w, h = FRAME_HEADER.unpack(head)
+        if magic != FRAME_MAGIC:
+            raise CameraSourceError(f"camera {self.spec!r}: not a visnav frame stream (magic {magic!r})")
+        px = self._recv(w * h)
+        if px is None:
+            return None
+        now = self.clock()
+        self.index = index + 1
+        return Captured(np.frombuffer(px, np.uint8).reshape(h, w), exposed + self.time_offset_s, now, int(index))
+
+    def close(self) -> None:
+        try:
+            self.sock.close()
+        except OSError:
+            pass
+
+
+class FrameStreamServer:
+    """The sending side of ``FrameStreamSource`` (the SIL camera): listens on ``host:port`` (0: a free port),
+    accepts one reader, sends frames from a bounded queue on its own thread (a slow reader drops frames,
+    counted in ``dropped``, instead of stalling the sender)."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 0, queue_size: int = 8):
+        import queue
+        import socket
+        import threading
+
+        self.srv = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.srv.bind((host, port))
+        self.srv.listen(1)
+        self.port = self.srv.getsockname()[1]
+        self.url = f"{FRAME_STREAM_SCHEME}{host}:{self.port}"
+        self.q: queue.Queue = queue.Queue(maxsize=queue_size)
+        self.dropped = self.sent = 0
+        self.conn = None
+        self._stop = threading.Event()
+        self._th = threading.Thread(target=self._serve, daemon=True, name="frame-stream")
+        self._th.start()
+
+    def send(self, image: np.ndarray, exposed_monotonic: float, index: int) -> None:
+        import queue
+
+        try:
+            self.q.put_nowait((np.ascontiguousarray(image, np.uint8), float(exposed_monotonic), int(index)))
+        except queue.Full:
+            self.dropped += 1
+
+    def _serve(self) -> None:
+        import queue
+        import socket
+
+        self.srv.settimeout(0.2)
+        while not self._stop.is_set() and self.conn is None:
+            try:
+                self.conn, _ = self.srv.accept()
+                self.conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            except socket.timeout:
+                continue
+            except OSError:
+                return
+        while not self._stop.is_set():
+            try:
+                img, t, i = self.q.get(timeout=0.1)
+            except queue.Empty:
+                continue
+            h, w = img.shape[:2]
+            try:
+                self.conn.sendall(FRAME_HEADER.pack(FRAME_MAGIC, i, t, w, h) + img.tobytes())
+                self.sent += 1
+            except OSError:
+                return
+
+    def close(self) -> None:
+        self._stop.set()
+        self._th.join(timeout=1.0)
+        for s in (self.conn, self.srv):
+            if s is not None:
+                try:
+                    s.close()
+                except OSError:
+                    pass
+
+
 def open_source(spec: str, fps: float = 10.0, time_offset_s: float = 0.0) -> FrameSource:
-    """A folder -> FolderSource, anything else -> VideoSource."""
+    """``vnframes://HOST:PORT`` -> FrameStreamSource, a folder -> FolderSource, anything else -> VideoSource."""
+    if spec.startswith(FRAME_STREAM_SCHEME):
+        return FrameStreamSource(spec, time_offset_s=time_offset_s)
     p = Path(spec)
     if p.is_dir():
         return FolderSource(p, fps=fps, time_offset_s=time_offset_s)

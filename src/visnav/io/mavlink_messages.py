@@ -31,7 +31,7 @@ from visnav.estimation.ins import euler_to_quat, quat_to_euler  # noqa: E402
 from visnav.geometry.frames import LocalTangentPlane  # noqa: E402
 from visnav.geometry.rotations import euler_to_dcm  # noqa: E402
 from visnav.measurements import (AttitudeSample, BaroSample, GpsSample, Health, ImuSample,  # noqa: E402
-                                 NavEstimate, RangeSample)
+                                 NavCommand, NavEstimate, RangeSample)
 
 G0 = 9.80665  # m/s^2 per g (SCALED_IMU's mG)
 SATELLITES_VISIBLE = 10  # GPS_INPUT: a constant >= the autopilots' minimum for a 3D fix (ArduPilot, PX4: 6)
@@ -256,3 +256,110 @@ def encode_origin(mav, origin: LocalTangentPlane, target_system: int, time_usec:
     return mav.set_gps_global_origin_encode(int(target_system), int(round(origin.lat0_deg * 1e7)),
                                             int(round(origin.lon0_deg * 1e7)), int(round(origin.h0_m * 1000)),
                                             int(time_usec))
+
+
+# ------------------------------------------------------------------- mission requests and navigator health
+# A mission flying on the autopilot side talks to the navigator behind the bridge with standard messages
+# (docs/autopilots.md, "Mission requests and navigator health"):
+#   COMMAND_LONG, command = MAV_CMD_USER_1 (31010): param1 = request code (NAV_COMMAND_CODES), param2 = its
+#   enumerated argument (init_from / source code), param3 = 1 when a target follows in param4..6 (NED [m]),
+#   param7 = the request's sequence number (retries carry the same one); answered with COMMAND_ACK.
+#   DEBUG_FLOAT_ARRAY (350), name "VN_HEALTH", array_id = HEALTH_ARRAY_ID: the navigator's Health with
+#   time_usec = the instant it describes in the autopilot's clock, data[i] = HEALTH_FIELDS[i].
+NAV_COMMAND_ID = mavlink.MAV_CMD_USER_1
+NAV_COMMAND_CODES = {"request-tracking": 1, "request-tracking-rebase": 2, "stop-tracking": 3, "set-source": 4}
+INIT_FROM_CODES = ("gps", "estimate")
+SOURCE_CODES = ("gps", "mpe", "inertial", "vision", "ins", "none", "registration", "camera", "ahrs", "bridge")
+INTEGRITY_CODES = ("ok", "degraded", "unusable")
+HEALTH_NAME = "VN_HEALTH"
+HEALTH_ARRAY_ID = 1
+HEALTH_FIELDS = ("source", "tracking", "tracking_pending", "coherence", "tracked_px_x", "tracked_px_y",
+                 "mpe_rate_hz", "mpe_jump", "laser_ok", "rejected_ranges", "rejected_samples", "reinitializations",
+                 "integrity", "hpl_m", "hpl_probability", "consistency_k2", "requests_applied", "frame_index")
+
+
+class NoMavlinkMapping(ValueError):
+    """A mission request that has no MAVLink mapping (one line naming it)."""
+
+
+def _code(table: tuple[str, ...], value: str, what: str) -> int:
+    if value not in table:
+        raise NoMavlinkMapping(f"{what} {value!r} has no MAVLink code (known: {', '.join(table)})")
+    return table.index(value)
+
+
+def encode_nav_command(mav, cmd: NavCommand, seq: int, target_system: int, target_component: int):
+    """A mission's ``NavCommand`` as COMMAND_LONG (MAV_CMD_USER_1, mapping above); NoMavlinkMapping when the
+    request or one of its arguments has no code."""
+    name = cmd.name.replace("_", "-")
+    if name not in NAV_COMMAND_CODES:
+        raise NoMavlinkMapping(f"navigator request {cmd.name!r} has no MAVLink mapping (mapped: "
+                               f"{', '.join(NAV_COMMAND_CODES)}; docs/autopilots.md)")
+    a = dict(cmd.args)
+    arg = 0.0
+    if name == "set-source":
+        arg = _code(SOURCE_CODES, a.pop("source"), "source")
+    elif name in ("request-tracking", "request-tracking-rebase"):
+        arg = _code(INIT_FROM_CODES, a.pop("init_from", "gps"), "init_from")
+    target = a.pop("target_ned", None) if name == "request-tracking" else None
+    if a:
+        raise NoMavlinkMapping(f"navigator request {cmd.name!r}: argument(s) {', '.join(a)} have no MAVLink mapping")
+    xyz = [0.0, 0.0, 0.0] if target is None else [float(x) for x in np.asarray(target, float).reshape(3)]
+    return mav.command_long_encode(int(target_system), int(target_component), NAV_COMMAND_ID, 0,
+                                   float(NAV_COMMAND_CODES[name]), float(arg), 0.0 if target is None else 1.0,
+                                   *xyz, float(seq))
+
+
+def decode_nav_command(msg, t: float) -> tuple[int, NavCommand]:
+    """COMMAND_LONG (MAV_CMD_USER_1) -> (sequence number, NavCommand at our instant ``t``); NoMavlinkMapping
+    for a code we do not know."""
+    codes = {v: k for k, v in NAV_COMMAND_CODES.items()}
+    code, arg = int(round(msg.param1)), int(round(msg.param2))
+    if code not in codes:
+        raise NoMavlinkMapping(f"MAV_CMD_USER_1 request code {code} is not a navigator request (known: "
+                               f"{', '.join(f'{v} {k}' for k, v in NAV_COMMAND_CODES.items())})")
+    name = codes[code]
+    args: dict = {}
+    if name == "set-source":
+        args["source"] = SOURCE_CODES[arg] if 0 <= arg < len(SOURCE_CODES) else "?"
+    elif name in ("request-tracking", "request-tracking-rebase"):
+        args["init_from"] = INIT_FROM_CODES[arg] if 0 <= arg < len(INIT_FROM_CODES) else "?"
+        if name == "request-tracking":
+            args["target_ned"] = (np.array([msg.param4, msg.param5, msg.param6], float) if msg.param3 >= 0.5
+                                  else None)
+    if any(isinstance(v, str) and v == "?" for v in args.values()):
+        raise NoMavlinkMapping(f"navigator request {name}: argument code {arg} unknown")
+    return int(round(msg.param7)), NavCommand(t, name, args)
+
+
+def encode_health(mav, h: Health, time_usec: int, requests_applied: int, frame_index: int = -1):
+    """The navigator's Health as DEBUG_FLOAT_ARRAY "VN_HEALTH" (HEALTH_FIELDS order; unknown source /
+    integrity -> -1). ``frame_index``: the frame whose estimate went out with the same ``time_usec`` (-1:
+    not a frame's, e.g. the inertial estimate of a camera stall)."""
+    src = SOURCE_CODES.index(h.source) if h.source in SOURCE_CODES else -1
+    integ = INTEGRITY_CODES.index(h.integrity) if h.integrity in INTEGRITY_CODES else -1
+    vals = [src, h.tracking, h.tracking_pending, h.coherence, h.tracked_px[0], h.tracked_px[1], h.mpe_rate_hz,
+            h.mpe_jump, h.laser_ok, h.rejected_ranges, h.rejected_samples, h.reinitializations, integ, h.hpl_m,
+            h.hpl_probability, h.consistency_k2, requests_applied, frame_index]
+    data = [float(v) for v in vals] + [0.0] * (58 - len(vals))
+    return mav.debug_float_array_encode(int(time_usec), HEALTH_NAME.encode(), HEALTH_ARRAY_ID, data)
+
+
+def decode_health(msg) -> tuple[Health, int, int]:
+    """DEBUG_FLOAT_ARRAY "VN_HEALTH" -> (Health, requests applied, frame index)."""
+    d = dict(zip(HEALTH_FIELDS, msg.data))
+    src, integ = int(d["source"]), int(d["integrity"])
+    h = Health(source=SOURCE_CODES[src] if 0 <= src < len(SOURCE_CODES) else "?", tracking=d["tracking"] >= 0.5,
+               tracking_pending=d["tracking_pending"] >= 0.5, coherence=float(d["coherence"]),
+               tracked_px=(float(d["tracked_px_x"]), float(d["tracked_px_y"])), mpe_rate_hz=float(d["mpe_rate_hz"]),
+               mpe_jump=d["mpe_jump"] >= 0.5, laser_ok=d["laser_ok"] >= 0.5, rejected_ranges=int(d["rejected_ranges"]),
+               rejected_samples=int(d["rejected_samples"]), reinitializations=int(d["reinitializations"]),
+               integrity=INTEGRITY_CODES[integ] if 0 <= integ < len(INTEGRITY_CODES) else "?",
+               hpl_m=float(d["hpl_m"]), hpl_probability=float(d["hpl_probability"]),
+               consistency_k2=float(d["consistency_k2"]))
+    return h, int(d["requests_applied"]), int(d["frame_index"])
+
+
+def is_health(msg) -> bool:
+    name = msg.name.decode() if isinstance(msg.name, bytes) else str(msg.name)
+    return name.rstrip("\x00") == HEALTH_NAME and msg.array_id == HEALTH_ARRAY_ID

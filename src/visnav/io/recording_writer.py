@@ -16,8 +16,11 @@ from visnav.io.recording import (COMMANDS, DELIVERY, STREAMS, TRUTH, RecordingEr
 class RecordingWriter:
     """Collects measurements in delivery order and writes the folder (frames as lossless PNG)."""
 
-    def __init__(self, out_dir: str | Path):
+    def __init__(self, out_dir: str | Path, image_writer=None):
+        """``image_writer(path, image) -> bool``: how a frame is written (default ``cv2.imwrite`` now; the
+        bridge passes one that writes on a background thread)."""
         self.dir = Path(out_dir)
+        self.image_writer = image_writer
         try:
             (self.dir / "frames").mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -38,7 +41,7 @@ class RecordingWriter:
             raise RecordingError(f"cannot record a {type(m).__name__}")
         if kind == "frames":
             name = f"frames/{len(self.rows['frames']):06d}.png"
-            if not cv2.imwrite(str(self.dir / name), np.asarray(m.image)):
+            if not (self.image_writer or cv2.imwrite)(str(self.dir / name), np.asarray(m.image)):
                 raise RecordingError(f"{self.dir / name}: cannot write the frame")
             row = (m.t, name, m.index)
         elif kind == "imu":

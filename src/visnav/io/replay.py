@@ -206,10 +206,12 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                     counts[name] += 1
                 nav.update(m)
             elif kinds[k] == 2 or c["method"][b[k]] == "estimate":
+                t = t if kinds[k] == 2 else _query_t(c, b[k], t)
                 e = nav.estimate(t)
                 log.record("estimate", t, position=e.position, velocity=e.velocity, euler=e.attitude,
                            source=e.source, valid=e.valid)
             elif c["method"][b[k]] == "health":
+                t = _query_t(c, b[k], t)
                 h = nav.health(t)
                 log.record("status", t, source=h.source, coherence=h.coherence, tracking=h.tracking,
                            mpe_rate_hz=h.mpe_rate_hz, laser_ok=h.laser_ok)
@@ -241,6 +243,16 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
     except Exception as exc:  # keep what the replay has
         return counts, f"{type(exc).__name__} at t={t:.3f} s (event {k} of {len(kinds)}): {exc}"
     return counts, None
+
+
+def _query_t(c, row: int, t: float) -> float:
+    """The instant an ``estimate`` / ``health`` row asked for: its ``t`` argument where it has one (the bridge's
+    log: the estimate at a frame's exposure, asked after later samples arrived), else the row's time."""
+    if "args" in c and c["args"][row]:
+        kw = json.loads(c["args"][row]).get("kwargs", {})
+        if "t" in kw:
+            return float(kw["t"])
+    return t
 
 
 def _log_reference(rec: Recording, log: FlightLog, opts: ReplayOptions) -> str | None:

@@ -1,31 +1,43 @@
-"""``visnav run SCENARIO --sil``: the simulator plays the autopilot, the navigator runs behind the bridge.
+"""``visnav run SCENARIO --sil``: the simulator plays the autopilot, the navigator runs in ``visnav bridge``,
+a separate process, over MAVLink on 127.0.0.1.
 
 The closed loop of a scenario is flown as usual (vehicle, sensors, mission, controller), paced to the
-wall clock, but its navigator is replaced by ``SilLink``, the autopilot side of a MAVLink link on
-127.0.0.1:
+wall clock, but its navigator slot holds ``SilLink`` (through the simulation's ``navigator_wrapper``), the
+autopilot side of a MAVLink link:
 
-* every measurement the simulation delivers is sent to the bridge as the autopilot would send it
-  (ImuSample -> HIGHRES_IMU, AttitudeSample -> ATTITUDE_QUATERNION, BaroSample -> SCALED_PRESSURE,
-  RangeSample -> DISTANCE_SENSOR, GpsSample -> GLOBAL_POSITION_INT), stamped with the instant it describes
-  in the autopilot's boot clock (simulation time + ``boot_offset_s``); HEARTBEAT at 1 Hz, TIMESYNC answered,
-  GPS_GLOBAL_ORIGIN on request;
-* camera frames go to the bridge's camera input (an in-process queue: a frame does not travel over
-  MAVLink), stamped with the instant they show;
+* every measurement the simulation delivers is sent as the autopilot would send it (ImuSample -> HIGHRES_IMU,
+  AttitudeSample -> ATTITUDE_QUATERNION, BaroSample -> SCALED_PRESSURE, RangeSample -> DISTANCE_SENSOR,
+  GpsSample -> GLOBAL_POSITION_INT), stamped with the instant it describes in the autopilot's boot clock;
+  HEARTBEAT at 1 Hz, TIMESYNC answered, GPS_GLOBAL_ORIGIN on request;
+* camera frames go to the bridge's camera input ``vnframes://127.0.0.1:PORT`` (``io/camera_source``: TCP,
+  with the exposure instant in CLOCK_MONOTONIC, the clock every process of the machine shares);
+* the mission's requests to its navigator (``command(NavCommand)``) travel as COMMAND_LONG MAV_CMD_USER_1
+  (acknowledged, retried), the navigator's health comes back as DEBUG_FLOAT_ARRAY "VN_HEALTH"
+  (``io/mavlink_messages``, docs/autopilots.md); a request is pending for the mission until a health
+  message says the navigator applied it;
 * what the bridge sends back (ODOMETRY) is the navigation solution the mission and controller fly on:
   ``estimate(t)`` = the newest ODOMETRY carried forward to ``t`` with its velocity, in the simulation's NED.
 
-The bridge runs in this process (threads) with the scenario's own navigator built a second time by
-``io.bridge_navigators`` (so it never sees the simulation's truth). Compass samples have no MAVLink path
-here and are not forwarded. The navigator behind the bridge writes its diagnostics into the flying
-simulation's log, so that the mission's metrics find them.
+``run_sil`` starts ``visnav bridge`` as a subprocess (``spawn=True``) or waits for one the user starts in
+another terminal (it prints the command line), and ends the bridge's session with MAV_CMD_PREFLIGHT_REBOOT_
+SHUTDOWN (param2 = 2: shut the companion computer down). Afterwards the streams the navigator recorded in
+the bridge process (``navigator.h5``, e.g. PALACE's ``mpe``, WITAS's ``pmf``) are merged into the flying
+log on the simulation's clock and the metrics are computed again from the log, so a SIL run is scored like
+an in-process one. Compass samples have no MAVLink path here and are not forwarded.
 """
 
 from __future__ import annotations
 
+import json
 import math
-import queue
+import os
+import shlex
+import socket
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -33,56 +45,92 @@ from visnav.estimation.ins import euler_to_quat, quat_to_euler
 from visnav.geometry.frames import LocalTangentPlane
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.io import mavlink_messages as mm
-from visnav.io.camera_source import Captured, FrameSource
+from visnav.io.camera_source import FrameStreamServer
 from visnav.io.mavlink_link import mavutil
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, Health, ImuSample, NavEstimate,
                                  RangeSample)
 
 P0_HPA = 1013.25  # pressure at the NED origin's height
+ORIGIN = (58.395, 15.575, 0.0)  # the simulation's NED origin as the autopilot reports it
+BRIDGE_COMPONENT = mavlink.MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
+REQUEST_RETRY_S, REQUEST_TRIES = 0.3, 10
+SIL_NAVIGATORS = ("palace", "witas")  # navigators the bridge can run from a scenario alone
 
 
-class QueueSource(FrameSource):
-    """Frames handed over in-process (the SIL camera)."""
+class SilError(RuntimeError):
+    """The SIL could not start or talk to the bridge (one line)."""
 
-    def __init__(self):
-        super().__init__()
-        self.q: queue.Queue = queue.Queue(maxsize=64)
-        self.closed = False
 
-    def read(self):
-        while not self.closed:
-            try:
-                return self.q.get(timeout=0.1)
-            except queue.Empty:
-                continue
-        return None
-
-    def close(self) -> None:
-        self.closed = True
+def free_port(kind=socket.SOCK_DGRAM) -> int:
+    s = socket.socket(socket.AF_INET, kind)
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
 
 
 class SilLink:
     """The simulation's navigator slot, talking MAVLink to the bridge (module docstring)."""
 
-    def __init__(self, url: str, camera: QueueSource, origin: LocalTangentPlane, boot_offset_s: float = 1000.0,
-                 pace: bool = True):
-        self.conn = mavutil.mavlink_connection(url, source_system=1, source_component=1, dialect="common")
+    def __init__(self, port: int, frames: FrameStreamServer, origin: LocalTangentPlane,
+                 boot_offset_s: float = 1000.0, pace: bool = True):
+        self.port = port
+        self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=1, source_component=1,
+                                               dialect="common")
         self.mav = self.conn.mav
-        self.camera, self.origin = camera, origin
-        self.boot_offset_s, self.pace = boot_offset_s, pace
-        self.wall0 = time.monotonic()
-        self._next_hb = -1.0
-        self._odo: list = []  # (t_sim, position, velocity_ned, euler, covariance 6x6, reset_counter)
+        self.frames, self.origin, self.pace = frames, origin, pace
+        self.boot_base = time.monotonic() - boot_offset_s  # the autopilot booted boot_offset_s ago
+        self.wall0 = time.monotonic()  # monotonic instant of simulation time 0 (``start_clock``)
+        self._next_hb = 0.0
+        self._odo: list = []  # (t_sim, position, velocity_ned, euler, covariance 6x6, reset_counter, quality)
+        self._odo_usec: set[int] = set()
         self.received: dict[str, int] = {}
         self.sent = 0
-        self.frames_dropped = 0  # frames the bridge's camera queue had no room for (it fell behind)
+        self.timesync_answered = 0
+        self.bridge_seen = False
+        self._ts_rx: list[float] = []  # when the bridge's last TIMESYNC requests came
+        self.frame_t: dict[int, float] = {}  # frame index -> exposure instant (simulation time)
+        self.frame_lag_ms: list[float] = []  # the simulated camera's latency plus any lag behind the wall clock
+        self.stamp_errors_ms: list[float] = []  # ODOMETRY time_usec -> sim time, minus the frame's exposure
         self.h = Health(source="bridge")
+        self._jump = False
+        self.applied = 0  # newest request the navigator applied (from its health)
+        self._seq = 0
+        self._pending: dict[int, list] = {}  # seq -> [message, last sent (monotonic), tries]
+        self.requests_failed: list[str] = []
         self._lock = threading.Lock()
+        self._send_lock = threading.Lock()
+        self._stop = threading.Event()
+        # the autopilot's receive side, HEARTBEAT and request retries run on their own thread (TIMESYNC answered
+        # at once, as a flight controller does, whatever the simulation loop is doing)
+        self._rx = threading.Thread(target=self._rx_loop, daemon=True, name="sil-autopilot-rx")
+        self._rx.start()
+
+    def _send(self, msg) -> None:
+        with self._send_lock:
+            self.mav.send(msg)
+
+    def _rx_loop(self) -> None:
+        while not self._stop.is_set():
+            self._service()
+            try:
+                r = self.conn.recv_match(blocking=True, timeout=0.05)
+            except OSError:
+                return
+            if r is not None:
+                self._receive(r)
 
     # ------------------------------------------------------------------ clocks
+    def start_clock(self) -> None:
+        """Simulation time 0 = now (the autopilot's boot clock runs on unchanged)."""
+        self.wall0 = time.monotonic()
+
     def boot_us(self, t_sim: float) -> int:
-        return int(round((t_sim + self.boot_offset_s) * 1e6))
+        return int(round((self.wall0 + t_sim - self.boot_base) * 1e6))
+
+    def sim_of_boot_us(self, usec: int) -> float:
+        return usec * 1e-6 + self.boot_base - self.wall0
 
     def now_sim(self) -> float:
         return time.monotonic() - self.wall0
@@ -96,7 +144,6 @@ class SilLink:
     # ------------------------------------------------------------------ navigator interface
     def update(self, m) -> None:
         self._pace(m.t)
-        self._service()
         mav = self.mav
         if isinstance(m, ImuSample):
             msg = mav.highres_imu_encode(self.boot_us(m.t), *m.accel, *m.gyro, 0, 0, 0, 0, 0, 0, 20.0, 0x3F)
@@ -119,52 +166,83 @@ class SilLink:
                                                  int(round(-m.position[2] * 1000)), *[int(round(x * 100)) for x in v],
                                                  65535)
         elif isinstance(m, Frame):
-            now = time.monotonic()
-            try:
-                self.camera.q.put_nowait(Captured(m.image, self.wall0 + m.t, now, m.index))
-            except queue.Full:
-                self.frames_dropped += 1
+            self.frame_t[int(m.index)] = float(m.t)
+            self.frame_lag_ms.append((self.now_sim() - m.t) * 1e3)  # exposure -> handed to the frame stream
+            self.frames.send(np.asarray(m.image), self.wall0 + m.t, int(m.index))
             return
         else:
             return
-        mav.send(msg)
+        self._send(msg)
         self.sent += 1
 
+    def command(self, cmd) -> None:
+        """A mission request: COMMAND_LONG MAV_CMD_USER_1 to the bridge, retried until acknowledged."""
+        self._seq += 1
+        msg = mm.encode_nav_command(self.mav, cmd, self._seq, 1, BRIDGE_COMPONENT)
+        self._pending[self._seq] = [msg, time.monotonic(), 1]
+        self._send(msg)
+
+    def initialize(self, init) -> None:
+        raise ValueError("an explicit navigator start (NavInit) has no MAVLink mapping: a scenario with a nav_init "
+                         "cannot fly --sil")
+
     def _service(self) -> None:
-        t = self.now_sim()
-        if t >= self._next_hb:
-            self._next_hb = t + 1.0
-            self.mav.send(self.mav.heartbeat_encode(mavlink.MAV_TYPE_HELICOPTER, mavlink.MAV_AUTOPILOT_GENERIC,
+        """HEARTBEAT at 1 Hz and the retries of unacknowledged requests (the receive thread calls it)."""
+        now = time.monotonic()
+        if now >= self._next_hb:
+            self._next_hb = now + 1.0
+            self._send(self.mav.heartbeat_encode(mavlink.MAV_TYPE_HELICOPTER, mavlink.MAV_AUTOPILOT_GENERIC,
                                                     mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0,
                                                     mavlink.MAV_STATE_ACTIVE))
-        for _ in range(1000):
-            r = self.conn.recv_match(blocking=False)
-            if r is None:
-                return
-            typ = r.get_type()
-            self.received[typ] = self.received.get(typ, 0) + 1
-            if typ == "TIMESYNC" and r.tc1 == 0:
-                self.mav.send(self.mav.timesync_encode(self.boot_us(self.now_sim()) * 1000, r.ts1))
-            elif typ == "COMMAND_LONG" and r.command == mavlink.MAV_CMD_REQUEST_MESSAGE and int(r.param1) == 49:
-                o = self.origin
-                self.mav.send(self.mav.gps_global_origin_encode(int(round(o.lat0_deg * 1e7)),
-                                                                int(round(o.lon0_deg * 1e7)),
-                                                                int(round(o.h0_m * 1000)), 0))
-            elif typ == "ODOMETRY":
-                q = np.array(r.q)
-                e = quat_to_euler(q)
-                v_ned = euler_to_dcm(e) @ np.array([r.vx, r.vy, r.vz])
-                P = np.zeros((6, 6))
-                P[:3, :3] = mm.from_upper_triangle(r.pose_covariance)[:3, :3]
-                Cb = euler_to_dcm(e)
-                P[3:, 3:] = Cb @ mm.from_upper_triangle(r.velocity_covariance)[:3, :3] @ Cb.T
-                t_sim = r.time_usec * 1e-6 - self.boot_offset_s
-                with self._lock:
-                    self._odo.append((t_sim, np.array([r.x, r.y, r.z]), v_ned, e, P, r.reset_counter, r.quality))
-                    del self._odo[:-50]
+        for seq, p in list(self._pending.items()):  # unacknowledged requests (UDP may lose one)
+            if now - p[1] >= REQUEST_RETRY_S:
+                if p[2] >= REQUEST_TRIES:
+                    self.requests_failed.append(f"request {seq} not acknowledged after {REQUEST_TRIES} tries")
+                    self._pending.pop(seq, None)
+                    continue
+                self._send(p[0])
+                p[1], p[2] = now, p[2] + 1
+
+    def _receive(self, r) -> None:
+        typ = r.get_type()
+        self.received[typ] = self.received.get(typ, 0) + 1
+        if typ == "HEARTBEAT" and r.get_srcComponent() == BRIDGE_COMPONENT:
+            self.bridge_seen = True
+        elif typ == "TIMESYNC" and r.tc1 == 0:
+            now = time.monotonic()
+            self._send(self.mav.timesync_encode(int((now - self.boot_base) * 1e9), r.ts1))
+            self.timesync_answered += 1
+            self._ts_rx.append(now)
+            del self._ts_rx[:-4]
+        elif typ == "COMMAND_LONG" and r.command == mavlink.MAV_CMD_REQUEST_MESSAGE and int(r.param1) == 49:
+            o = self.origin
+            self._send(self.mav.gps_global_origin_encode(int(round(o.lat0_deg * 1e7)), int(round(o.lon0_deg * 1e7)),
+                                                            int(round(o.h0_m * 1000)), 0))
+        elif typ == "COMMAND_ACK" and r.command == mm.NAV_COMMAND_ID:
+            self._pending.pop(int(r.result_param2), None)
+            if r.result != mavlink.MAV_RESULT_ACCEPTED:
+                self.requests_failed.append(f"request {r.result_param2} refused (MAV_RESULT {r.result})")
+        elif typ == "DEBUG_FLOAT_ARRAY" and mm.is_health(r):
+            h, applied, frame = mm.decode_health(r)
+            with self._lock:
+                self.h, self.applied = h, max(self.applied, applied)
+                self._jump |= h.mpe_jump
+            if frame >= 0 and frame in self.frame_t and r.time_usec in self._odo_usec:
+                self.stamp_errors_ms.append((self.sim_of_boot_us(r.time_usec) - self.frame_t[frame]) * 1e3)
+        elif typ == "ODOMETRY":
+            e = quat_to_euler(np.array(r.q))
+            Cb = euler_to_dcm(e)
+            v_ned = Cb @ np.array([r.vx, r.vy, r.vz])
+            P = np.zeros((6, 6))
+            P[:3, :3] = mm.from_upper_triangle(r.pose_covariance)[:3, :3]
+            P[3:, 3:] = Cb @ mm.from_upper_triangle(r.velocity_covariance)[:3, :3] @ Cb.T
+            with self._lock:
+                self._odo.append((self.sim_of_boot_us(r.time_usec), np.array([r.x, r.y, r.z]), v_ned, e, P,
+                                  r.reset_counter, r.quality))
+                del self._odo[:-50]
+                self._odo_usec.add(int(r.time_usec))
 
     def estimate(self, t: float) -> NavEstimate:
-        self._service()
         with self._lock:
             last = self._odo[-1] if self._odo else None
         if last is None:
@@ -172,92 +250,177 @@ class SilLink:
                                source="bridge")
         ts, p, v, e, P, _, q = last
         return NavEstimate(t=t, position=p + v * (t - ts), velocity=v, attitude=e, covariance=P, valid=q > 0,
-                           source="bridge")
-
-    def attach(self, navigator, lock) -> None:
-        """The navigator behind the bridge, for the mission's commands (see ``__getattr__``)."""
-        self._remote, self._remote_lock = navigator, lock
-
-    def __getattr__(self, name):
-        """A mission's commands and queries to its navigator (PALACE: request_tracking, set_source,
-        tracking_pending, source) reach the navigator behind the bridge directly, as they would from a
-        mission running on the companion computer next to it; only estimates travel over MAVLink."""
-        remote = self.__dict__.get("_remote")
-        if remote is None or name.startswith("_"):
-            raise AttributeError(name)
-        with self._remote_lock:
-            value = getattr(remote, name)
-        if not callable(value):
-            return value
-
-        def call(*a, **kw):
-            with self._remote_lock:
-                return value(*a, **kw)
-
-        return call
+                           source=self.h.source if self.h.source != "bridge" else "bridge")
 
     def health(self, t: float | None = None) -> Health:
-        remote = self.__dict__.get("_remote")
-        if remote is None:
-            return self.h
-        with self._remote_lock:
-            return remote.health(None if t is None else self.wall0 + t)
+        """The navigator's newest health; a request it has not applied yet is pending (``tracking_pending``),
+        a position jump reported since the last call is kept (``mpe_jump``)."""
+        with self._lock:
+            h = Health(**{k: getattr(self.h, k) for k in Health.__dataclass_fields__})
+            h.tracking_pending = h.tracking_pending or self.applied < self._seq
+            h.mpe_jump, self._jump = h.mpe_jump or self._jump, False
+        return h
+
+    def synced(self) -> bool:
+        """The bridge's clock sync has converged: it asks TIMESYNC at 4x its steady rate until then
+        (io/mavlink_link.py), so three intervals above 1.5x the fast period say it is done."""
+        ts = self._ts_rx
+        return len(ts) >= 4 and self.timesync_answered >= 8 and min(np.diff(ts)) > 0.06 \
+            and time.monotonic() - ts[-1] < 0.5
+
+    def shutdown_bridge(self) -> None:
+        """MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, param2 = 2 (shut down the onboard computer): the bridge ends its
+        session, writes its logs and exits."""
+        self._send(self.mav.command_long_encode(1, BRIDGE_COMPONENT, mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN,
+                                                   0, 0, 2, 0, 0, 0, 0, 0))
 
     def close(self) -> None:
+        self._stop.set()
+        self._rx.join(timeout=1.0)
         self.conn.close()
+        self.frames.close()
 
 
-def run_sil(sc, progress=None, notify=None, sim=None):
-    """Fly Scenario ``sc`` with its navigator behind the bridge (module docstring); the RunResult, with the
-    bridge's keys added to its metrics (``sil_`` prefix for the stand-in's own figures)."""
-    import socket
+def sil_simulation(sc):
+    """The scenario's simulation with ``SilLink`` in its navigator slot (``sim.sil_link``)."""
+    from visnav.io.navigators import navigator_for
+    from visnav.sim.missions import simulation_class
 
-    from visnav.io.bridge import Bridge, BridgeConfig
-    from visnav.io.bridge_navigators import navigator_from_scenario
-    from visnav.io.mavlink_link import MavlinkLink
-    from visnav.sim.missions import make_simulation
+    kind = getattr(sc.mission, "type", "palace")
+    try:
+        name = navigator_for(kind)
+    except ValueError:
+        name = None
+    if name not in SIL_NAVIGATORS:
+        raise ValueError(f"--sil flies missions whose navigator runs behind `visnav bridge` ({', '.join(SIL_NAVIGATORS)}"
+                         f" navigators: palace-landing, hover, pfcm, witas-homing); mission.type {kind!r} has "
+                         + ("the pad navigator, which needs a pan-tilt link" if name == "pad" else "none"))
+    frames = FrameStreamServer()
+    link = SilLink(free_port(), frames, LocalTangentPlane(*ORIGIN))
+    sim = simulation_class(getattr(sc.mission, "type", "palace"))(sc, navigator_wrapper=lambda nav: link)
+    sim.sil_link = link
+    return sim
 
-    sim = sim if sim is not None else make_simulation(sc)
-    built = navigator_from_scenario(sc)  # a second, independent navigator: the one behind the bridge
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
+
+def bridge_command(sc_toml: Path, link: SilLink, out_dir: Path) -> list[str]:
+    """The ``visnav bridge`` command line that serves this SIL flight."""
+    return ["visnav", "bridge", "--mavlink", f"udpin:127.0.0.1:{link.port}", "--camera", link.frames.url,
+            "--navigator", str(sc_toml), "--origin", ",".join(f"{x:g}" for x in ORIGIN), "--health",
+            "--out", str(out_dir)]
+
+
+def _wait_ready(link: SilLink, proc, timeout_s: float, log: Path) -> None:
+    t_end = time.monotonic() + timeout_s
+    while time.monotonic() < t_end:
+        if link.bridge_seen and link.frames.conn is not None and link.synced():
+            return
+        if proc is not None and proc.poll() is not None:
+            tail = log.read_text().strip().splitlines()[-1:] if log.is_file() else []
+            raise SilError(f"visnav bridge exited (code {proc.returncode}) before the flight: "
+                           f"{tail[0] if tail else 'no output'}")
+        time.sleep(0.01)
+    raise SilError(f"no bridge on udp 127.0.0.1:{link.port} / {link.frames.url} within {timeout_s:g} s "
+                   "(HEARTBEAT, TIMESYNC and the frame stream)")
+
+
+def _merge_navigator_streams(sim, path: Path, wall0: float) -> int:
+    """The bridge navigator's own streams (monotonic clock) into the flying log (simulation time)."""
+    from visnav.sim.log import FlightLog
+
+    nav = FlightLog.from_hdf5(path)
+    n = 0
+    for name in nav.streams():
+        s = nav.get(name)
+        keys = [k for k in s if k != "t"]
+        for i, t in enumerate(s["t"]):
+            sim.log.record(name, float(t) - wall0, **{k: s[k][i] for k in keys})
+            n += 1
+    return n
+
+
+def run_sil(sc, progress=None, notify=None, sim=None, out_dir: str | Path | None = None, spawn: bool = True,
+            ready_timeout_s: float = 120.0):
+    """Fly Scenario ``sc`` against ``visnav bridge`` in another process (module docstring); the RunResult with
+    the bridge's keys added to its metrics (``sil_`` prefix for the autopilot side's own figures). The
+    bridge's log folder (metrics.json, bridge.tlog, recording/, navigator.h5, bridge.out) is ``out_dir``
+    (default: a temporary folder)."""
+    import tempfile
+
+    from visnav.analysis.integrity_metrics import integrity_metrics
+    from visnav.scenarios.schema import to_toml
+
+    sim = sim if sim is not None else sil_simulation(sc)
+    link: SilLink = sim.sil_link
     notes: list[str] = []
     say = notify or notes.append
-    link = MavlinkLink(f"udpin:127.0.0.1:{port}", notify=say)
-    cam = QueueSource()
-    origin = LocalTangentPlane(58.395, 15.575, 0.0)
-    proxy = SilLink(f"udpout:127.0.0.1:{port}", cam, origin)
-    sim.nav = proxy
-    if hasattr(built.navigator, "recorder"):  # its diagnostics into the flying log, on the simulation's clock
-        built.navigator.recorder = lambda name, t, *a, **kw: sim.log.record(name, t - proxy.wall0, *a, **kw)
-    # the origin given, as `visnav bridge --origin` does: otherwise a GPS_GLOBAL_ORIGIN answer that comes later
-    # than BridgeConfig.origin_wait_s (a loaded machine) makes the bridge take the first fix as its origin
-    bridge = Bridge(link, cam, built.navigator, BridgeConfig(origin=origin), notify=say)
-    proxy.attach(built.navigator, bridge.nav_lock)
-    if hasattr(sim.mission, "nav"):  # the mission talks to the navigator behind the bridge
-        sim.mission.nav = proxy
-    th = threading.Thread(target=bridge.run, daemon=True, name="bridge")
-    th.start()
+    bdir = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="visnav-sil-"))
+    bdir.mkdir(parents=True, exist_ok=True)
+    sc_toml = bdir / "navigator-scenario.toml"
+    sc_toml.write_text(to_toml(sc))
+    cmd = bridge_command(sc_toml, link, bdir)
+    out_log = bdir / "bridge.out"
+    proc = None
+    if spawn:
+        argv = [sys.executable, "-m", "visnav.cli"] + cmd[1:]
+        env = dict(os.environ, COLUMNS="200", TERM="dumb")
+        with open(out_log, "w") as fh:
+            proc = subprocess.Popen(argv, stdout=fh, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env)
+    else:
+        say("start the bridge in another terminal: " + shlex.join(cmd))
     try:
+        _wait_ready(link, proc, ready_timeout_s, out_log)
+        link.start_clock()
+        wall0 = time.perf_counter()
         result = sim.run(progress=progress)
-    finally:
-        bridge.stop.set()
-        th.join(timeout=3.0)
-        cam.close()
+        wall = time.perf_counter() - wall0
+    except BaseException:
+        if proc is not None and proc.poll() is None:
+            proc.kill()
         link.close()
-        proxy.close()
-    m = bridge.metrics()
-    stamps = np.array([usec - proxy.boot_us(t - proxy.wall0) for t, usec in bridge.sent_stamps], float)
+        raise
+    # end the bridge's session; it writes its logs
+    metrics_path = bdir / "metrics.json"
+    t_end = time.monotonic() + 60.0
+    next_shutdown = 0.0
+    while time.monotonic() < t_end:
+        if time.monotonic() >= next_shutdown:
+            link.shutdown_bridge()
+            next_shutdown = time.monotonic() + 1.0
+        if proc is not None and proc.poll() is not None:
+            break
+        if proc is None and metrics_path.is_file() and metrics_path.stat().st_mtime > time.time() - 60:
+            time.sleep(1.0)  # navigator.h5 and the recording are written before metrics.json
+            break
+        time.sleep(0.05)
+    if proc is not None and proc.poll() is None:
+        proc.kill()
+        say("the bridge did not end its session within 60 s: killed")
+    link.close()
+    m = json.loads(metrics_path.read_text()) if metrics_path.is_file() else {}
+    if (bdir / "navigator.h5").is_file():  # score the flight like an in-process one
+        _merge_navigator_streams(sim, bdir / "navigator.h5", link.wall0)
+        metrics = sim._metrics(sim.log, sc, wall_time_s=wall, error=result.error)
+        metrics.update(integrity_metrics(sim.log, sc))
+        result.metrics = metrics
+    else:
+        say(f"{bdir / 'navigator.h5'} missing: metrics from the autopilot side's log only")
+    stamps = np.abs(np.array(link.stamp_errors_ms)) if link.stamp_errors_ms else np.array([np.nan])
+    lag = np.array(link.frame_lag_ms) if link.frame_lag_ms else np.array([np.nan])
+    result.metrics.update({k: m[k] for k in ("link_ok", "rate_in_hz", "rate_out_hz", "latency_capture_to_send_ms",
+                                             "latency_arrival_to_send_ms", "processing_ms", "timesync_offset_ms", "timesync_rtt_ms",
+                                             "reset_counter") if k in m})
     result.metrics.update({
-        "link_ok": m["link_ok"], "rate_in_hz": m["rate_in_hz"], "rate_out_hz": m["rate_out_hz"],
-        "latency_capture_to_send_ms": m["latency_capture_to_send_ms"], "processing_ms": m["processing_ms"],
-        "timesync_offset_ms": m["timesync_offset_ms"], "timesync_rtt_ms": m["timesync_rtt_ms"],
-        "reset_counter": m["reset_counter"],
-        "sil_stamp_error_ms_max": float(np.max(np.abs(stamps)) / 1000.0) if len(stamps) else float("nan"),
-        "sil_odometry_received": proxy.received.get("ODOMETRY", 0), "sil_messages_sent": proxy.sent,
-        "sil_frames_dropped": proxy.frames_dropped,
+        "sil_stamp_error_ms_max": float(np.max(stamps)), "sil_stamp_error_ms_median": float(np.median(stamps)),
+        "sil_stamps_checked": len(link.stamp_errors_ms),
+        "sil_frame_handover_ms": {"median": float(np.median(lag)), "p95": float(np.percentile(lag, 95))},
+        "sil_odometry_received": link.received.get("ODOMETRY", 0), "sil_messages_sent": link.sent,
+        "sil_frames_dropped": link.frames.dropped, "sil_requests_sent": link._seq,
+        "sil_requests_applied": link.applied, "sil_bridge_process": "spawned" if spawn else "external",
+        "sil_bridge_dir": str(bdir),
     })
-    result.metrics["sil_notes"] = notes[:20]
+    if link.requests_failed:
+        notes += link.requests_failed[:5]
+    if out_log.is_file():
+        notes += [ln for ln in out_log.read_text().splitlines() if ln.strip()][-10:]
+    result.metrics["sil_notes"] = notes[:30]
     return result
