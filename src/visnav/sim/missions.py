@@ -28,7 +28,6 @@ REGISTRY: dict[str, Builder] = {}
 #: ``.run(progress=None) -> RunResult``.
 SIMULATIONS: dict[str, str] = {
     "condor": "visnav.sim.condor_loop:CondorSimulation",
-    "deck": "visnav.sim.deck_loop:DeckSimulation",
     "mav-geolocation": "visnav.sim.geoloc_loop:GeolocationSimulation",
 }
 
@@ -200,3 +199,10 @@ def _pad(ctx: BuildContext) -> MissionParts:
     from visnav.sim.pad_parts import build as build_pad
 
     return build_pad(ctx)
+
+
+@register("deck")
+def _deck(ctx: BuildContext) -> MissionParts:
+    from visnav.sim.deck_parts import build as build_deck
+
+    return build_deck(ctx)
