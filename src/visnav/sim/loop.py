@@ -67,10 +67,13 @@ class Simulation:
         self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
         self.notes = list(parts.info.get("notes", []))  # how the scenario was set up (the CLI prints them)
         self.info = parts.info
-        fill_rmax_defaults(parts, self)  # the R-MAX's parts where the builder left them out
+        if parts.evaluate is None:
+            fill_rmax_defaults(parts, self)  # the R-MAX's parts where the builder left them out
         self.vehicle, self.controller, self._metrics = parts.vehicle, parts.controller, parts.metrics
         self.logger = parts.logger
-        if parts.truth is None:
+        if parts.evaluate is not None:  # nothing flies (the CONDOR ground test)
+            self.history = None
+        elif parts.truth is None:
             self.history = TruthHistory(self.dt, horizon_s=parts.truth_horizon_s)
             self.history.advance = lambda t: self.history.push(self.vehicle.state)
             self.history.advance(0.0)
@@ -159,7 +162,7 @@ class Simulation:
     def run(self, progress=None) -> RunResult:
         """Fly the scenario (``run_scaffold``: wall time, an exception or Ctrl-C stops the run and it keeps
         what it has, metrics from the log)."""
-        return run_scaffold(self, self._fly, progress)
+        return run_scaffold(self, self.parts.evaluate or self._fly, progress)
 
     def _fly(self, progress) -> None:
         sc, dt, p = self.sc, self.dt, self.parts
@@ -175,9 +178,9 @@ class Simulation:
                                                             self.vehicle, self.logger)
         environment, actuator, contact, after_step, world_step = (p.environment, p.actuator, p.contact, p.after_step,
                                                                   p.world_step)
+        self._initialize_navigator()
         if p.start is not None:
             p.start(0.0)
-        self._initialize_navigator()
         cmd = p.initial_command
         ref = mode = health = nav_est = None
         self.step_state = st = Step(0.0, None, None, None, None, cmd, "")

@@ -27,10 +27,12 @@ REGISTRY: dict[str, Builder] = {}
 #: to the command line and the campaign runner: ``.sc``, ``.mission.mode`` and
 #: ``.run(progress=None) -> RunResult``.
 SIMULATIONS: dict[str, str] = {
-    "condor": "visnav.sim.condor_loop:CondorSimulation",
     "mav-geolocation": "visnav.sim.geoloc_loop:GeolocationSimulation",
 }
 
+
+#: the missions the R-MAX flies (``visnav record`` records these; the other vehicles' parts have no recorder yet)
+RMAX_MISSIONS = ("palace", "hover", "pfcm", "witas-homing", "pad-landing")
 
 #: the R-MAX loop, which flies every mission type not in ``SIMULATIONS`` (named, not imported: sim/loop.py
 #: imports this module's ``build``, and the package's imports have no cycle, tests/test_import_rules.py)
@@ -206,3 +208,10 @@ def _deck(ctx: BuildContext) -> MissionParts:
     from visnav.sim.deck_parts import build as build_deck
 
     return build_deck(ctx)
+
+
+@register("condor")
+def _condor(ctx: BuildContext) -> MissionParts:
+    from visnav.sim.condor_parts import build as build_condor
+
+    return build_condor(ctx)

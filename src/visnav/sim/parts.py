@@ -31,7 +31,9 @@ class MissionParts:
     ``observers`` (measurement type -> who takes it instead of the navigator: a mission's motion-capture
     view), ``uplink`` (a ``sensors/link.Link`` the navigator's ground-station outputs cross, from its
     ``pop_uplink()``), ``on_delivered(t, m)`` (what happens after the navigator took ``m``: an operator),
-    ``finish(t)`` (after the loop, before the metrics), ``streams`` (the log's own schema).
+    ``start(t)`` (before the first step, after the ``nav_init``: an operator's first click), ``finish(t)``
+    (after the loop, before the metrics), ``streams`` (the log's own schema); ``evaluate(progress)``: a run in
+    which nothing flies (the CONDOR ground test), in the same run scaffold.
     """
 
     world: object  # world/scene.World: ground (rendered by the cameras) and wind; DeckWorld; CondorWorld
@@ -68,6 +70,7 @@ class MissionParts:
     on_delivered: Callable | None = None
     start: Callable | None = None  # start(t): the mission's first words (before the first step)
     finish: Callable | None = None
+    evaluate: Callable | None = None  # evaluate(progress): a run where nothing flies (the CONDOR ground test)
     streams: dict | None = None
     extra_metrics: tuple = ()  # more metrics(log, scenario) -> dict merged into the run's (integrity)
 

@@ -24,18 +24,17 @@ def rmax_vehicle(parts, dt: float) -> RmaxModel:
 
 class WindEnvironment:
     """The world's wind at the vehicle, updated at 20 Hz (turbulence bandwidth is a few rad/s), for the
-    turbulence at the vehicle's height and airspeed: ``height(truth)``, ``airspeed(truth)``."""
+    turbulence at the vehicle's height and airspeed now: ``height()``, ``airspeed()``."""
 
-    def __init__(self, wind, truth, dt: float, height, airspeed, initial=None) -> None:
-        self.wind, self.truth, self.dt = wind, truth, dt  # wind(), truth(): the world's wind, the loop's truth
+    def __init__(self, wind, dt: float, height, airspeed, initial=None) -> None:
+        self.wind, self.dt = wind, dt  # wind(): the world's wind (a fault may wrap it after the build)
         self.height, self.airspeed = height, airspeed
         self.d = rate_divisor(20.0, dt)
         self.now = self.wind().steady.ned if initial is None else initial
 
     def __call__(self, k: int, t: float) -> Environment:
         if k % self.d == 0:
-            s = self.truth().latest
-            self.now = self.wind().velocity_ned(t, self.d * self.dt, self.height(s), self.airspeed(s))
+            self.now = self.wind().velocity_ned(t, self.d * self.dt, self.height(), self.airspeed())
         return Environment(self.now)
 
 
@@ -118,8 +117,8 @@ def fill_rmax_defaults(parts, sim) -> None:
             parts.initial_command = YacsCommand(t=0.0)
         if parts.environment is None:
             parts.environment = WindEnvironment(
-                lambda: sim.world.wind, lambda: sim.truth, dt, lambda s: max(s.height_agl, 0.5),
-                lambda s: float(np.linalg.norm(s.velocity - sim.world.wind.steady.ned)))
+                lambda: sim.world.wind, dt, lambda: max(sim.truth.latest.height_agl, 0.5),
+                lambda: float(np.linalg.norm(sim.truth.latest.velocity - sim.world.wind.steady.ned)))
         if parts.actuator_injection is not None:
             parts.actuator = Injection(parts.actuator_injection, sim.log.record)
         parts.extra_metrics = (*parts.extra_metrics, integrity_metrics)  # from the log (issue #18)

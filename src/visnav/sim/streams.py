@@ -133,7 +133,8 @@ CONDOR_STREAMS = {
                "delivered": ("bool", "", "the fix crossed the telemetry link (false: dropped)"),
                "radius": ("m", "horizontal", "the fix's vision range")},
     "nav_init": {"source": ("text", "", "where the initialisation came from (survey: the tent's position)"),
-                 "position": ("m", NED, "the tent's surveyed position given to the navigator")},
+                 "position": ("m", NED, "the tent's surveyed position given to the navigator"),
+                 "velocity": ("m/s", NED, "not given (NaN)"), "attitude": (EULER[0], EULER[1], "not given (NaN)")},
     "click": {"pixel": ("px", "image (u right, v down)", "the operator's click that starts the tracker on the tent")},
 }
 
