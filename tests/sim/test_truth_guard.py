@@ -44,10 +44,11 @@ class GuardedState(VehicleState):
 def _guard(monkeypatch):
     import visnav.sensors.base as sb
     import visnav.sim.loop as loop
+    import visnav.sim.parts as parts
     import visnav.sim.rmax_parts as rp
     import visnav.vehicles.rmax as vr
 
-    class GuardedHistory(sb.TruthHistory):
+    class GuardedHistory(parts.VehicleTruth):
         def __call__(self, t):
             ok, mod = _caller_ok(2)
             if not ok:
@@ -58,7 +59,7 @@ def _guard(monkeypatch):
     monkeypatch.setattr(sb, "VehicleState", GuardedState)  # what the truth history interpolates
     monkeypatch.setattr(vr, "VehicleState", GuardedState)  # the vehicle model's state
     monkeypatch.setattr(rp, "VehicleState", GuardedState)  # the start state
-    monkeypatch.setattr(loop, "TruthHistory", GuardedHistory)
+    monkeypatch.setattr(loop, "VehicleTruth", GuardedHistory)  # the loop's truth history of the R-MAX
 
 
 def test_the_guard_sees_a_read_from_elsewhere(monkeypatch):

@@ -71,8 +71,8 @@ def test_the_guard_catches_a_read_from_elsewhere(monkeypatch):
 @pytest.mark.parametrize("name, loop, keys", [
     ("deck-static", "visnav.sim.deck_parts", ["run.duration_s=8"]),  # manual start, hand-over, approach
     ("deck-moving", "visnav.sim.deck_parts", ["run.duration_s=6"]),
-    ("condor-orbit", "visnav.sim.condor_loop", ["run.duration_s=30", "mission.control.orbit.switch_time_s=20"]),  # GPS, then vision
-    ("mav-geolocation", "visnav.sim.geoloc_loop", ["run.duration_s=25"]),
+    ("condor-orbit", "visnav.sim.condor_parts", ["run.duration_s=30", "mission.control.orbit.switch_time_s=20"]),  # GPS, then vision
+    ("mav-geolocation", "visnav.sim.geoloc_parts", ["run.duration_s=25"]),
 ])
 def test_no_truth_outside_the_sensors_models_and_the_loop(monkeypatch, name, loop, keys):
     g = _guard(monkeypatch, loop)

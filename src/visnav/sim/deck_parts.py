@@ -24,12 +24,11 @@ from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import AttitudeThrustCommand, NavInit, RelativeStateSample, VehicleState
 from visnav.mission.deck import DeckMission
 from visnav.navigation.deck import DeckNavConfig, DeckNavigator
-from visnav.sensors.base import TruthHistory
 from visnav.sensors.deck_observer import RelativeStateSensor
 from visnav.sensors.imu import AccelGyro, RollPitchAhrs
 from visnav.sensors.led_camera import LedCamera
 from visnav.sim.clock import rate_divisor
-from visnav.sim.parts import MissionParts
+from visnav.sim.parts import MissionParts, VehicleTruth
 from visnav.sim.streams import DECK_STREAMS
 from visnav.vehicles.base import Environment
 from visnav.vehicles.multirotor import Multirotor, MultirotorParams
@@ -41,18 +40,14 @@ CONTROL_HZ = 50.0
 VICON_SIGMA = np.repeat([0.03, np.radians(3), 0.05, np.radians(2)], 3)
 
 
-class MultirotorTruth(TruthHistory):
+class MultirotorTruth(VehicleTruth):
     """The Y6's true state on the dynamics grid, as the ``VehicleState`` the sensors read."""
 
-    def __init__(self, vehicle: Multirotor, dt: float, horizon_s: float = 1.0) -> None:
-        super().__init__(dt, horizon_s)
-        self.vehicle = vehicle
-
-    def advance(self, t: float) -> None:
+    def state(self, t: float) -> VehicleState:
         s = self.vehicle.state
-        self.push(VehicleState(t=t, position=s.position.copy(), velocity=s.velocity.copy(), euler=s.euler.copy(),
-                               body_rates=np.asarray(s.body_rates, float).copy(),
-                               specific_force=np.asarray(s.specific_force, float).copy()))
+        return VehicleState(t=t, position=s.position.copy(), velocity=s.velocity.copy(), euler=s.euler.copy(),
+                            body_rates=np.asarray(s.body_rates, float).copy(),
+                            specific_force=np.asarray(s.specific_force, float).copy())
 
 
 class DeckContact:
@@ -147,7 +142,7 @@ def build(ctx) -> MissionParts:
     rel = dist * np.array([np.cos(elev) * np.cos(az), np.cos(elev) * np.sin(az), -np.sin(elev)])
     yaw0 = np.arctan2(-rel[1], -rel[0]) + np.radians(rng[1].uniform(-5, 5))
     vehicle = Multirotor(params, motion.state(0.0).position + rel, yaw=yaw0)
-    truth = MultirotorTruth(vehicle, dt)
+    truth = MultirotorTruth(vehicle, dt, horizon_s=1.0)
     truth.advance(0.0)
 
     # sensors, in the order they are sampled at one instant (attitude before the IMU sample it rotates)

@@ -19,14 +19,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visnav.scenarios.schema import Scenario
-from visnav.sensors.base import TruthHistory
 from visnav.sensors.camera import PendingFrame
 from visnav.sim.clock import rate_divisor as _divisor
 from visnav.sensors.faults import inject_faults
 from visnav.sim.log import FlightLog
 from visnav.sim.missions import BuildContext
 from visnav.sim.missions import build as build_mission
-from visnav.sim.parts import Step
+from visnav.sim.parts import Step, VehicleTruth
 from visnav.sim.rmax_parts import fill_rmax_defaults
 from visnav.sim.streams import RMAX_STREAMS
 
@@ -65,6 +64,7 @@ class Simulation:
         self.camera_model, self.mount = parts.camera_model, parts.mount
         self.mission = parts.mission
         self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
+        self.flight_nav = parts.flight_navigator or parts.navigator  # what the mission and controller fly on
         self.notes = list(parts.info.get("notes", []))  # how the scenario was set up (the CLI prints them)
         self.info = parts.info
         if parts.evaluate is None:
@@ -74,8 +74,7 @@ class Simulation:
         if parts.evaluate is not None:  # nothing flies (the CONDOR ground test)
             self.history = None
         elif parts.truth is None:
-            self.history = TruthHistory(self.dt, horizon_s=parts.truth_horizon_s)
-            self.history.advance = lambda t: self.history.push(self.vehicle.state)
+            self.history = VehicleTruth(self.vehicle, self.dt, horizon_s=parts.truth_horizon_s)
             self.history.advance(0.0)
         else:
             self.history = parts.truth  # (advanced to t = 0 by its builder)
@@ -120,10 +119,11 @@ class Simulation:
                         self._emit(sample(t), s.latency_s)
             else:
                 fn = lambda t, s=s, sample=sample: self._emit(sample(t), s.latency_s)  # noqa: E731
+            phase = getattr(s, "phase_s", 0.0)  # the first sample's instant
             if self.parts.sensor_grid:
-                grid.append([_divisor(s.rate_hz, self.dt), fn])
+                grid.append([_divisor(s.rate_hz, self.dt), int(round(phase / self.dt)), fn])
             else:
-                own.append([1.0 / s.rate_hz, 0.0, fn])
+                own.append([1.0 / s.rate_hz, phase, fn])
         return own, grid
 
     def _initialize_navigator(self) -> None:
@@ -140,7 +140,7 @@ class Simulation:
     def _deliver(self, t: float) -> None:
         """Everything due by ``t``: to an observer of its type (a mission's motion-capture view) or to the
         navigator; what the navigator's ground-station half sends crosses the uplink and comes back later."""
-        q, nav, observers, after, link = self._queue, self.nav, self.parts.observers, self.parts.on_delivered, self.parts.uplink
+        q, nav, observers, after, link = self._queue, self.flight_nav, self.parts.observers, self.parts.on_delivered, self.parts.uplink
         while q and q[0][0] <= t + 1e-9:
             m = heapq.heappop(q)[2]
             if isinstance(m, PendingFrame):
@@ -153,7 +153,7 @@ class Simulation:
             if after is not None:
                 after(t, m)
             if link is not None:
-                for fix in nav.pop_uplink():
+                for fix in self.nav.pop_uplink():
                     t_del = link.transmit(t, fix)
                     self.log.record("uplink", fix.t, sent_at=t, delivered=t_del is not None, radius=fix.range)
                     if t_del is not None:
@@ -174,8 +174,8 @@ class Simulation:
         if any(hasattr(s, "sample_async") and s.latency_s >= dt for s in self.sensors.values()):
             self._render_pool = ThreadPoolExecutor(1)
         own, grid = self._sensor_schedule()
-        truth, nav, mission, controller, vehicle, logger = (self.history, self.nav, self.mission, self.controller,
-                                                            self.vehicle, self.logger)
+        truth, nav, mission, controller, vehicle, logger = (self.history, self.flight_nav, self.mission,
+                                                            self.controller, self.vehicle, self.logger)
         environment, actuator, contact, after_step, world_step = (p.environment, p.actuator, p.contact, p.after_step,
                                                                   p.world_step)
         self._initialize_navigator()
@@ -184,6 +184,7 @@ class Simulation:
         cmd = p.initial_command
         ref = mode = health = nav_est = None
         self.step_state = st = Step(0.0, None, None, None, None, cmd, "")
+        completed = False
         try:
             for k in range(n):
                 t = self._t = k * dt
@@ -194,12 +195,14 @@ class Simulation:
                     while item[1] <= t + 1e-9:
                         item[2](item[1])
                         item[1] += item[0]
-                for d, fn in grid:
-                    if k % d == 0:
+                for d, off, fn in grid:
+                    if k % d == off:
                         fn(t)
                 # deliveries -> navigator
                 if self._queue and self._queue[0][0] <= t + 1e-9:
                     self._deliver(t)
+                    if mission.done:  # (a ground station's mission that finished on a delivery)
+                        break
                 # mission manager and controller (their own rates)
                 mission_due, ctrl_due = k % d_mis == 0, k % d_ctrl == 0
                 if mission_due or ctrl_due:
@@ -226,12 +229,13 @@ class Simulation:
                 vehicle.step(cmd if actuator is None else actuator(t, cmd), dt, env)
                 if after_step is not None and after_step(t + dt, t):
                     break
+            completed = True
         finally:
             if self._render_pool is not None:
                 self._render_pool.shutdown(wait=True, cancel_futures=True)
                 self._render_pool = None
             if p.finish is not None:
-                p.finish(self._t)
+                p.finish(self._t, completed)
 
 
 def run_scaffold(sim, fly, progress=None) -> RunResult:

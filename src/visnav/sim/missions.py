@@ -27,7 +27,6 @@ REGISTRY: dict[str, Builder] = {}
 #: to the command line and the campaign runner: ``.sc``, ``.mission.mode`` and
 #: ``.run(progress=None) -> RunResult``.
 SIMULATIONS: dict[str, str] = {
-    "mav-geolocation": "visnav.sim.geoloc_loop:GeolocationSimulation",
 }
 
 
@@ -215,3 +214,10 @@ def _condor(ctx: BuildContext) -> MissionParts:
     from visnav.sim.condor_parts import build as build_condor
 
     return build_condor(ctx)
+
+
+@register("mav-geolocation")
+def _geolocation(ctx: BuildContext) -> MissionParts:
+    from visnav.sim.geoloc_parts import build as build_geolocation
+
+    return build_geolocation(ctx)

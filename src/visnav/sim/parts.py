@@ -8,6 +8,8 @@ from typing import Callable
 
 import numpy as np
 
+from visnav.sensors.base import TruthHistory
+
 
 @dataclass
 class MissionParts:
@@ -16,7 +18,7 @@ class MissionParts:
     ``sensors``: name -> sensor (``rate_hz``, ``latency_s``, ``sample(t, truth_at, world)`` -> a
     measurement, a tuple of them or None), sampled in this order, each at its own instants
     (``sensor_grid=False``: ``j / rate_hz``, interpolated between dynamics steps) or on the dynamics grid
-    (``sensor_grid=True``: every ``rate_divisor(rate_hz, dt)`` steps); ``gates``: name -> ``wanted(t)``
+    (``sensor_grid=True``: every ``rate_divisor(rate_hz, dt)`` steps), from its ``phase_s`` on; ``gates``: name -> ``wanted(t)``
     (a camera renders only while its mission wants frames). ``nav_init``: an explicit start of the
     navigator (a surveyed pose), sent before the first step and logged in the ``nav_init`` stream.
     ``actuator_injection(t)``: YACS increments added to the controller's output (a sweep), or None.
@@ -28,8 +30,9 @@ class MissionParts:
     ``logger(step)`` (the run's streams at ``log_hz``; None: the R-MAX streams), ``contact(t)`` (after the
     log, before the vehicle steps: True ends the run), ``after_step(t)`` (after the vehicle stepped to
     ``t``: True ends the run), ``world_step(dt)`` (what moves besides the vehicle: a gimbal),
-    ``observers`` (measurement type -> who takes it instead of the navigator: a mission's motion-capture
-    view), ``uplink`` (a ``sensors/link.Link`` the navigator's ground-station outputs cross, from its
+    ``flight_navigator`` (what the mission and the controller fly on and the sensors' messages go to when it
+    is not the navigator: the autopilot's own), ``observers`` (measurement type -> who takes it instead:
+    a mission's motion-capture view, the payload navigator's frames), ``uplink`` (a ``sensors/link.Link`` the navigator's ground-station outputs cross, from its
     ``pop_uplink()``), ``on_delivered(t, m)`` (what happens after the navigator took ``m``: an operator),
     ``start(t)`` (before the first step, after the ``nav_init``: an operator's first click), ``finish(t)``
     (after the loop, before the metrics), ``streams`` (the log's own schema); ``evaluate(progress)``: a run in
@@ -52,6 +55,7 @@ class MissionParts:
     info: dict = field(default_factory=dict)  # what reports and tests read (reference map, path, pad layout, notes)
     # --- the parts of the other vehicles (defaults: the R-MAX) ---
     vehicle: object = None
+    flight_navigator: object = None  # what the mission and controller fly on, if not the navigator (an autopilot's)
     truth: object = None
     truth_horizon_s: float = 2.5
     sensor_grid: bool = False
@@ -87,6 +91,21 @@ class Step:
     reference: object
     command: object
     mode: str
+
+
+class VehicleTruth(TruthHistory):
+    """``truth_at`` of a vehicle's recent states on the dynamics grid (``advance(t)`` pushes its state now)."""
+
+    def __init__(self, vehicle, dt: float, horizon_s: float) -> None:
+        super().__init__(dt, horizon_s)
+        self.vehicle = vehicle
+
+    def state(self, t: float):
+        """The vehicle's true state at step ``t`` (as a ``VehicleState``)."""
+        return self.vehicle.state
+
+    def advance(self, t: float) -> None:
+        self.push(self.state(t))
 
 
 class CurrentTruth:
