@@ -1,11 +1,17 @@
-"""The closed-loop simulation: sensors -> navigator -> mission -> controller -> vehicle.
+"""The one closed-loop simulation of every system: sensors -> latency queue -> navigator -> mission ->
+controller -> vehicle.
 
-One fixed dynamics step (``run.dt_s``, 100 Hz); every other block runs at its own rate as an
-integer divisor of it: IMU 100 Hz, mission + position loop 10 Hz, GPS and laser 10 Hz, sonar
-20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered). Each
-measurement is stamped with the instant it describes and delivered after its sensor's latency.
-Truth reaches only the sensors (through ``TruthHistory``), the log and an explicit, logged ``NavInit``.
-The parts come from the mission's builder (``sim/missions.py``); the loop builds nothing else.
+The loop owns the clock: one fixed dynamics step (``run.dt_s``, 100 Hz); every other block at its own rate
+as an integer divisor of it (``sim/clock.rate_divisor``). Each measurement is stamped with the instant it
+describes and delivered after its sensor's latency (a heap). Everything else is a part from the mission's
+builder (``sim/missions.py`` -> ``sim/parts.MissionParts``): world, vehicle, truth, sensors, navigator
+(and the flight navigator it flies on, where that is another), mission, controller, environment (wind,
+ground effect), logger, contact, uplink (a latency + drop channel), metrics; the R-MAX's where a builder
+leaves them out (``sim/rmax_parts.py``). The R-MAX: IMU 100 Hz, mission + position loop 10 Hz, GPS and
+laser 10 Hz, sonar 20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered).
+Truth reaches only the sensors (through ``truth_at``), the log, the system's contact / logging parts and an
+explicit, logged ``NavInit``. ``run_scaffold``: the one run scaffold (wall time, errors, Ctrl-C, metrics
+from the log).
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ from visnav.sim.missions import build as build_mission
 from visnav.sim.parts import Step, VehicleTruth
 from visnav.sim.rmax_parts import fill_rmax_defaults
 from visnav.sim.streams import RMAX_STREAMS
+from visnav.vehicles.base import Environment
 
 
 @dataclass
@@ -48,14 +55,16 @@ class RunResult:
 
 
 class Simulation:
-    def __init__(self, scenario: Scenario, navigator_wrapper=None):
+    def __init__(self, scenario: Scenario, navigator_wrapper=None, builder=None):
         """``navigator_wrapper(nav) -> nav``, when given, wraps the navigator the loop and the mission
-        talk to (``visnav record`` puts a recording proxy there)."""
+        talk to (``visnav record`` puts a recording proxy there). ``builder(ctx) -> MissionParts``, when
+        given, builds the parts instead of the one registered for the scenario's ``mission.type`` (a system
+        being written, a test)."""
         self.sc = sc = scenario
         self.dt = sc.run.dt_s
         self.log = FlightLog()
         ctx = BuildContext(sc, self.log.record, navigator_wrapper)
-        self.parts = parts = build_mission(ctx)
+        self.parts = parts = build_mission(ctx) if builder is None else builder(ctx)
         self.log.set_schema(RMAX_STREAMS if parts.streams is None else parts.streams)
         self.world = parts.world
         # [[faults]] (issue #18): the faulted sensors wrapped, gusts added to the world's wind
@@ -178,6 +187,7 @@ class Simulation:
                                                             self.controller, self.vehicle, self.logger)
         environment, actuator, contact, after_step, world_step = (p.environment, p.actuator, p.contact, p.after_step,
                                                                   p.world_step)
+        still = Environment()  # no environment part: still air, no ground effect
         self._initialize_navigator()
         if p.start is not None:
             p.start(0.0)
@@ -223,7 +233,7 @@ class Simulation:
                 if contact is not None and contact(t):
                     break
                 # vehicle dynamics in its environment (wind, ground effect)
-                env = environment(k, t)
+                env = still if environment is None else environment(k, t)
                 if world_step is not None:
                     world_step(dt)
                 vehicle.step(cmd if actuator is None else actuator(t, cmd), dt, env)
