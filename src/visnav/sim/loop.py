@@ -73,7 +73,6 @@ class Simulation:
         self.camera_model, self.mount = parts.camera_model, parts.mount
         self.mission = parts.mission
         self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
-        self.flight_nav = parts.flight_navigator or parts.navigator  # what the mission and controller fly on
         self.notes = list(parts.info.get("notes", []))  # how the scenario was set up (the CLI prints them)
         self.info = parts.info
         if parts.evaluate is None:
@@ -92,6 +91,13 @@ class Simulation:
         self._queue: list = []
         self._render_pool: ThreadPoolExecutor | None = None
         self._seq = itertools.count()
+
+    @property
+    def flight_nav(self):
+        """What the mission and the controller fly on: the navigator (``sim.nav``, which ``sim/sil.py`` may swap
+        for its proxy before the run), or the system's flight navigator where it has one (an autopilot's)."""
+        fn = self.parts.flight_navigator
+        return self.nav if fn is None else fn
 
     @property
     def truth(self):
