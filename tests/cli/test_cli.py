@@ -108,9 +108,9 @@ def test_unwritable_out_is_one_line_on_stderr_and_exit_2(tmp_path, cmd):
 
 # ----------------------------------------------------------------- point 5: Ctrl-C
 def test_ctrl_c_during_a_run_writes_what_it_has_and_exits_130(tmp_path, monkeypatch):
-    from visnav.sim.loop import Simulation
+    from visnav.sim.rmax_parts import RmaxLogger
 
-    orig, calls = Simulation._log_step, []
+    orig, calls = RmaxLogger.__call__, []
 
     def log_step(self, *a, **k):
         orig(self, *a, **k)
@@ -118,7 +118,7 @@ def test_ctrl_c_during_a_run_writes_what_it_has_and_exits_130(tmp_path, monkeypa
         if len(calls) == 15:  # 1.4 s into the run
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(Simulation, "_log_step", log_step)
+    monkeypatch.setattr(RmaxLogger, "__call__", log_step)
     out = tmp_path / "r"
     r = _invoke("run", "palace-landing", "--out", out, "--no-report")
     assert r.exit_code == 130, r.output

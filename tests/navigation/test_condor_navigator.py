@@ -10,8 +10,8 @@ from visnav.measurements import NavCommand, NavInit, TargetRangeSample
 from visnav.navigation.base import Navigator
 from visnav.navigation.condor import CondorNavigator, RadiusFilter
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.condor_loop import build_navigator
-from visnav.sim.missions import make_simulation
+from visnav.sim.condor_parts import build_navigator
+from visnav.sim.loop import Simulation
 
 
 class _Recorder:
@@ -54,10 +54,10 @@ def _same(a, b):
 
 def test_plain_list_gives_the_closed_loop_estimate():
     sc = load_scenario("condor-orbit", ["run.duration_s=30", "mission.control.orbit.switch_time_s=10"])
-    sim = make_simulation(sc)
-    rec = _Recorder(sim.nav)
-    sim.nav = rec
-    sim.mission.nav = rec
+    recs: list[_Recorder] = []
+    sim = Simulation(sc, navigator_wrapper=lambda nav: recs.append(_Recorder(nav)) or recs[0])
+    rec = recs[0]
+    assert sim.nav is rec and sim.mission.nav is rec
     r = sim.run()
     assert r.error is None, r.error
     ev = rec.events
@@ -66,7 +66,7 @@ def test_plain_list_gives_the_closed_loop_estimate():
     assert any(e[0] == "command" and e[1].name == "set_source" for e in ev)
     assert any(e[0] == "update" and isinstance(e[1], TargetRangeSample) for e in ev)
     # a fresh navigator, no simulation: the same messages in the same order give the same estimates
-    nav = build_navigator(sc.mission, sim.camera)
+    nav = build_navigator(sc.mission, sim.camera_model)
     assert isinstance(nav, Navigator)
     n = 0
     for e in ev:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.scenarios.schema import load_scenario
+from visnav.sim.loop import Simulation
 from visnav.sim.missions import make_simulation
 
 
@@ -39,8 +40,9 @@ def _state(nav, t):
 
 def test_geolocation_navigator_from_a_list_equals_the_closed_loop():
     sc = load_scenario("mav-geolocation", ["run.duration_s=30"])
-    sim = make_simulation(sc)
-    cap = sim.nav = _Capture(sim.nav)
+    caps: list[_Capture] = []
+    sim = Simulation(sc, navigator_wrapper=lambda nav: caps.append(_Capture(nav)) or caps[0])
+    cap = caps[0]
     res = sim.run()
     assert res.error is None, res.error
     kinds = {type(m).__name__ for m in cap.messages}
@@ -64,8 +66,9 @@ def test_dropped_messages_change_the_estimate():
     """The comparison can fail: the same list without every other frame does not reproduce the estimate
     (a single dropped frame does not: the tracker carries over it)."""
     sc = load_scenario("mav-geolocation", ["run.duration_s=30"])
-    sim = make_simulation(sc)
-    cap = sim.nav = _Capture(sim.nav)
+    caps: list[_Capture] = []
+    sim = Simulation(sc, navigator_wrapper=lambda nav: caps.append(_Capture(nav)) or caps[0])
+    cap = caps[0]
     sim.run()
     t_end = float(cap.messages[-1].t)
     fresh = make_simulation(sc).nav

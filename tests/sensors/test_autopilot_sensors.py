@@ -67,7 +67,7 @@ def test_condor_gps_noise_is_the_configured_one(gps_noise_m):
     """The configured ``mission.gps_noise_m`` is the horizontal 1-sigma of the GPS CONDOR flies its loiter on
     (the old loop applied a tenth of it)."""
     sim = make_simulation(load_scenario("condor-orbit", [f"mission.gps_noise_m={gps_noise_m}"]))
-    gps = [s for s in sim.sensors if isinstance(s, Gps)]
+    gps = [s for s in sim.sensors.values() if isinstance(s, Gps)]
     assert len(gps) == 1
     e = _draw(gps[0], "position")[:, :2] - S.position[:2]
     np.testing.assert_allclose(e.std(axis=0), gps_noise_m, rtol=0.05)
@@ -77,5 +77,5 @@ def test_condor_gps_noise_is_the_configured_one(gps_noise_m):
 
 def test_condor_sensors_follow_the_contract():
     sim = make_simulation(load_scenario("condor-orbit"))
-    for s in sim.sensors:
+    for s in sim.sensors.values():
         assert s.rate_hz > 0 and s.latency_s >= 0, type(s).__name__

@@ -54,7 +54,7 @@ def test_short_vision_orbit_coordinated():
     # flown on airspeed: ~2 m; the frame's age and range error: 2.4 m before) adds to ~4 m
     from visnav.sensors.baro import Compass
 
-    b = next(s.bias for s in sim.sensors if isinstance(s, Compass))
+    b = next(s.bias for s in sim.sensors.values() if isinstance(s, Compass))
     assert m["position_est_error_rms_m"] < math.hypot(110.0 * b, 5.5)
     # nothing non-finite ever reached the controller
     ctl = r.log.get("control")

@@ -49,18 +49,18 @@ class _Recorder:
                                         ("deck-moving", ["run.duration_s=9"])])
 def test_navigator_from_a_list_of_measurements_gives_the_closed_loop_estimate(name, sets):
     """Static: the eq. 5.12 start and the hand-over command; moving: the Vicon NavInit, hover and approach."""
-    from visnav.sim.deck_loop import DeckSimulation
+    from visnav.sim.loop import Simulation
 
     sc = load_scenario(name, sets, seed=2)
     rec: list[_Recorder] = []
-    sim = DeckSimulation(sc, navigator_wrapper=lambda nav: rec.append(_Recorder(nav)) or rec[0])
+    sim = Simulation(sc, navigator_wrapper=lambda nav: rec.append(_Recorder(nav)) or rec[0])
     res = sim.run()
     assert res.error is None, res.error
     calls = rec[0].calls
     assert {k for k, _ in calls} == {"initialize", "update", "command", "estimate", "health"}
     assert any(k == "command" and c.name == "track" for k, c in calls)
     # a fresh navigator fed the same messages (no simulation object anywhere)
-    nav = DeckNavigator(DeckNavConfig.from_mission(sc.mission, sim.frame_steps * sc.run.dt_s))
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc.mission, sim.info["frame_steps"] * sc.run.dt_s))
     n_est = 0
     for kind, item in calls:
         if kind in ("update", "initialize", "command"):

@@ -136,7 +136,7 @@ def test_imu_pilot_hovers_level_without_truth_before_hand_over():
     # start.pilot = "imu" (default): before the hand-over the commands are level with no heading rate,
     # thrust from the vertical-acceleration PI only; the vehicle stays near its start (no wind)
     sim = make_simulation(load_scenario("deck-static", ["run.duration_s=4.0"], seed=1))
-    assert sim.cfg.start.pilot == "imu"
+    assert sim.sc.mission.start.pilot == "imu"
     sim.run()
     cmd, veh = sim.log.get("command"), sim.log.get("vehicle")
     assert set(sim.log.get("mode")["mode"]) == {"manual"}
@@ -160,10 +160,10 @@ def test_thesis_camera_loses_every_light_over_the_deck_origin():
     view down to contact, as the thesis' deck "within view during the whole duration of the flights".
     """
     sim = make_simulation(load_scenario("deck-static", seed=1))
-    cam, lights, go = sim.camera, sim.world.lights, sim.params.gear_offset
-    assert np.max(lights[:, 0]) < sim.cfg.camera.position_m[0]
-    np.testing.assert_array_equal(sim.landing_point, 0.0)
-    land = make_simulation(load_scenario("deck-moving", seed=1)).landing_point
+    cam, lights, go = sim.camera, sim.world.lights, sim.info["params"].gear_offset
+    assert np.max(lights[:, 0]) < sim.sc.mission.camera.position_m[0]
+    np.testing.assert_array_equal(sim.info["landing_point"], 0.0)
+    land = make_simulation(load_scenario("deck-moving", seed=1)).info["landing_point"]
     np.testing.assert_allclose(land, [-0.2, 0.0, 0.0])
     for gear_h in (0.05, 0.1, 0.2, 0.3, 0.5, 0.8):  # level, deck frame = NED at the deck origin
         _, over = cam.project(lights, np.array([0.0, 0.0, -(gear_h + go)]), np.eye(3))

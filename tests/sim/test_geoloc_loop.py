@@ -40,7 +40,7 @@ def test_truth_only_in_sensors_and_log(short_run):
     samples = r.log.get("sample")
     assert len(samples["t"]) == len(sim.nav.samples)
     # the navigator's samples never hold the truth: each registration sample differs from it
-    assert np.all(np.linalg.norm(samples["reg"][samples["ok"].astype(bool)] - sim.target, axis=1) > 1e-6)
+    assert np.all(np.linalg.norm(samples["reg"][samples["ok"].astype(bool)] - sim.info["target"], axis=1) > 1e-6)
 
 
 def test_the_vehicle_flies_the_figure_eight(short_run):

@@ -7,24 +7,25 @@ from visnav.sim import missions
 from visnav.sim.loop import Simulation
 
 
-def test_rmax_missions_fly_the_rmax_loop():
-    for name in ("palace-landing", "pfcm-segment", "palace-hover-drift"):
-        sc = load_scenario(name)
-        assert sc.mission.type not in missions.SIMULATIONS
-        assert missions.simulation_class(sc.mission.type) is Simulation
+def test_every_scenario_flies_the_one_loop_from_its_builder():
+    """Every built-in scenario's mission type has a builder, and the one ``Simulation`` flies it."""
+    from visnav.scenarios.schema import builtin_names
+
+    names = builtin_names()
+    assert {"deck-static", "condor-orbit", "mav-geolocation", "palace-landing"} <= set(names)
+    for name in names:
+        assert load_scenario(name).mission.type in missions.REGISTRY, name
+    assert missions.simulation_class() is Simulation
 
 
-def test_a_registered_mission_gets_its_own_simulation(monkeypatch):
-    monkeypatch.setitem(missions.SIMULATIONS, "palace", "visnav.sim.log:FlightLog")
-    from visnav.sim.log import FlightLog
+def test_a_vehicle_of_its_own_is_a_part_not_a_loop():
+    sim = missions.make_simulation(load_scenario("deck-static", ["run.duration_s=0.5"]))
+    assert type(sim) is Simulation
+    from visnav.vehicles.multirotor import Multirotor
 
-    assert missions.simulation_class("palace") is FlightLog
-
-
-def test_every_registered_simulation_imports():
-    for kind in missions.SIMULATIONS:
-        cls = missions.simulation_class(kind)
-        assert callable(getattr(cls, "run", None)), kind
+    assert isinstance(sim.vehicle, Multirotor) and sim.parts.contact is not None
+    r = sim.run()
+    assert r.error is None and len(r.log.get("vehicle")["t"]) == 51  # every step, the end included
 
 
 def test_unknown_mission_type_names_the_known_ones():

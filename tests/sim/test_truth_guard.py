@@ -16,10 +16,10 @@ import pytest
 from visnav.measurements import VehicleState
 from visnav.scenarios.schema import load_scenario
 
-#: modules allowed to read truth: the sensors, the loop (logging, contact, NavInit), the vehicle model
+#: modules allowed to read truth: the sensors, the loop and the R-MAX's parts (logging, touchdown, wind), the vehicle model
 #: that produces it, the state type's own properties (height_agl) and the dataclass machinery
 ALLOWED = ("visnav.sensors.", "visnav.vehicles.")
-ALLOWED_EXACT = {"visnav.sim.loop", "visnav.measurements", "dataclasses"}
+ALLOWED_EXACT = {"visnav.sim.loop", "visnav.sim.rmax_parts", "visnav.measurements", "dataclasses"}
 RMAX_SCENARIOS = ["palace-landing", "palace-hover-drift", "palace-sweep", "pfcm-segment", "pfcm-spiral",
                   "witas-homing", "pad-landing"]
 
@@ -44,9 +44,11 @@ class GuardedState(VehicleState):
 def _guard(monkeypatch):
     import visnav.sensors.base as sb
     import visnav.sim.loop as loop
+    import visnav.sim.parts as parts
+    import visnav.sim.rmax_parts as rp
     import visnav.vehicles.rmax as vr
 
-    class GuardedHistory(sb.TruthHistory):
+    class GuardedHistory(parts.VehicleTruth):
         def __call__(self, t):
             ok, mod = _caller_ok(2)
             if not ok:
@@ -56,8 +58,8 @@ def _guard(monkeypatch):
 
     monkeypatch.setattr(sb, "VehicleState", GuardedState)  # what the truth history interpolates
     monkeypatch.setattr(vr, "VehicleState", GuardedState)  # the vehicle model's state
-    monkeypatch.setattr(loop, "VehicleState", GuardedState)  # the start state
-    monkeypatch.setattr(loop, "TruthHistory", GuardedHistory)
+    monkeypatch.setattr(rp, "VehicleState", GuardedState)  # the start state
+    monkeypatch.setattr(loop, "VehicleTruth", GuardedHistory)  # the loop's truth history of the R-MAX
 
 
 def test_the_guard_sees_a_read_from_elsewhere(monkeypatch):

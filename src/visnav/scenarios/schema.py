@@ -282,7 +282,7 @@ class PfcmMissionConfig(_M):
 
 # Every mission's config, told apart by its ``type`` (add new ones to this tuple). A mission that
 # flies another vehicle keeps its own config module (scenarios/config_<mission>.py, built on
-# scenarios/base.py) and its own simulation class (registered in sim/missions.py SIMULATIONS).
+# scenarios/base.py) and its builder of the loop's parts (registered in sim/missions.py, @register).
 MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig,
                                                 WitasMissionConfig, CondorMissionConfig, DeckMissionConfig,
                                                 GeolocationMissionConfig, PadMissionConfig)

@@ -39,7 +39,7 @@ def ground_test_rows(tables: str) -> list[tuple[str, float, tuple]]:
     return out
 
 
-def run_ground_test(cfg, rng: np.random.Generator, log) -> dict:
+def run_ground_test(cfg, rng: np.random.Generator, record) -> dict:
     """Fly nothing: evaluate every row; log stream ``ground_test``; returns summary numbers."""
     c = cfg.camera
     cam = condor_camera(c.width_px, c.height_px, c.hfov_deg, c.k1, c.k2, c.crop_dx_px, c.crop_dy_px)
@@ -74,9 +74,9 @@ def run_ground_test(cfg, rng: np.random.Generator, log) -> dict:
             if k == "configured":
                 east = est.ground_range * math.sin(est.bearing) if est.valid else math.nan
                 north = est.ground_range * math.cos(est.bearing) if est.valid else math.nan
-                log.record("estimate", float(i), position=np.array([north, east, 0.0]), euler=np.zeros(3))
-        log.record("truth", float(i), position=target, euler=np.zeros(3))
-        log.record("ground_test", float(i), **row)
+                record("estimate", float(i), position=np.array([north, east, 0.0]), euler=np.zeros(3))
+        record("truth", float(i), position=target, euler=np.zeros(3))
+        record("ground_test", float(i), **row)
     out = {}
     for k, e in errs.items():
         a = np.abs(np.asarray(e, float))

@@ -28,6 +28,10 @@ class FlightLog:
         self.schema: dict[str, dict[str, Field]] = {
             s: {k: Field(*v) for k, v in f.items()} for s, f in (schema or {}).items()}
 
+    def set_schema(self, schema: dict[str, dict[str, tuple]]) -> None:
+        """This log's own streams (a simulation knows them once its builder said which system flies)."""
+        self.schema = {s: {k: Field(*v) for k, v in f.items()} for s, f in schema.items()}
+
     def field(self, stream: str, name: str) -> Field:
         """Unit, frame and description of one field (``UNDOCUMENTED``: units "" when nobody documented it)."""
         own = self.schema.get(stream, {}).get(name) or STREAMS.get(stream, {}).get(name)

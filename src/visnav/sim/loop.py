@@ -1,11 +1,17 @@
-"""The closed-loop simulation: sensors -> navigator -> mission -> controller -> vehicle.
+"""The one closed-loop simulation of every system: sensors -> latency queue -> navigator -> mission ->
+controller -> vehicle.
 
-One fixed dynamics step (``run.dt_s``, 100 Hz); every other block runs at its own rate as an
-integer divisor of it: IMU 100 Hz, mission + position loop 10 Hz, GPS and laser 10 Hz, sonar
-20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered). Each
-measurement is stamped with the instant it describes and delivered after its sensor's latency.
-Truth reaches only the sensors (through ``TruthHistory``), the log and an explicit, logged ``NavInit``.
-The parts come from the mission's builder (``sim/missions.py``); the loop builds nothing else.
+The loop owns the clock: one fixed dynamics step (``run.dt_s``, 100 Hz); every other block at its own rate
+as an integer divisor of it (``sim/clock.rate_divisor``). Each measurement is stamped with the instant it
+describes and delivered after its sensor's latency (a heap). Everything else is a part from the mission's
+builder (``sim/missions.py`` -> ``sim/parts.MissionParts``): world, vehicle, truth, sensors, navigator
+(and the flight navigator it flies on, where that is another), mission, controller, environment (wind,
+ground effect), logger, contact, uplink (a latency + drop channel), metrics; the R-MAX's where a builder
+leaves them out (``sim/rmax_parts.py``). The R-MAX: IMU 100 Hz, mission + position loop 10 Hz, GPS and
+laser 10 Hz, sonar 20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered).
+Truth reaches only the sensors (through ``truth_at``), the log, the system's contact / logging parts and an
+explicit, logged ``NavInit``. ``run_scaffold``: the one run scaffold (wall time, errors, Ctrl-C, metrics
+from the log).
 """
 
 from __future__ import annotations
@@ -18,20 +24,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from visnav.measurements import VehicleState, YacsCommand
 from visnav.scenarios.schema import Scenario
-from visnav.sensors.base import TruthHistory
 from visnav.sensors.camera import PendingFrame
 from visnav.sim.clock import rate_divisor as _divisor
-from visnav.analysis.integrity_metrics import integrity_metrics
-from visnav.navigation.integrity import STATE_CODES
 from visnav.sensors.faults import inject_faults
 from visnav.sim.log import FlightLog
 from visnav.sim.missions import BuildContext
 from visnav.sim.missions import build as build_mission
+from visnav.sim.parts import Step, VehicleTruth
+from visnav.sim.rmax_parts import fill_rmax_defaults
 from visnav.sim.streams import RMAX_STREAMS
 from visnav.vehicles.base import Environment
-from visnav.vehicles.rmax import RmaxModel
 
 
 @dataclass
@@ -52,31 +55,54 @@ class RunResult:
 
 
 class Simulation:
-    def __init__(self, scenario: Scenario, navigator_wrapper=None):
+    def __init__(self, scenario: Scenario, navigator_wrapper=None, builder=None):
         """``navigator_wrapper(nav) -> nav``, when given, wraps the navigator the loop and the mission
-        talk to (``visnav record`` puts a recording proxy there)."""
+        talk to (``visnav record`` puts a recording proxy there). ``builder(ctx) -> MissionParts``, when
+        given, builds the parts instead of the one registered for the scenario's ``mission.type`` (a system
+        being written, a test)."""
         self.sc = sc = scenario
         self.dt = sc.run.dt_s
-        self.log = FlightLog(schema=RMAX_STREAMS)
+        self.log = FlightLog()
         ctx = BuildContext(sc, self.log.record, navigator_wrapper)
-        self.parts = parts = build_mission(ctx)
+        self.parts = parts = build_mission(ctx) if builder is None else builder(ctx)
+        self.log.set_schema(RMAX_STREAMS if parts.streams is None else parts.streams)
         self.world = parts.world
         # [[faults]] (issue #18): the faulted sensors wrapped, gusts added to the world's wind
         self.sensors = inject_faults(parts.sensors, self.world, sc.faults, ctx.rng[7])
         self.camera = self.sensors.get("camera")
         self.camera_model, self.mount = parts.camera_model, parts.mount
-        self.mission, self.controller, self._metrics = parts.mission, parts.controller, parts.metrics
+        self.mission = parts.mission
         self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
         self.notes = list(parts.info.get("notes", []))  # how the scenario was set up (the CLI prints them)
-        init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
-                            euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
-                            specific_force=np.array([0.0, 0.0, -9.81]))
-        self.vehicle = RmaxModel(dt=self.dt, initial=init)
-        self.history = TruthHistory(self.dt, horizon_s=2.5)
+        self.info = parts.info
+        if parts.evaluate is None:
+            fill_rmax_defaults(parts, self)  # the R-MAX's parts where the builder left them out
+        self.vehicle, self.controller, self._metrics = parts.vehicle, parts.controller, parts.metrics
+        self.logger = parts.logger
+        if parts.evaluate is not None:  # nothing flies (the CONDOR ground test)
+            self.history = None
+        elif parts.truth is None:
+            self.history = VehicleTruth(self.vehicle, self.dt, horizon_s=parts.truth_horizon_s)
+            self.history.advance(0.0)
+        else:
+            self.history = parts.truth  # (advanced to t = 0 by its builder)
+        self.step_state = None
 
         self._queue: list = []
         self._render_pool: ThreadPoolExecutor | None = None
         self._seq = itertools.count()
+
+    @property
+    def flight_nav(self):
+        """What the mission and the controller fly on: the navigator (``sim.nav``, which ``sim/sil.py`` may swap
+        for its proxy before the run), or the system's flight navigator where it has one (an autopilot's)."""
+        fn = self.parts.flight_navigator
+        return self.nav if fn is None else fn
+
+    @property
+    def truth(self):
+        """What the sensors read as ``truth_at``."""
+        return self.history
 
     # ------------------------------------------------------------------------------------
     def _emit(self, m, latency: float) -> None:
@@ -88,25 +114,32 @@ class Simulation:
             return
         heapq.heappush(self._queue, (m.t + latency, next(self._seq), m))
 
-    def _sensor_schedule(self) -> list[list]:
-        """[period, next time, sample function] of every sensor; each samples truth at its own
-        instants (interpolated between dynamics steps), so its rate need not divide the step. The
-        camera renders only while the mission wants frames."""
+    def _sensor_schedule(self) -> tuple[list, list]:
+        """([period, next time, sample function] of the sensors sampled at their own instants (truth
+        interpolated between dynamics steps, so the rate need not divide the step), [divisor, sample
+        function] of those sampled on the dynamics grid. A gated sensor (a camera) samples only while
+        its gate wants it; a sensor that renders (``sample_async``) does so on a second thread while the
+        loop steps through its latency."""
         h, w = self.history, self.world
-        items = []
+        own, grid = [], []
         for name, s in self.sensors.items():
-            if name == "camera":
-                def camera(t, s=s):
-                    if self.mission.camera_wanted(t):
-                        if self._render_pool is not None:
-                            self._emit(s.sample_async(t, h, w, self._render_pool), s.latency_s)
-                        else:
-                            self._emit(s.sample(t, h, w), s.latency_s)
-
-                items.append((s.rate_hz, camera))
+            gate = self.parts.gates.get(name)
+            if self._render_pool is not None and hasattr(s, "sample_async") and s.latency_s >= self.dt:
+                sample = lambda t, s=s: s.sample_async(t, h, w, self._render_pool)  # noqa: E731
             else:
-                items.append((s.rate_hz, lambda t, s=s: self._emit(s.sample(t, h, w), s.latency_s)))
-        return [[1.0 / r, 0.0, f] for r, f in items]
+                sample = lambda t, s=s: s.sample(t, h, w)  # noqa: E731
+            if gate is not None:
+                def fn(t, s=s, gate=gate, sample=sample):
+                    if gate(t):
+                        self._emit(sample(t), s.latency_s)
+            else:
+                fn = lambda t, s=s, sample=sample: self._emit(sample(t), s.latency_s)  # noqa: E731
+            phase = getattr(s, "phase_s", 0.0)  # the first sample's instant
+            if self.parts.sensor_grid:
+                grid.append([_divisor(s.rate_hz, self.dt), int(round(phase / self.dt)), fn])
+            else:
+                own.append([1.0 / s.rate_hz, phase, fn])
+        return own, grid
 
     def _initialize_navigator(self) -> None:
         """An explicit start of the navigator (a surveyed pose): logged, then sent."""
@@ -119,102 +152,125 @@ class Simulation:
                         attitude=v(init.attitude))
         self.nav.initialize(init)
 
+    def _deliver(self, t: float) -> None:
+        """Everything due by ``t``: to an observer of its type (a mission's motion-capture view) or to the
+        navigator; what the navigator's ground-station half sends crosses the uplink and comes back later."""
+        q, nav, observers, after, link = self._queue, self.flight_nav, self.parts.observers, self.parts.on_delivered, self.parts.uplink
+        while q and q[0][0] <= t + 1e-9:
+            m = heapq.heappop(q)[2]
+            if isinstance(m, PendingFrame):
+                m = m.result()
+            obs = observers.get(type(m)) if observers else None
+            if obs is not None:
+                obs(m)
+                continue
+            nav.update(m)
+            if after is not None:
+                after(t, m)
+            if link is not None:
+                for fix in self.nav.pop_uplink():
+                    t_del = link.transmit(t, fix)
+                    self.log.record("uplink", fix.t, sent_at=t, delivered=t_del is not None, radius=fix.range)
+                    if t_del is not None:
+                        heapq.heappush(q, (t_del, next(self._seq), fix))
+
     def run(self, progress=None) -> RunResult:
-        """Fly the scenario; on an exception the run stops and keeps what it has."""
-        sc, dt, log = self.sc, self.dt, self.log
-        n = int(round(sc.run.duration_s / dt))
-        d_pos = _divisor(10.0, dt)  # mission manager (and the PALACE position loop)
+        """Fly the scenario (``run_scaffold``: wall time, an exception or Ctrl-C stops the run and it keeps
+        what it has, metrics from the log)."""
+        return run_scaffold(self, self.parts.evaluate or self._fly, progress)
+
+    def _fly(self, progress) -> None:
+        sc, dt, p = self.sc, self.dt, self.parts
+        n = int(round(sc.run.duration_s / dt)) + (1 if p.end_inclusive else 0)
+        d_mis = _divisor(p.mission_hz, dt)  # mission manager
         d_ctrl = _divisor(self.controller.rate_hz, dt)  # the controller's own rate
-        d_wind = _divisor(20.0, dt)  # turbulence bandwidth is a few rad/s: 20 Hz updates suffice
+        d_log = d_mis if p.log_hz is None else _divisor(p.log_hz, dt)
         # frames render on a second thread while the loop steps through the camera latency
-        self._render_pool = ThreadPoolExecutor(1) if self.camera is not None and self.camera.latency_s >= dt else None
-        schedule = self._sensor_schedule()
-        inject = self.parts.actuator_injection
+        if any(hasattr(s, "sample_async") and s.latency_s >= dt for s in self.sensors.values()):
+            self._render_pool = ThreadPoolExecutor(1)
+        own, grid = self._sensor_schedule()
+        truth, nav, mission, controller, vehicle, logger = (self.history, self.flight_nav, self.mission,
+                                                            self.controller, self.vehicle, self.logger)
+        environment, actuator, contact, after_step, world_step = (p.environment, p.actuator, p.contact, p.after_step,
+                                                                  p.world_step)
+        still = Environment()  # no environment part: still air, no ground effect
         self._initialize_navigator()
-        cmd = YacsCommand(t=0.0)
-        ref = None
-        wind = self.world.wind.steady.ned
-        wall0 = time.perf_counter()
-        touchdown = None
-        error = None
-        t = 0.0
-        interrupted = False
+        if p.start is not None:
+            p.start(0.0)
+        cmd = p.initial_command
+        ref = mode = health = nav_est = None
+        self.step_state = st = Step(0.0, None, None, None, None, cmd, "")
+        completed = False
         try:
             for k in range(n):
-                t = k * dt
-                truth = self.vehicle.state
-                self.history.push(truth)
-                # sensors (each at its own instants up to now) -> latency queues
-                for item in schedule:
+                t = self._t = k * dt
+                if k:
+                    truth.advance(t)
+                # sensors (each at its own instants up to now, or on the grid) -> latency queues
+                for item in own:
                     while item[1] <= t + 1e-9:
                         item[2](item[1])
                         item[1] += item[0]
+                for d, off, fn in grid:
+                    if k % d == off:
+                        fn(t)
                 # deliveries -> navigator
-                q = self._queue
-                while q and q[0][0] <= t + 1e-9:
-                    m = heapq.heappop(q)[2]
-                    self.nav.update(m.result() if isinstance(m, PendingFrame) else m)
-                # mission manager (10 Hz) and controller (its own rate)
-                mission_due, ctrl_due = k % d_pos == 0, k % d_ctrl == 0
-                if mission_due or ctrl_due:
-                    nav_est = self.nav.estimate(t)
-                if mission_due:
-                    health = self.nav.health(t)
-                    ref, mode = self.mission.step(t, nav_est, health)
-                if ctrl_due:
-                    # no position solution yet (first GPS fix not in): hold the trim
-                    cmd = self.controller.command(t, nav_est, ref) if nav_est.valid else YacsCommand(t=t)
-                if mission_due:
-                    self._log_step(t, truth, nav_est, ref, cmd, mode, health)
-                    if self.mission.done:
+                if self._queue and self._queue[0][0] <= t + 1e-9:
+                    self._deliver(t)
+                    if mission.done:  # (a ground station's mission that finished on a delivery)
                         break
+                # mission manager and controller (their own rates)
+                mission_due, ctrl_due = k % d_mis == 0, k % d_ctrl == 0
+                if mission_due or ctrl_due:
+                    nav_est = nav.estimate(t)
+                if mission_due:
+                    health = nav.health(t)
+                    ref, mode = mission.step(t, nav_est, health)
+                if ctrl_due:
+                    cmd = controller.command(t, nav_est, ref)
+                if k % d_log == 0:
+                    st.t, st.truth, st.estimate, st.health, st.reference, st.command, st.mode = (
+                        t, truth.latest, nav_est, health, ref, cmd, mode)
+                    logger(st)
                     if progress is not None:
                         progress(t, n * dt)
-                # vehicle dynamics in the wind
-                if k % d_wind == 0:
-                    airspeed = float(np.linalg.norm(truth.velocity - self.world.wind.steady.ned))
-                    wind = self.world.wind.velocity_ned(t, d_wind * dt, max(truth.height_agl, 0.5), airspeed)
-                applied = cmd
-                if inject is not None:
-                    d = inject(t)
-                    if d is not None:  # a sweep at the actuator (the loop broken where seed 000 broke it)
-                        applied = YacsCommand(t=t, ail=cmd.ail + d[0], ele=cmd.ele + d[1], rud=cmd.rud + d[2],
-                                              thr=cmd.thr + d[3])
-                        log.record("actuator", t, controller=np.array([cmd.ail, cmd.ele, cmd.rud, cmd.thr]),
-                                   injection=np.asarray(d, float),
-                                   applied=np.array([applied.ail, applied.ele, applied.rud, applied.thr]))
-                self.vehicle.step(applied, dt, Environment(wind))
-                if self.vehicle.state.on_ground and touchdown is None and t > 1.0:
-                    touchdown = self.vehicle.state
-                    self.mission.on_touchdown(t + dt)
-                    log.record("touchdown", t + dt, position=touchdown.position,
-                               speed=float(getattr(self.vehicle, "touchdown_speed", np.nan)))
-                    self._log_step(t + dt, touchdown, self.nav.estimate(t + dt), ref, cmd, "landed",
-                                   self.nav.health(t + dt))
+                if mission_due and mission.done:
                     break
-        except Exception as exc:  # keep what we have: the run directory is still written
-            error = f"{type(exc).__name__} at t={t:.2f}s: {exc}"
-            log.record("error", t, message=error)
-        except KeyboardInterrupt:  # Ctrl-C: stop here and keep what the run has
-            interrupted = True
+                if contact is not None and contact(t):
+                    break
+                # vehicle dynamics in its environment (wind, ground effect)
+                env = still if environment is None else environment(k, t)
+                if world_step is not None:
+                    world_step(dt)
+                vehicle.step(cmd if actuator is None else actuator(t, cmd), dt, env)
+                if after_step is not None and after_step(t + dt, t):
+                    break
+            completed = True
         finally:
             if self._render_pool is not None:
                 self._render_pool.shutdown(wait=True, cancel_futures=True)
                 self._render_pool = None
-        wall = time.perf_counter() - wall0
-        metrics = self._metrics(self.log, self.sc, wall_time_s=wall, error=error)  # from the log only
-        metrics.update(integrity_metrics(log, sc))  # from the log (issue #18)
-        return RunResult(scenario=sc, log=log, metrics=metrics, error=error, interrupted=interrupted)
+            if p.finish is not None:
+                p.finish(self._t, completed)
 
-    def _log_step(self, t, truth, est, ref, cmd, mode, health) -> None:
-        log = self.log
-        log.record("truth", t, position=truth.position, velocity=truth.velocity, euler=truth.euler,
-                   body_rates=truth.body_rates)
-        log.record("estimate", t, position=est.position, velocity=est.velocity, euler=est.attitude,
-                   source=est.source, valid=est.valid)
-        log.record("reference", t, position=ref.position, velocity=ref.velocity, yaw=ref.yaw)
-        log.record("command", t, ail=cmd.ail, ele=cmd.ele, rud=cmd.rud, thr=cmd.thr)
-        log.record("status", t, mode=mode, source=health.source, coherence=health.coherence,
-                   mpe_rate_hz=health.mpe_rate_hz, laser_ok=health.laser_ok, tracking=health.tracking,
-                   rejected_samples=health.rejected_samples, rejected_ranges=health.rejected_ranges,
-                   integrity=STATE_CODES.get(health.integrity, -1), hpl_m=health.hpl_m, k2=health.consistency_k2)
+
+def run_scaffold(sim, fly, progress=None) -> RunResult:
+    """The one run scaffold of every simulation: the wall time, an exception (one ``error`` line in the log)
+    or Ctrl-C (``interrupted``) stops the run and it keeps what it has, the metrics come from the log."""
+    sc, log = sim.sc, sim.log
+    sim._t = 0.0
+    error, interrupted = None, False
+    wall0 = time.perf_counter()
+    try:
+        fly(progress)
+    except Exception as exc:  # keep what we have: the run directory is still written
+        t = sim._t
+        error = f"{type(exc).__name__} at t={t:.2f}s: {exc}"
+        log.record("error", t, message=error)
+    except KeyboardInterrupt:  # Ctrl-C: stop here and keep what the run has
+        interrupted = True
+    wall = time.perf_counter() - wall0
+    metrics = sim._metrics(log, sc, wall_time_s=wall, error=error)  # from the log only
+    for extra in sim.parts.extra_metrics:
+        metrics.update(extra(log, sc))
+    return RunResult(scenario=sc, log=log, metrics=metrics, error=error, interrupted=interrupted)

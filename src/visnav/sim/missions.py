@@ -1,11 +1,14 @@
-"""What a scenario's ``mission.type`` flies with: the parts of the R-MAX loop (``sim/loop.py``).
+"""What a scenario's ``mission.type`` flies with: the parts of the one loop (``sim/loop.py``).
 
 A builder takes a ``BuildContext`` (the scenario, the log's recorder, the run's random generators) and
 returns the ``MissionParts``: world, sensors, navigator, mission, controller, metrics, start pose,
 and, where the mission has them, an actuator injection and an explicit navigator initialisation. The
 simulation builds nothing else: a builder asks for the textured world (``ctx.textured_world()``) or the
 standard R-MAX sensors (``ctx.rmax_sensors()``) only when its mission uses them. A new mission registers
-its builder here with ``@register("name")`` (and its pydantic config in ``scenarios/schema.py``).
+its builder here with ``@register("name")`` (and its pydantic config in ``scenarios/schema.py``); a mission
+that flies another vehicle gives its vehicle, truth, environment, logger and contact parts too
+(``sim/deck_parts.py``, ``sim/condor_parts.py``, ``sim/geoloc_parts.py``); left out, they are the R-MAX's
+(``sim/rmax_parts.py``).
 """
 
 from __future__ import annotations
@@ -21,34 +24,25 @@ from visnav.sim.parts import MissionParts  # noqa: F401  (re-exported)
 Builder = Callable[["BuildContext"], "MissionParts"]
 REGISTRY: dict[str, Builder] = {}
 
-#: mission type -> "module:Class" of a simulation of its own, for missions that fly another
-#: vehicle with other sensors than the R-MAX loop of ``sim/loop.py`` (multirotor on a ship deck,
-#: fixed wing with a gimbal). The class takes the ``Scenario`` and offers what ``Simulation`` offers
-#: to the command line and the campaign runner: ``.sc``, ``.mission.mode`` and
-#: ``.run(progress=None) -> RunResult``.
-SIMULATIONS: dict[str, str] = {
-    "condor": "visnav.sim.condor_loop:CondorSimulation",
-    "deck": "visnav.sim.deck_loop:DeckSimulation",
-    "mav-geolocation": "visnav.sim.geoloc_loop:GeolocationSimulation",
-}
+#: the missions the R-MAX flies (``visnav record`` records these; the other vehicles' parts have no recorder yet)
+RMAX_MISSIONS = ("palace", "hover", "pfcm", "witas-homing", "pad-landing")
+
+#: the one loop, which flies every mission from its builder's parts (named, not imported: sim/loop.py imports
+#: this module's ``build``, and the package's imports have no cycle, tests/test_import_rules.py)
+SIMULATION = "visnav.sim.loop:Simulation"
 
 
-#: the R-MAX loop, which flies every mission type not in ``SIMULATIONS`` (named, not imported: sim/loop.py
-#: imports this module's ``build``, and the package's imports have no cycle, tests/test_import_rules.py)
-RMAX_SIMULATION = "visnav.sim.loop:Simulation"
-
-
-def simulation_class(mission_type: str):
-    """The simulation class that flies ``mission_type`` (the R-MAX ``Simulation`` by default)."""
+def simulation_class():
+    """The one simulation class (``sim/loop.Simulation``)."""
     import importlib
 
-    module, name = SIMULATIONS.get(mission_type, RMAX_SIMULATION).split(":")
+    module, name = SIMULATION.split(":")
     return getattr(importlib.import_module(module), name)
 
 
-def make_simulation(scenario):
-    """Build the simulation for a validated ``Scenario``."""
-    return simulation_class(getattr(scenario.mission, "type", "palace"))(scenario)
+def make_simulation(scenario, navigator_wrapper=None):
+    """Build the simulation for a validated ``Scenario`` (its mission's builder gives the parts)."""
+    return simulation_class()(scenario, navigator_wrapper=navigator_wrapper)
 
 
 @dataclass
@@ -200,3 +194,24 @@ def _pad(ctx: BuildContext) -> MissionParts:
     from visnav.sim.pad_parts import build as build_pad
 
     return build_pad(ctx)
+
+
+@register("deck")
+def _deck(ctx: BuildContext) -> MissionParts:
+    from visnav.sim.deck_parts import build as build_deck
+
+    return build_deck(ctx)
+
+
+@register("condor")
+def _condor(ctx: BuildContext) -> MissionParts:
+    from visnav.sim.condor_parts import build as build_condor
+
+    return build_condor(ctx)
+
+
+@register("mav-geolocation")
+def _geolocation(ctx: BuildContext) -> MissionParts:
+    from visnav.sim.geoloc_parts import build as build_geolocation
+
+    return build_geolocation(ctx)

@@ -96,12 +96,12 @@ def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool =
     from visnav.io.recording import COMMANDS, STREAMS, TRUTH
     from visnav.io.runs import OutputDirError, prepare_out_dir
     from visnav.sim.loop import Simulation
-    from visnav.sim.missions import SIMULATIONS
+    from visnav.sim.missions import RMAX_MISSIONS
 
     kind = scenario.mission.type
-    if kind in SIMULATIONS:
-        raise RecordingError(f"visnav record flies the R-MAX loop (palace-landing, witas-homing, ...); mission.type "
-                             f"{kind!r} has a loop of its own and no navigator interface yet (issue #13)")
+    if kind not in RMAX_MISSIONS:
+        raise RecordingError(f"visnav record records the R-MAX's missions (palace-landing, witas-homing, ...); "
+                             f"mission.type {kind!r} flies another vehicle, whose recording is not written yet")
     own = tuple(s.file for s in STREAMS.values()) + (TRUTH.file, COMMANDS.file, "camera.yaml", "scenario.toml")
     try:
         prepare_out_dir(out_dir, force=force, clear=own)

@@ -57,7 +57,7 @@ _DECK_STATE = {
 }
 _DECK_ORDER = "state order: position (m), euler (rad), velocity (m/s), deck_rates (rad/s)"
 
-#: the deck landing (sim/deck_loop.py)
+#: the deck landing (sim/deck_parts.py)
 DECK_STREAMS = {
     "truth": {k: (u, f, "true " + d) for k, (u, f, d) in _DECK_STATE.items()},
     "estimate": {**{k: (u, f, "UKF estimate of the " + d) for k, (u, f, d) in _DECK_STATE.items()},  # at the step
@@ -94,7 +94,7 @@ DECK_STREAMS = {
     "retarget_skipped": {"reason": ("text", "", "why the touchdown point was not re-aimed")},
 }
 
-#: the CONDOR orbit (sim/condor_loop.py)
+#: the CONDOR orbit (sim/condor_parts.py)
 CONDOR_STREAMS = {
     "truth": {**{k: v for k, v in RMAX_STREAMS["truth"].items()},
               "airspeed": ("m/s", "", "true airspeed"), "beta": ("rad", "", "sideslip angle")},
@@ -133,7 +133,8 @@ CONDOR_STREAMS = {
                "delivered": ("bool", "", "the fix crossed the telemetry link (false: dropped)"),
                "radius": ("m", "horizontal", "the fix's vision range")},
     "nav_init": {"source": ("text", "", "where the initialisation came from (survey: the tent's position)"),
-                 "position": ("m", NED, "the tent's surveyed position given to the navigator")},
+                 "position": ("m", NED, "the tent's surveyed position given to the navigator"),
+                 "velocity": ("m/s", NED, "not given (NaN)"), "attitude": (EULER[0], EULER[1], "not given (NaN)")},
     "click": {"pixel": ("px", "image (u right, v down)", "the operator's click that starts the tracker on the tent")},
 }
 
@@ -155,7 +156,7 @@ CONDOR_GROUND_STREAMS = {
 
 _NE = "north, east of the NED world"
 
-#: the MAV target geo-location (sim/geoloc_loop.py, seed 002 ch. 7)
+#: the MAV target geo-location (sim/geoloc_parts.py, seed 002 ch. 7)
 GEOLOC_STREAMS = {
     "truth": {**{k: v for k, v in RMAX_STREAMS["truth"].items() if k != "body_rates"},
               "airspeed": ("m/s", "", "true airspeed")},
