@@ -138,9 +138,10 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
 
     opts = opts or ReplayOptions()
     if navigator not in NAVIGATORS:
-        raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))} "
-                             "(deck and CONDOR follow issue #13)")
-    rec.require(NAVIGATORS[navigator].needs, navigator)
+        raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))}")
+    nspec = NAVIGATORS[navigator]
+    rec.require(nspec.needs, navigator)
+    rec.color = nspec.color_frames
     notes: list[str] = []
     metrics: dict = {}
     if opts.time_offset == "auto":
@@ -156,21 +157,28 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     nav, sc = _navigator(navigator, rec, opts, log.record)
     kinds, a, b, times = _events(rec, opts.output_rate_hz)
     wall0 = time.perf_counter()
+    cpu0 = time.process_time()
     counts, error = _feed(rec, nav, navigator, log, notes, (kinds, a, b, times), opts, progress)
-    wall = time.perf_counter() - wall0
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     reference = _log_reference(rec, log, opts)
-    h = nav.health(None)
+    h = nav.health(float(times[-1]) if len(times) else 0.0)
     dur = float(times[-1] - times[0]) if len(times) else 0.0
     metrics |= {"frames_used": counts["frames"], "frames_dropped": int(rec.skipped.get("frames", 0)),
                 "frames_in_recording": rec.count("frames"), "imu_samples": counts["imu"],
                 "samples_rejected": int(getattr(h, "rejected_samples", 0))}
     if opts.gps_until_s is not None:
         metrics["gps_withheld"] = counts["gps_withheld"]
+    if counts["fixes"]:  # a navigator with a ground-station half (CONDOR): its fixes over the link
+        metrics |= {"link_fixes": counts["fixes"], "link_fixes_delivered": counts["fixes_delivered"],
+                    "link_fixes_missing": counts["fixes_missing"]}
+        if counts["fixes_missing"]:
+            notes.append(f"link.csv: {counts['fixes_missing']} delivered fix(es) the replayed navigator did not make")
     if reference:
         metrics["reference"] = reference
         metrics |= _accuracy(log, True)
-    metrics |= {"replay_wall_s": wall, "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
-                "flight_duration_s": dur}
+    metrics |= {"replay_wall_s": wall, "replay_cpu_s": cpu,
+                "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
+                "replay_real_time_factor_cpu": dur / cpu if cpu > 0 else float("nan"), "flight_duration_s": dur}
     if counts.get("interrupted"):
         metrics["interrupted"] = True
         notes.append("interrupted (Ctrl-C): the run directory holds the replay up to there")
@@ -180,22 +188,56 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     notes += rec.notes
     if rec.skipped:
         notes.append(f"skipped during the replay: {', '.join(f'{v} {k}' for k, v in rec.skipped.items())}")
-    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes)
+    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes, frame=nspec.frame)
 
 
 def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict, str | None]:
     """The replay loop: samples to ``update``, recorded requests to their methods, estimates to the log."""
+    from visnav.io.navigators import NAVIGATORS
+
     kinds, a, b, times = events
     c = rec.commands
-    counts = {"frames": 0, "imu": 0, "gps_withheld": 0}
+    counts = {"frames": 0, "imu": 0, "gps_withheld": 0, "fixes": 0, "fixes_delivered": 0, "fixes_missing": 0}
     by_index = {STREAM_NAMES.index(s): s for s in rec.streams}
     cut = opts.gps_until_s if opts.gps_until_s is not None else np.inf
+    row = NAVIGATORS[navigator].estimate_row or _estimate_row
+    pending: list = []  # the last estimate query not yet logged: (t, fields); a later one at the same t replaces it
+    uplink = getattr(nav, "pop_uplink", None)  # a ground-station half's fixes (CONDOR): back through link.csv
+    fixes: dict[float, object] = {}
+    via_link = "link" in rec.streams
     k, t = 0, float("nan")
+
+    def flush():
+        if pending:
+            log.record("estimate", pending[0], **pending[1])
+            pending.clear()
+
+    def deliver(m):
+        nav.update(m)
+        if uplink is None:
+            return
+        for fix in uplink():
+            counts["fixes"] += 1
+            if via_link:
+                fixes[float(fix.t)] = fix
+            else:  # no link log: the fix reaches the navigator's on-board half at once
+                counts["fixes_delivered"] += 1
+                nav.update(fix)
+
     try:
         for k in range(len(kinds)):
             t = float(times[k])
             if kinds[k] == 0:
                 name = by_index[a[k]]
+                if name == "link":
+                    t_fix = float(rec.streams["link"]["t_s"][b[k]]) + rec.time_offset_s
+                    key = min(fixes, key=lambda x: abs(x - t_fix), default=None)
+                    if key is None or abs(key - t_fix) > 1e-9:
+                        counts["fixes_missing"] += 1
+                        continue
+                    counts["fixes_delivered"] += 1
+                    nav.update(fixes.pop(key))
+                    continue
                 m = rec.sample(name, int(b[k]))
                 if m is None:
                     continue
@@ -204,11 +246,11 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                     continue
                 if name in ("frames", "imu"):
                     counts[name] += 1
-                nav.update(m)
+                deliver(m)
             elif kinds[k] == 2 or c["method"][b[k]] == "estimate":
-                e = nav.estimate(t)
-                log.record("estimate", t, position=e.position, velocity=e.velocity, euler=e.attitude,
-                           source=e.source, valid=e.valid)
+                if pending and pending[0] != t:
+                    flush()
+                pending[:] = [t, row(nav.estimate(t))]
             elif c["method"][b[k]] == "health":
                 h = nav.health(t)
                 log.record("status", t, source=h.source, coherence=h.coherence, tracking=h.tracking,
@@ -239,8 +281,15 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
     except KeyboardInterrupt:  # Ctrl-C: keep what the replay has
         counts["interrupted"] = True
     except Exception as exc:  # keep what the replay has
+        flush()
         return counts, f"{type(exc).__name__} at t={t:.3f} s (event {k} of {len(kinds)}): {exc}"
+    flush()
     return counts, None
+
+
+def _estimate_row(e) -> dict:
+    """A ``NavEstimate`` as the ``estimate`` stream logs it."""
+    return {"position": e.position, "velocity": e.velocity, "euler": e.attitude, "source": e.source, "valid": e.valid}
 
 
 def _log_reference(rec: Recording, log: FlightLog, opts: ReplayOptions) -> str | None:

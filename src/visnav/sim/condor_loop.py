@@ -72,8 +72,10 @@ def build_navigator(cfg, camera) -> CondorNavigator:
 
 
 class CondorSimulation:
-    def __init__(self, scenario) -> None:
+    def __init__(self, scenario, navigator_wrapper=None) -> None:
+        """``navigator_wrapper(nav) -> nav``, when given, wraps the navigator the loop and the mission talk to."""
         self.sc = sc = scenario
+        self._wrap = navigator_wrapper or (lambda nav: nav)
         self.cfg = cfg = sc.mission
         self.log = FlightLog(schema=CONDOR_GROUND_STREAMS if cfg.experiment == "ground_test" else CONDOR_STREAMS)
         self.mission = GroundTestMission()
@@ -121,7 +123,7 @@ class CondorSimulation:
         ]
         lk = cfg.link
         self.link = Link(rng[5], lk.latency_s, lk.drop_prob, lk.outage_rate_hz, lk.outage_s)
-        self.nav = build_navigator(cfg, self.camera)
+        self.nav = self._wrap(build_navigator(cfg, self.camera))
         ctl = cfg.control
         gains = InnerGains(kp_phi=ctl.kp_phi, kd_phi=ctl.kd_phi, kp_psi=ctl.kp_psi,
                            bank_limit=math.radians(ctl.bank_limit_deg))
