@@ -10,6 +10,11 @@ A recording is a folder a user can fill from their own vehicle without our code:
     magnetometer.csv t_s, heading_rad
     range.csv        t_s, range_m, sensor [, beam_offset_rad]
     gps.csv          t_s, n_m, e_m, d_m, vn_mps, ve_mps, vd_mps [, sigma_m]
+    airspeed.csv     t_s, airspeed_mps                          (CONDOR: pitot)
+    camera_attitude.csv  t_s, roll_rad, tilt_rad                (CONDOR: the gimbal camera's AHRS)
+    pan.csv          t_s, pan_rad                               (CONDOR: gimbal pan potentiometer)
+    click.csv        t_s, u_px, v_px                            (CONDOR: the operator's click on the target)
+    link.csv         t_s [, t_recv_s, seq]                      (CONDOR: uplink deliveries of the navigator's fixes)
     truth.csv        t_s, n_m, e_m, d_m [, roll_rad, pitch_rad, yaw_rad]   (where a reference exists)
     commands.csv     t_s, seq, method, args  (simulated recordings: what the mission asked the navigator)
     scenario.toml    (simulated recordings: the resolved scenario)
