@@ -27,6 +27,8 @@ class NavigatorSpec:
     frame: str = "NED world, body FRD"  # the frame of its estimate (the TUM header of a replay)
     estimate_row: Callable | None = None  # estimate -> dict(position, velocity, euler, source, valid); None: NavEstimate
     color_frames: bool = False  # it takes RGB frames (else 8-bit gray)
+    finish: Callable | None = None  # finish(nav, log): what the navigator logs at the end of a run (replay)
+    truth: Callable | None = None  # truth(log) -> truth.csv columns of what it estimates (default: the vehicle's)
 
 
 def rmax_camera(sc):
@@ -146,6 +148,45 @@ def _condor(sc, recorder, camera, mount, **_):
     return build_navigator(sc.mission, camera)
 
 
+def _geolocation_camera(sc):
+    from visnav.sim.geoloc_loop import mav_camera
+
+    return mav_camera(sc.mission.camera), None  # on the pitch-roll gimbal: no fixed mount
+
+
+def _geolocation(sc, recorder, camera, mount, reference=None, **_):
+    """``GeolocationNavigator`` of ``mission.registration``; the reference image given (``--map``) or, for a
+    simulated recording, the closed loop's (the mission's map, degraded)."""
+    from visnav.sim.geoloc_loop import build_navigator, mission_map, mission_reference
+
+    if reference is None:
+        reference = mission_reference(sc.mission, mission_map(sc.mission))
+    return build_navigator(sc.mission, reference, camera)
+
+
+def _target_row(e) -> dict:
+    """A ``TargetEstimate``: the target on the ground (down 0), NED world."""
+    p = np.asarray(e.position, float)
+    return {"position": np.array([p[0], p[1], 0.0]), "velocity": np.full(3, np.nan), "euler": np.zeros(3),
+            "source": e.method, "valid": e.valid}
+
+
+def _geolocation_finish(nav, log) -> None:
+    from visnav.sim.geoloc_loop import log_samples
+
+    log_samples(log, nav)
+
+
+def _target_truth(log) -> dict | None:
+    """truth.csv of a geo-location flight: the true target (what its navigator estimates) at the log's 10 Hz."""
+    tg, tr = log.get("target"), log.get("truth")
+    if not tg or not tr:
+        return None
+    p = np.asarray(tg["position"], float).reshape(-1)
+    n = len(tr["t"])
+    return {"t_s": np.asarray(tr["t"], float), "n_m": np.full(n, p[0]), "e_m": np.full(n, p[1]), "d_m": np.zeros(n)}
+
+
 NAVIGATORS: dict[str, NavigatorSpec] = {
     "palace": NavigatorSpec("palace-landing", ("palace", "hover", "pfcm"), ("imu", "attitude", "gps"), rmax_camera,
                             _rmax_camera_hz, _palace),
@@ -160,6 +201,10 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
     "condor": NavigatorSpec("condor-orbit", ("condor",), ("imu", "attitude", "gps", "baro", "magnetometer", "airspeed",
                                                           "camera_attitude", "pan", "frames", "click"),
                             _condor_camera, lambda sc: float(sc.mission.camera.frame_hz), _condor, color_frames=True),
+    "geolocation": NavigatorSpec("mav-geolocation", ("mav-geolocation",), ("telemetry", "frames", "click"),
+                                 _geolocation_camera, lambda sc: float(sc.mission.camera.frame_hz), _geolocation,
+                                 frame="target position: NED world, on the ground (down 0)", estimate_row=_target_row,
+                                 finish=_geolocation_finish, truth=_target_truth),
 }
 
 

@@ -15,6 +15,7 @@ A recording is a folder a user can fill from their own vehicle without our code:
     pan.csv          t_s, pan_rad                               (CONDOR: gimbal pan potentiometer)
     click.csv        t_s, u_px, v_px                            (CONDOR: the operator's click on the target)
     link.csv         t_s [, t_recv_s, seq]                      (CONDOR: uplink deliveries of the navigator's fixes)
+    telemetry.csv    t_s, n_m, e_m, d_m, heading_rad, height_m, ground_speed_mps   (geo-location: the downlink)
     truth.csv        t_s, n_m, e_m, d_m [, roll_rad, pitch_rad, yaw_rad]   (where a reference exists)
     commands.csv     t_s, seq, method, args  (simulated recordings: what the mission asked the navigator)
     scenario.toml    (simulated recordings: the resolved scenario)
@@ -37,7 +38,7 @@ import numpy as np
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.measurements import (AirspeedSample, AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample,
-                                 ImuSample, OperatorClick, PanSample, RangeSample, TargetRangeSample)
+                                 ImuSample, OperatorClick, PanSample, RangeSample, TargetRangeSample, TelemetrySample)
 
 
 class RecordingError(ValueError):
@@ -77,6 +78,8 @@ STREAMS: dict[str, Stream] = {
     "airspeed": Stream("airspeed.csv", ("t_s", "airspeed_mps")),
     "click": Stream("click.csv", ("t_s", "u_px", "v_px")),
     "link": Stream("link.csv", ("t_s",)),
+    # MAV geo-location (seed 002 ch. 7): the autopilot's telemetry as the ground station receives it
+    "telemetry": Stream("telemetry.csv", ("t_s", "n_m", "e_m", "d_m", "heading_rad", "height_m", "ground_speed_mps")),
 }
 TRUTH = Stream("truth.csv", ("t_s", "n_m", "e_m", "d_m"), ("vn_mps", "ve_mps", "vd_mps", "roll_rad", "pitch_rad",
                                                           "yaw_rad"))
@@ -84,7 +87,7 @@ COMMANDS = Stream("commands.csv", ("t_s", "method"), ("seq", "args"), text=("met
 DELIVERY = ("t_recv_s", "seq")
 _TYPE_STREAM = {ImuSample: "imu", AttitudeSample: "attitude", GpsSample: "gps", RangeSample: "range",
                 BaroSample: "baro", HeadingSample: "magnetometer", Frame: "frames", PanSample: "pan",
-                AirspeedSample: "airspeed", OperatorClick: "click", TargetRangeSample: "link"}
+                AirspeedSample: "airspeed", OperatorClick: "click", TargetRangeSample: "link", TelemetrySample: "telemetry"}
 
 
 def stream_of(m) -> str | None:
@@ -343,6 +346,9 @@ class Recording:
             return AirspeedSample(t, float(s["airspeed_mps"][i]))
         if stream == "click":
             return OperatorClick(t, np.array([s["u_px"][i], s["v_px"][i]]))
+        if stream == "telemetry":
+            return TelemetrySample(t, np.array([s["n_m"][i], s["e_m"][i], s["d_m"][i]]), float(s["heading_rad"][i]),
+                                   float(s["height_m"][i]), float(s["ground_speed_mps"][i]))
         if stream == "link":
             raise ValueError("link.csv rows are deliveries of the navigator's own fixes, not measurements")
         return self._frame(t + self.time_offset_s, s, i)

@@ -64,6 +64,8 @@ class RecordingWriter:
             row = (m.t, m.airspeed)
         elif kind == "click":
             row = (m.t, *m.pixel)
+        elif kind == "telemetry":
+            row = (m.t, *m.position, m.heading, m.height, m.ground_speed)
         else:  # link: a fix the navigator made, delivered back to it; the replay's navigator makes its own
             row = (m.t,)
         self.rows[kind].append((*row, t_recv, seq))

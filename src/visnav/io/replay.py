@@ -68,7 +68,7 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
         parts |= {"camera": rec.camera.camera, "mount": rec.camera.mount}
     elif name == "palace":  # no frames and no camera.yaml: the scenario's camera stands in for MPE's
         rec.notes.append("no camera.yaml and no frames: PALACE runs on GPS / inertial only")
-    if name == "witas":
+    if name in ("witas", "geolocation"):
         if opts.map_path:
             from visnav.world.maps import GeoImage
 
@@ -77,7 +77,7 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
             except (OSError, ValueError) as exc:
                 raise RecordingError(f"{opts.map_path}: cannot load the reference map ({exc})") from None
         elif rec.scenario_toml is None:  # a simulated recording has its scenario: the closed loop's map
-            raise RecordingError(f"{rec.path}: the witas navigator needs a reference map: give --map MAP "
+            raise RecordingError(f"{rec.path}: the {name} navigator needs a reference map: give --map MAP "
                                  "(PNG/JPEG + world file)")
     try:
         return make_navigator(name, sc, recorder, **parts), sc
@@ -160,6 +160,8 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     cpu0 = time.process_time()
     counts, error = _feed(rec, nav, navigator, log, notes, (kinds, a, b, times), opts, progress)
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    if nspec.finish is not None:
+        nspec.finish(nav, log)
     reference = _log_reference(rec, log, opts)
     h = nav.health(float(times[-1]) if len(times) else 0.0)
     dur = float(times[-1] - times[0]) if len(times) else 0.0

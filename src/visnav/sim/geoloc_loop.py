@@ -61,8 +61,37 @@ def mav_camera(c) -> PinholeCamera:
                          (c.k1, c.k2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
 
 
+def mission_reference(cfg, geo: GeoImage) -> GeoImage:
+    """The reference image the navigator registers to: the mission's map, degraded (``mission.map.ref_*``)."""
+    m = cfg.map
+    return degrade_reference(geo, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
+
+
+def build_navigator(cfg, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
+    """The navigator of the scenario's ``mission`` block (``mission.registration``, the camera's processing size)."""
+    r, c = cfg.registration, cfg.camera
+    return GeolocationNavigator(reference, camera, hough=r.hough, median_px=r.median_px,
+                                search_radius_m=r.search_radius_m, min_quality=r.min_quality,
+                                registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
+                                gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
+                                check_rotation=r.check_rotation, scale_search=r.scale_search,
+                                rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
+                                rotation_search_deg=r.rotation_search_deg,
+                                rotation_search_step_deg=r.rotation_search_step_deg)
+
+
+def log_samples(log, nav) -> None:
+    """The navigator's samples and the RLS estimates after each (stream ``sample``)."""
+    for s in nav.samples:
+        log.record("sample", s["t"], reg=s["reg"], map=s["map"], est_reg=s["est_reg"], est_map=s["est_map"],
+                   ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],
+                   hough=s["hough_applied"], heading_tel=s["heading_tel"], heading_used=s["heading_used"],
+                   height_used=s["height_used"], gps=s["gps"], uv=s["uv"])
+
+
 class GeolocationSimulation:
-    def __init__(self, scenario) -> None:
+    def __init__(self, scenario, navigator_wrapper=None) -> None:
+        """``navigator_wrapper(nav) -> nav``, when given, wraps the navigator the loop and the mission talk to."""
         self.sc = sc = scenario
         self.cfg = cfg = sc.mission
         self.log = FlightLog(schema=GEOLOC_STREAMS)
@@ -77,8 +106,7 @@ class GeolocationSimulation:
             raise ValueError(f"mission.target ({t.north_m}, {t.east_m}) m from the map centre is off the map "
                              f"({n1 - n0:.0f} x {e1 - e0:.0f} m)")
         frames_map = paste_truck(geo, self.target, t.length_m, t.width_m, math.radians(t.heading_deg))
-        m = cfg.map
-        self.reference = degrade_reference(geo, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
+        self.reference = mission_reference(cfg, geo)
         c, ctl = cfg.camera, cfg.control
         va = cfg.airframe.airspeed_mps
         self.wind = scenario_wind(sc.world, rng[0], ctl.altitude_m, va)
@@ -98,15 +126,7 @@ class GeolocationSimulation:
         self.telemetry = AutopilotTelemetry(rng[4], tl.rate_hz, tl.gps_sigma_m, tl.gps_bias_m, 600.0, tl.gps_delay_s,
                                             tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg,
                                             gps_rate_hz=tl.gps_rate_hz, link_delay_s=tl.link_delay_s)
-        r = cfg.registration
-        self.nav = GeolocationNavigator(self.reference, self.camera, hough=r.hough, median_px=r.median_px,
-                                        search_radius_m=r.search_radius_m, min_quality=r.min_quality,
-                                        registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
-                                        gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
-                                        check_rotation=r.check_rotation, scale_search=r.scale_search,
-                                        rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
-                                        rotation_search_deg=r.rotation_search_deg,
-                                        rotation_search_step_deg=r.rotation_search_step_deg)
+        self.nav = (navigator_wrapper or (lambda nav: nav))(build_navigator(cfg, self.reference, self.camera))
         self.mission = GeolocationMission(cfg, self.path, recorder=self.log.record)
         self.params = micro_params(cfg.airframe.mass_kg, cfg.airframe.span_m)
         start, heading = self.path.start_pose()
@@ -141,11 +161,7 @@ class GeolocationSimulation:
     def _log_samples(self) -> None:
         """The navigator's samples and RLS estimates, beside the true target (for the report)."""
         self.log.record("target", 0.0, position=self.target.copy())
-        for s in self.nav.samples:
-            self.log.record("sample", s["t"], reg=s["reg"], map=s["map"], est_reg=s["est_reg"], est_map=s["est_map"],
-                            ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],
-                            hough=s["hough_applied"], heading_tel=s["heading_tel"], heading_used=s["heading_used"],
-                            height_used=s["height_used"], gps=s["gps"], uv=s["uv"])
+        log_samples(self.log, self.nav)
         est, est_m, h = self.nav.estimate(0.0), self.nav.estimate(0.0, "map_based"), self.nav.health(0.0)
         self.log.record("geoloc_result", getattr(self, "_t", 0.0), sim_time=getattr(self, "sim_time", math.nan),
                         est_reg=est.position, est_reg_valid=est.valid, est_map=est_m.position, est_map_valid=est_m.valid,

@@ -43,10 +43,10 @@ class RecordingNavigator:
             self._writer.add(m, self._clock(), self._writer.next_seq())
         self._inner.update(m)
 
-    def estimate(self, t: float):
+    def estimate(self, t: float, *args, **kwargs):
         if self.recording:
             self._writer.add_command(t, self._writer.next_seq(), "estimate")
-        return self._inner.estimate(t)
+        return self._inner.estimate(t, *args, **kwargs)
 
     def health(self, t: float | None = None):
         if self.recording and t is not None:
@@ -79,6 +79,18 @@ class RecordingNavigator:
             return attr(*args, **kwargs)
 
         return call
+
+
+def _drop_summary_queries(writer: RecordingWriter) -> None:
+    """Estimate / health queries made after the last delivered sample about an earlier instant (a loop's
+    summary at the end of its run, e.g. the geo-location's ``estimate(0.0)``) are not part of the flight:
+    a replay, which places queries by their time, would ask them before everything."""
+    last = [(r[-1], r[-2]) for rows in writer.rows.values() for r in rows]  # (seq, t_recv)
+    if not last:
+        return
+    seq, t_recv = max(last)
+    writer.commands = [c for c in writer.commands
+                       if not (c[2] in ("estimate", "health") and c[1] > seq and c[0] < t_recv - 1e-9)]
 
 
 @dataclass
@@ -139,9 +151,13 @@ def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool =
     result = sim.run(progress=progress)
     for p in proxies:  # the metrics' queries after the flight are not part of it
         p.recording = False
+    _drop_summary_queries(writer)
     tr = result.log.get("truth")
     truth = None
-    if tr:
+    name = navigator_for(kind) if kind in SIMULATIONS else None
+    if name is not None and NAVIGATORS[name].truth is not None:  # what the navigator estimates (the target)
+        truth = NAVIGATORS[name].truth(result.log)
+    elif tr:
         p, v, e = (np.asarray(tr[k], float).reshape(-1, 3) for k in ("position", "velocity", "euler"))
         truth = {"t_s": tr["t"], "n_m": p[:, 0], "e_m": p[:, 1], "d_m": p[:, 2], "vn_mps": v[:, 0],
                  "ve_mps": v[:, 1], "vd_mps": v[:, 2], "roll_rad": e[:, 0], "pitch_rad": e[:, 1], "yaw_rad": e[:, 2]}
