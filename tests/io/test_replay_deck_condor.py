@@ -175,6 +175,7 @@ def test_a_deck_recording_without_frames_names_what_the_navigator_needs(deck_rec
         replay(Recording.open(rec), "deck")
 
 
-def test_geolocation_is_refused_with_a_message(tmp_path):
-    with pytest.raises(RecordingError, match="mav-geolocation"):
-        record(load_scenario("mav-geolocation", ["run.duration_s=1"]), tmp_path / "g")
+def test_the_condor_ground_test_is_refused_with_a_message(tmp_path):
+    with pytest.raises(RecordingError, match="'ground_test' experiment has no navigator"):
+        record(load_scenario("condor-ground-test"), tmp_path / "g")
+    assert not (tmp_path / "g").exists()

@@ -115,8 +115,8 @@ def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool =
         name = next((n for n, s in NAVIGATORS.items() if kind in s.mission_types), None)
         if name is None:
             raise RecordingError(f"visnav record: mission.type {kind!r} has no registered navigator "
-                                 f"(io/navigators.py) to record for; recordable: palace, witas, pad, deck and "
-                                 f"condor missions")
+                                 f"(io/navigators.py) to record for; recordable: the missions of "
+                                 f"{', '.join(sorted(NAVIGATORS))}")
         if kind == "condor" and scenario.mission.experiment != "orbit":
             raise RecordingError(f"visnav record: the CONDOR {scenario.mission.experiment!r} experiment has no "
                                  "navigator in the loop; record an orbit (condor-orbit)")
