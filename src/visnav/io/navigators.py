@@ -140,7 +140,7 @@ def _condor_camera(sc):
 
 
 def _condor(sc, recorder, camera, mount, **_):
-    from visnav.sim.condor_loop import build_navigator
+    from visnav.sim.condor_parts import build_navigator
 
     if sc.mission.experiment != "orbit":
         raise ValueError(f"the condor navigator flies the orbit experiment; this scenario's is "
@@ -149,7 +149,7 @@ def _condor(sc, recorder, camera, mount, **_):
 
 
 def _geolocation_camera(sc):
-    from visnav.sim.geoloc_loop import mav_camera
+    from visnav.sim.geoloc_parts import mav_camera
 
     return mav_camera(sc.mission.camera), None  # on the pitch-roll gimbal: no fixed mount
 
@@ -157,7 +157,7 @@ def _geolocation_camera(sc):
 def _geolocation(sc, recorder, camera, mount, reference=None, **_):
     """``GeolocationNavigator`` of ``mission.registration``; the reference image given (``--map``) or, for a
     simulated recording, the closed loop's (the mission's map, degraded)."""
-    from visnav.sim.geoloc_loop import build_navigator, mission_map, mission_reference
+    from visnav.sim.geoloc_parts import build_navigator, mission_map, mission_reference
 
     if reference is None:
         reference = mission_reference(sc.mission, mission_map(sc.mission))
@@ -172,7 +172,7 @@ def _target_row(e) -> dict:
 
 
 def _geolocation_finish(nav, log) -> None:
-    from visnav.sim.geoloc_loop import log_samples
+    from visnav.sim.geoloc_parts import log_samples
 
     log_samples(log, nav)
 

@@ -22,7 +22,6 @@ import numpy as np
 from visnav.control.fixedwing import FixedWingAutopilot, InnerGains
 from visnav.measurements import Frame, NavInit, OperatorClick
 from visnav.mission.condor import CondorMission, GroundTestMission
-from visnav.navigation.condor import CondorNavigator, RadiusFilter
 from visnav.scenarios.config_fixedwing import build_autopilot_sensors
 from visnav.sensors.baro import Baro, Compass
 from visnav.sensors.condor_camera import GimbalCamera, TargetCamera, condor_camera, target_outline
@@ -30,12 +29,12 @@ from visnav.sensors.gimbal import CameraAhrs, Gimbal, PanPotentiometer
 from visnav.sensors.gps import Gps
 from visnav.sensors.link import Link
 from visnav.sim.clock import rate_divisor
+from visnav.sim.condor_parts import build_navigator  # noqa: F401  (also imported from here)
 from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
 from visnav.sim.log import FlightLog
 from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
 from visnav.vehicles.base import Environment
 from visnav.vehicles.fixedwing import FixedWingParams, trim
-from visnav.vision.condor_pipeline import VisionRange
 
 
 class CondorWorld(AircraftAir):
@@ -59,16 +58,6 @@ class CurrentTruth:
             raise ValueError(f"CONDOR truth is asked for t={t:.4f}s at step t={self.now:.4f}s: a sensor that "
                              f"describes another instant needs sensors/base.TruthHistory")
         return self.vehicle.state
-
-
-def build_navigator(cfg, camera) -> CondorNavigator:
-    """The navigator of the scenario's ``mission`` block (its own tuning, ``mission.navigation``)."""
-    c, v, a, n = cfg.camera, cfg.vision, cfg.altimeter, cfg.navigation
-    vision = VisionRange(camera, math.radians(c.hfov_deg), v.method, v.lut, v.board_distance_m, v.board_spacing_m)
-    return CondorNavigator(vision, camera, (a.t_measured_c, a.c0, a.c1),
-                           radius_filter=RadiusFilter(n.radius_alpha, n.radius_beta, n.radius_stale_s),
-                           gps_gain=n.gps_gain, radius_sigma_pct=n.radius_sigma_pct,
-                           heading_sigma_deg=n.heading_sigma_deg, gps_sigma_m=cfg.gps_noise_m)
 
 
 class CondorSimulation:

@@ -18,7 +18,6 @@ import time
 import numpy as np
 
 from visnav.control.fixedwing import FixedWingAutopilot, InnerGains
-from visnav.geometry.camera import PinholeCamera
 from visnav.guidance.figure_eight import FigureEight
 from visnav.measurements import Frame, OperatorClick, TurnReference
 from visnav.navigation.fixedwing import AutopilotNavigator
@@ -26,67 +25,18 @@ from visnav.scenarios.config_fixedwing import build_autopilot_sensors
 from visnav.sim.clock import rate_divisor
 from visnav.vehicles.base import Environment
 from visnav.mission.geolocation import GeolocationMission
-from visnav.navigation.geolocation import GeolocationNavigator
 from visnav.sensors.base import TruthHistory
 from visnav.sensors.camera import CameraRenderer
 from visnav.sensors.gimbal import PitchRollGimbal
 from visnav.sensors.telemetry import AutopilotTelemetry
 from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
+from visnav.sim.geoloc_parts import (build_navigator, log_samples, map_centre, mav_camera,  # noqa: F401
+                                     mission_map, mission_reference)
 from visnav.sim.log import FlightLog
 from visnav.sim.streams import GEOLOC_STREAMS
 from visnav.vehicles.fixedwing import micro_params, trim
-from visnav.world.maps import GeoImage, degrade_reference
 from visnav.world.scene import World
 from visnav.world.targets import paste_truck
-
-
-def mission_map(cfg) -> GeoImage:
-    """The map of ``mission.map``: a geo-referenced file, or the procedural rural world."""
-    if cfg.map.file:
-        return GeoImage.load(cfg.map.file)
-    from visnav.world.rural import rural_map
-
-    return rural_map(cfg.map.rural_size_m, 0.25, np.random.default_rng(cfg.map.rural_seed))
-
-
-def map_centre(geo: GeoImage) -> np.ndarray:
-    n0, n1, e0, e1 = geo.extent_ned()
-    return np.array([(n0 + n1) / 2, (e0 + e1) / 2])
-
-
-def mav_camera(c) -> PinholeCamera:
-    """1/4 inch CCD, f = 3.6 mm: 53 deg across the grabbed width; radial distortion k1, k2."""
-    f = (c.width_px / 2) / math.tan(math.radians(c.hfov_deg) / 2)
-    return PinholeCamera(c.width_px, c.height_px, f, f, (c.width_px - 1) / 2, (c.height_px - 1) / 2,
-                         (c.k1, c.k2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
-
-
-def mission_reference(cfg, geo: GeoImage) -> GeoImage:
-    """The reference image the navigator registers to: the mission's map, degraded (``mission.map.ref_*``)."""
-    m = cfg.map
-    return degrade_reference(geo, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
-
-
-def build_navigator(cfg, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
-    """The navigator of the scenario's ``mission`` block (``mission.registration``, the camera's processing size)."""
-    r, c = cfg.registration, cfg.camera
-    return GeolocationNavigator(reference, camera, hough=r.hough, median_px=r.median_px,
-                                search_radius_m=r.search_radius_m, min_quality=r.min_quality,
-                                registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
-                                gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
-                                check_rotation=r.check_rotation, scale_search=r.scale_search,
-                                rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
-                                rotation_search_deg=r.rotation_search_deg,
-                                rotation_search_step_deg=r.rotation_search_step_deg)
-
-
-def log_samples(log, nav) -> None:
-    """The navigator's samples and the RLS estimates after each (stream ``sample``)."""
-    for s in nav.samples:
-        log.record("sample", s["t"], reg=s["reg"], map=s["map"], est_reg=s["est_reg"], est_map=s["est_map"],
-                   ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],
-                   hough=s["hough_applied"], heading_tel=s["heading_tel"], heading_used=s["heading_used"],
-                   height_used=s["height_used"], gps=s["gps"], uv=s["uv"])
 
 
 class GeolocationSimulation:
