@@ -91,6 +91,9 @@ def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
     from visnav.estimation.timesync import estimate_offset, frame_rotation_angles
 
     rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
+    if rec.camera.mount is None:
+        raise RecordingError(f"{rec.path / 'camera.yaml'}: a gimbal camera (gimbal: true); --time-offset auto needs a "
+                             "camera fixed to the body (R_cam_to_body): give the offset in seconds")
     s = rec.streams["imu"]
     gyro = np.column_stack([s["gx_radps"], s["gy_radps"], s["gz_radps"]])
     decoded = [(float(t), rec.image(i)[0]) for i, t in enumerate(rec.streams["frames"]["t_s"])]
