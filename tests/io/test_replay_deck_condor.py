@@ -179,3 +179,18 @@ def test_the_condor_ground_test_is_refused_with_a_message(tmp_path):
     with pytest.raises(RecordingError, match="'ground_test' experiment has no navigator"):
         record(load_scenario("condor-ground-test"), tmp_path / "g")
     assert not (tmp_path / "g").exists()
+
+
+@pytest.mark.parametrize("text, expect", [
+    ("t_s,n_m,e_m,d_m,heading_rad,height_m\n0,1,2,-70,0.1,70\n", "missing column(s) ground_speed_mps"),
+    ("t_s,n_m,e_m,d_m,heading_rad,height_m,ground_speed_mps\n0.2,1,2,-70,0.1,70,13\n0.0,1,2,-70,0.1,70,13\n",
+     "line 3: timestamps out of order"),
+    ("t_s,airspeed_mps\n0,13\n0.1,fast\n", "line 3: column airspeed_mps holds 'fast'"),
+])
+def test_bad_telemetry_or_airspeed_csv_is_one_line_naming_the_file(tmp_path, text, expect):
+    name = "airspeed.csv" if "airspeed_mps" in text.splitlines()[0] else "telemetry.csv"
+    (tmp_path / name).write_text(text)
+    with pytest.raises(RecordingError) as err:
+        Recording.open(tmp_path)
+    msg = str(err.value)
+    assert msg.startswith(str(tmp_path / name)) and expect in msg and "\n" not in msg
