@@ -29,6 +29,7 @@ class NavigatorSpec:
     color_frames: bool = False  # it takes RGB frames (else 8-bit gray)
     finish: Callable | None = None  # finish(nav, log): what the navigator logs at the end of a run (replay)
     truth: Callable | None = None  # truth(log) -> truth.csv columns of what it estimates (default: the vehicle's)
+    streams: str = ""  # "module:NAME" of its loop's stream table (units of a replay's log.h5), "": the registered ones
 
 
 def rmax_camera(sc):
@@ -197,15 +198,27 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
     "deck": NavigatorSpec("deck-moving", ("deck",), ("imu", "attitude", "frames"), _deck_camera,
                           lambda sc: 1.0 / _deck_frame_interval(sc), _deck,
                           frame="deck-relative: deck origin relative to the vehicle in body FRD, deck -> body Euler",
-                          estimate_row=_deck_row),
+                          estimate_row=_deck_row, streams="visnav.sim.streams:DECK_STREAMS"),
     "condor": NavigatorSpec("condor-orbit", ("condor",), ("imu", "attitude", "gps", "baro", "magnetometer", "airspeed",
                                                           "camera_attitude", "pan", "frames", "click"),
-                            _condor_camera, lambda sc: float(sc.mission.camera.frame_hz), _condor, color_frames=True),
+                            _condor_camera, lambda sc: float(sc.mission.camera.frame_hz), _condor, color_frames=True,
+                            streams="visnav.sim.streams:CONDOR_STREAMS"),
     "geolocation": NavigatorSpec("mav-geolocation", ("mav-geolocation",), ("telemetry", "frames", "click"),
                                  _geolocation_camera, lambda sc: float(sc.mission.camera.frame_hz), _geolocation,
                                  frame="target position: NED world, on the ground (down 0)", estimate_row=_target_row,
-                                 finish=_geolocation_finish, truth=_target_truth),
+                                 finish=_geolocation_finish, truth=_target_truth,
+                                 streams="visnav.sim.streams:GEOLOC_STREAMS"),
 }
+
+
+def stream_table(s: NavigatorSpec) -> dict | None:
+    """The stream table of a navigator's loop (``NavigatorSpec.streams``), None when it has none of its own."""
+    import importlib
+
+    if not s.streams:
+        return None
+    module, attr = s.streams.split(":")
+    return getattr(importlib.import_module(module), attr)
 
 
 def spec(name: str) -> NavigatorSpec:

@@ -156,7 +156,9 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     elif opts.time_offset is not None:
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
-    log = FlightLog()
+    from visnav.io.navigators import stream_table
+
+    log = FlightLog(schema=stream_table(nspec))  # the loop's units and frames (deck: the relative state)
     nav, sc = _navigator(navigator, rec, opts, log.record)
     kinds, a, b, times = _events(rec, opts.output_rate_hz)
     wall0 = time.perf_counter()
