@@ -238,6 +238,8 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                 name = by_index[a[k]]
                 if name == "link":
                     t_fix = float(rec.streams["link"]["t_s"][b[k]]) + rec.time_offset_s
+                    for lost in [x for x in fixes if x < t_fix - 1e-9]:  # link.csv is in fix order: lost on the link
+                        del fixes[lost]
                     key = min(fixes, key=lambda x: abs(x - t_fix), default=None)
                     if key is None or abs(key - t_fix) > 1e-9:
                         counts["fixes_missing"] += 1
