@@ -722,8 +722,8 @@ def map_quality(
 # ------------------------------------------------------------------ record / replay (issue #14)
 @app.command("record")
 def record_(
-    scenario: str = typer.Argument(..., help="built-in scenario name or .toml (R-MAX loop: palace-landing, "
-                                   "witas-homing, ...)"),
+    scenario: str = typer.Argument(..., help="built-in scenario name or .toml (palace-landing, witas-homing, "
+                                   "pad-landing, deck-moving, deck-static, condor-orbit, ...)"),
     out: str = typer.Option(..., help="recording folder to write (docs/recordings.md)"),
     seed: Optional[int] = typer.Option(None, help="override run.seed"),
     set_: List[str] = typer.Option([], "--set", help="override a key, e.g. --set run.duration_s=20"),
@@ -757,8 +757,8 @@ def record_(
 def replay_(
     recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
                                     "ROS bag"),
-    navigator: str = typer.Option(..., help="navigator: palace or witas"),
-    map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas"),
+    navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
+    map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
     time_offset: Optional[str] = typer.Option(None, help="camera clock offset: 'auto' (gyro/camera "
                                               "cross-correlation) or seconds (t_imu = t_camera + offset); "

@@ -127,8 +127,8 @@ def test_cli_record_writes_the_folder(tmp_path):
     assert r.exit_code == 2 and "not empty" in r.output
     assert CliRunner().invoke(app, again + ["--force"]).exit_code == 0
     assert len(list((out / "frames").glob("*.png"))) == 5  # the earlier frames are gone
-    r = CliRunner().invoke(app, ["record", "deck-static", "--out", str(tmp_path / "deck")])
-    assert r.exit_code == 2 and "issue #13" in r.output
+    r = CliRunner().invoke(app, ["record", "condor-ground-test", "--out", str(tmp_path / "ground")])
+    assert r.exit_code == 2 and "no navigator in the loop" in r.output
 
 
 def test_corrupt_frame_inside_a_replay_is_counted_not_fatal(palace_rec, tmp_path):

@@ -5,13 +5,15 @@
 given comes from the scenario (the camera of ``[sensors.camera]`` or of the mission, the WITAS reference
 map degraded from the scenario's ground). A caller that has its own (a recording's ``camera.yaml``, a
 ``--map``, the simulation's pan-tilt unit) passes it. Adding a navigator (deck, CONDOR) is one
-``NavigatorSpec`` in ``NAVIGATORS``.
+``NavigatorSpec`` in ``NAVIGATORS`` (its estimate's frame and, when it is not a ``NavEstimate``, how to log it).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Callable
+
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -22,6 +24,12 @@ class NavigatorSpec:
     camera: Callable  # camera(sc) -> (PinholeCamera, mount) of the scenario
     camera_hz: Callable  # camera_hz(sc) -> frames per second it consumes
     build: Callable  # build(sc, recorder, camera, mount, **parts) -> navigator
+    frame: str = "NED world, body FRD"  # the frame of its estimate (the TUM header of a replay)
+    estimate_row: Callable | None = None  # estimate -> dict(position, velocity, euler, source, valid); None: NavEstimate
+    color_frames: bool = False  # it takes RGB frames (else 8-bit gray)
+    finish: Callable | None = None  # finish(nav, log): what the navigator logs at the end of a run (replay)
+    truth: Callable | None = None  # truth(log) -> truth.csv columns of what it estimates (default: the vehicle's)
+    streams: str = ""  # "module:NAME" of its loop's stream table (units of a replay's log.h5), "": the registered ones
 
 
 def rmax_camera(sc):
@@ -86,6 +94,100 @@ def _pad(sc, recorder, camera, mount, ptu=None, layout=None, **_):
     return PadNavigator(fc, detector, ptu, recorder=recorder)
 
 
+def _deck_camera(sc):
+    """The deck vehicle's LED camera (``mission.camera``): intrinsics with eq. 5.6-5.7 distortion, fixed mount
+    (T_cam: body -> camera, so R_cam_to_body = T_cam^T; lever arm = the camera position rho)."""
+    from visnav.geometry.mounts import FixedMount
+
+    c = sc.mission.camera
+    return c.pinhole(), FixedMount(c.rotation().T, tuple(c.position_m))
+
+
+def _deck_frame_interval(sc) -> float:
+    """The interval between the frames the deck loop delivers (a whole number of dynamics steps)."""
+    from visnav.sim.clock import rate_divisor
+
+    return rate_divisor(sc.mission.camera.rate_hz, sc.run.dt_s) * sc.run.dt_s
+
+
+def _deck(sc, recorder, camera, mount, **_):
+    """``DeckNavigator`` tuned from ``mission.filter`` (``DeckNavConfig.from_mission``); the camera's intrinsics,
+    distortion and mount are the ones given (a recording's camera.yaml) when they are."""
+    from dataclasses import replace
+
+    from visnav.estimation.deck import CameraGeometry
+    from visnav.navigation.deck import DeckNavConfig, DeckNavigator
+
+    cfg = DeckNavConfig.from_mission(sc.mission, _deck_frame_interval(sc))
+    if mount is None:
+        raise ValueError("the deck navigator needs the camera's mount (R_cam_to_body and lever_arm_m in camera.yaml)")
+    cfg = replace(cfg, camera=camera, cam=CameraGeometry(rho=np.asarray(mount.lever_arm, float),
+                                                         T_cam=np.asarray(mount.R_cam_to_body, float).T))
+    return DeckNavigator(cfg, recorder=recorder)
+
+
+def _deck_row(e) -> dict:
+    """The deck estimate's relative state: deck origin relative to the vehicle (body FRD), deck -> vehicle Euler
+    angles, the relative velocity seen from the vehicle (the loop's ``estimate`` stream)."""
+    x = e.state
+    return {"position": x[0:3], "euler": x[3:6], "velocity": x[6:9], "source": "deck", "valid": e.valid}
+
+
+def _condor_camera(sc):
+    from visnav.sensors.condor_camera import condor_camera
+
+    c = sc.mission.camera  # on the gimbal: no fixed mount (camera_attitude.csv, pan.csv)
+    return condor_camera(c.width_px, c.height_px, c.hfov_deg, c.k1, c.k2, c.crop_dx_px, c.crop_dy_px), None
+
+
+def _condor(sc, recorder, camera, mount, **_):
+    from visnav.sim.condor_parts import build_navigator
+
+    if sc.mission.experiment != "orbit":
+        raise ValueError(f"the condor navigator flies the orbit experiment; this scenario's is "
+                         f"{sc.mission.experiment!r}")
+    return build_navigator(sc.mission, camera)
+
+
+def _geolocation_camera(sc):
+    from visnav.sim.geoloc_parts import mav_camera
+
+    return mav_camera(sc.mission.camera), None  # on the pitch-roll gimbal: no fixed mount
+
+
+def _geolocation(sc, recorder, camera, mount, reference=None, **_):
+    """``GeolocationNavigator`` of ``mission.registration``; the reference image given (``--map``) or, for a
+    simulated recording, the closed loop's (the mission's map, degraded)."""
+    from visnav.sim.geoloc_parts import build_navigator, mission_map, mission_reference
+
+    if reference is None:
+        reference = mission_reference(sc.mission, mission_map(sc.mission))
+    return build_navigator(sc.mission, reference, camera)
+
+
+def _target_row(e) -> dict:
+    """A ``TargetEstimate``: the target on the ground (down 0), NED world."""
+    p = np.asarray(e.position, float)
+    return {"position": np.array([p[0], p[1], 0.0]), "velocity": np.full(3, np.nan), "euler": np.zeros(3),
+            "source": e.method, "valid": e.valid}
+
+
+def _geolocation_finish(nav, log) -> None:
+    from visnav.sim.geoloc_parts import log_samples
+
+    log_samples(log.record, nav)
+
+
+def _target_truth(log) -> dict | None:
+    """truth.csv of a geo-location flight: the true target (what its navigator estimates) at the log's 10 Hz."""
+    tg, tr = log.get("target"), log.get("truth")
+    if not tg or not tr:
+        return None
+    p = np.asarray(tg["position"], float).reshape(-1)
+    n = len(tr["t"])
+    return {"t_s": np.asarray(tr["t"], float), "n_m": np.full(n, p[0]), "e_m": np.full(n, p[1]), "d_m": np.zeros(n)}
+
+
 NAVIGATORS: dict[str, NavigatorSpec] = {
     "palace": NavigatorSpec("palace-landing", ("palace", "hover", "pfcm"), ("imu", "attitude", "gps"), rmax_camera,
                             _rmax_camera_hz, _palace),
@@ -93,7 +195,30 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
                            _witas_camera, lambda sc: float(sc.mission.filter.odometry_hz), _witas),
     "pad": NavigatorSpec("pad-landing", ("pad-landing",), ("imu", "attitude", "frames"), _pad_camera,
                          lambda sc: float(sc.mission.camera.rate_hz), _pad),
+    "deck": NavigatorSpec("deck-moving", ("deck",), ("imu", "attitude", "frames"), _deck_camera,
+                          lambda sc: 1.0 / _deck_frame_interval(sc), _deck,
+                          frame="deck-relative: deck origin relative to the vehicle in body FRD, deck -> body Euler",
+                          estimate_row=_deck_row, streams="visnav.sim.streams:DECK_STREAMS"),
+    "condor": NavigatorSpec("condor-orbit", ("condor",), ("imu", "attitude", "gps", "baro", "magnetometer", "airspeed",
+                                                          "camera_attitude", "pan", "frames", "click"),
+                            _condor_camera, lambda sc: float(sc.mission.camera.frame_hz), _condor, color_frames=True,
+                            streams="visnav.sim.streams:CONDOR_STREAMS"),
+    "geolocation": NavigatorSpec("mav-geolocation", ("mav-geolocation",), ("telemetry", "frames", "click"),
+                                 _geolocation_camera, lambda sc: float(sc.mission.camera.frame_hz), _geolocation,
+                                 frame="target position: NED world, on the ground (down 0)", estimate_row=_target_row,
+                                 finish=_geolocation_finish, truth=_target_truth,
+                                 streams="visnav.sim.streams:GEOLOC_STREAMS"),
 }
+
+
+def stream_table(s: NavigatorSpec) -> dict | None:
+    """The stream table of a navigator's loop (``NavigatorSpec.streams``), None when it has none of its own."""
+    import importlib
+
+    if not s.streams:
+        return None
+    module, attr = s.streams.split(":")
+    return getattr(importlib.import_module(module), attr)
 
 
 def spec(name: str) -> NavigatorSpec:

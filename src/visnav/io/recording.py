@@ -10,6 +10,12 @@ A recording is a folder a user can fill from their own vehicle without our code:
     magnetometer.csv t_s, heading_rad
     range.csv        t_s, range_m, sensor [, beam_offset_rad]
     gps.csv          t_s, n_m, e_m, d_m, vn_mps, ve_mps, vd_mps [, sigma_m]
+    airspeed.csv     t_s, airspeed_mps                          (CONDOR: pitot)
+    camera_attitude.csv  t_s, roll_rad, tilt_rad                (CONDOR: the gimbal camera's AHRS)
+    pan.csv          t_s, pan_rad                               (CONDOR: gimbal pan potentiometer)
+    click.csv        t_s, u_px, v_px                            (CONDOR: the operator's click on the target)
+    link.csv         t_s [, t_recv_s, seq]                      (CONDOR: uplink deliveries of the navigator's fixes)
+    telemetry.csv    t_s, n_m, e_m, d_m, heading_rad, height_m, ground_speed_mps   (geo-location: the downlink)
     truth.csv        t_s, n_m, e_m, d_m [, roll_rad, pitch_rad, yaw_rad]   (where a reference exists)
     commands.csv     t_s, seq, method, args  (simulated recordings: what the mission asked the navigator)
     scenario.toml    (simulated recordings: the resolved scenario)
@@ -31,8 +37,8 @@ import numpy as np
 
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
-from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, ImuSample,
-                                 RangeSample)
+from visnav.measurements import (AirspeedSample, AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample,
+                                 ImuSample, OperatorClick, PanSample, RangeSample, TargetRangeSample, TelemetrySample)
 
 
 class RecordingError(ValueError):
@@ -65,13 +71,30 @@ STREAMS: dict[str, Stream] = {
     "magnetometer": Stream("magnetometer.csv", ("t_s", "heading_rad"), alternatives=(("t_s", "mx", "my", "mz"),)),
     "frames": Stream("frames.csv", ("t_s", "file"), ("index", "video_frame"), text=("file",),
                      written=("t_s", "file", "index")),
+    # CONDOR (seed 004): the gimbal camera's own AHRS, its pan potentiometer, the pitot, the operator's
+    # click on the target, and the telemetry uplink that carries the ground station's range fixes
+    "camera_attitude": Stream("camera_attitude.csv", ("t_s", "roll_rad", "tilt_rad")),
+    "pan": Stream("pan.csv", ("t_s", "pan_rad")),
+    "airspeed": Stream("airspeed.csv", ("t_s", "airspeed_mps")),
+    "click": Stream("click.csv", ("t_s", "u_px", "v_px")),
+    "link": Stream("link.csv", ("t_s",)),
+    # MAV geo-location (seed 002 ch. 7): the autopilot's telemetry as the ground station receives it
+    "telemetry": Stream("telemetry.csv", ("t_s", "n_m", "e_m", "d_m", "heading_rad", "height_m", "ground_speed_mps")),
 }
 TRUTH = Stream("truth.csv", ("t_s", "n_m", "e_m", "d_m"), ("vn_mps", "ve_mps", "vd_mps", "roll_rad", "pitch_rad",
                                                           "yaw_rad"))
 COMMANDS = Stream("commands.csv", ("t_s", "method"), ("seq", "args"), text=("method", "args"))
 DELIVERY = ("t_recv_s", "seq")
 _TYPE_STREAM = {ImuSample: "imu", AttitudeSample: "attitude", GpsSample: "gps", RangeSample: "range",
-                BaroSample: "baro", HeadingSample: "magnetometer", Frame: "frames"}
+                BaroSample: "baro", HeadingSample: "magnetometer", Frame: "frames", PanSample: "pan",
+                AirspeedSample: "airspeed", OperatorClick: "click", TargetRangeSample: "link", TelemetrySample: "telemetry"}
+
+
+def stream_of(m) -> str | None:
+    """The recording stream a measurement belongs to (a camera's own AHRS: ``camera_attitude``)."""
+    if isinstance(m, AttitudeSample) and m.sensor == "camera":
+        return "camera_attitude"
+    return _TYPE_STREAM.get(type(m))
 
 
 # ---------------------------------------------------------------------------------------------- CSV
@@ -158,24 +181,29 @@ def _quote(s: str) -> str:
 @dataclass(frozen=True)
 class CameraInfo:
     camera: PinholeCamera
-    mount: FixedMount
+    mount: FixedMount | None  # None: a gimbal (``gimbal: true``), its attitude comes from the recording's streams
     time_offset_s: float = 0.0  # t_imu = t_camera + time_offset_s
 
 
-def write_camera_yaml(path: Path, camera: PinholeCamera, mount: FixedMount, time_offset_s: float = 0.0) -> None:
+def write_camera_yaml(path: Path, camera: PinholeCamera, mount: FixedMount | None, time_offset_s: float = 0.0) -> None:
+    """``mount`` None: a camera on a gimbal (``gimbal: true``; camera_attitude.csv and pan.csv say where it looks)."""
     import yaml
 
     doc = {
         "image_size": [camera.width, camera.height],
         "intrinsics": {"fx": camera.fx, "fy": camera.fy, "cx": camera.cx, "cy": camera.cy},
         "distortion": [float(c) for c in camera.dist],
-        "R_cam_to_body": [[float(x) for x in row] for row in mount.R_cam_to_body],
-        "lever_arm_m": [float(x) for x in mount.lever_arm],
-        "time_offset_s": float(time_offset_s),
     }
+    if mount is None:
+        doc["gimbal"] = True
+    else:
+        doc |= {"R_cam_to_body": [[float(x) for x in row] for row in mount.R_cam_to_body],
+                "lever_arm_m": [float(x) for x in mount.lever_arm]}
+    doc["time_offset_s"] = float(time_offset_s)
     head = ("# visnav recording camera (docs/recordings.md): OpenCV pinhole, distortion in OpenCV order\n"
             "# (k1, k2, p1, p2[, k3[, k4, k5, k6]]), R_cam_to_body maps camera (x right, y down, z optical axis)\n"
-            "# vectors to body FRD, lever arm = camera centre in body FRD, t_imu = t_camera + time_offset_s\n")
+            "# vectors to body FRD, lever arm = camera centre in body FRD, t_imu = t_camera + time_offset_s\n"
+            "# (gimbal: true instead of a mount: the camera's attitude is in camera_attitude.csv and pan.csv)\n")
     path.write_text(head + yaml.safe_dump(doc, sort_keys=False))
 
 
@@ -207,8 +235,11 @@ def read_camera_yaml(path: Path) -> CameraInfo:
                                                                                 float))
         elif "depression_deg" in doc:
             mount = FixedMount.depressed(float(doc["depression_deg"]), tuple(doc.get("lever_arm_m", (0, 0, 0))))
+        elif doc.get("gimbal") is True:
+            mount = None
         else:
-            raise ValueError("no mount: give R_cam_to_body (3x3, camera -> body FRD) or depression_deg")
+            raise ValueError("no mount: give R_cam_to_body (3x3, camera -> body FRD), depression_deg, or "
+                             "gimbal: true (attitude from camera_attitude.csv and pan.csv)")
         offset = float(doc.get("time_offset_s", 0.0))
         if not math.isfinite(offset):
             raise ValueError("time_offset_s is not finite")
@@ -232,6 +263,7 @@ class Recording:
     notes: list[str] = field(default_factory=list)
     time_offset_s: float = 0.0  # added to frame stamps (camera clock -> IMU clock); camera.yaml's by default
     images: list | None = None  # decoded frames held in memory (logs: rosbag images), else files
+    color: bool = False  # frames decoded to RGB (a navigator that uses colour: CONDOR), else 8-bit gray
     _video: dict = field(default_factory=dict, repr=False)  # file -> [cv2.VideoCapture, next frame number]
 
     @classmethod
@@ -276,7 +308,7 @@ class Recording:
         tr, sq, si, ri = [], [], [], []
         for j, n in enumerate(names):
             s = self.streams[n]
-            t = s["t_s"] + (self.time_offset_s if n == "frames" else 0.0)
+            t = s["t_s"] + (self.time_offset_s if n in ("frames", "link") else 0.0)
             tr.append(s.get("t_recv_s", t))
             sq.append(s.get("seq", np.full(len(t), -1.0)))
             si.append(np.full(len(t), STREAM_ORDER[n]))
@@ -306,6 +338,19 @@ class Recording:
             return BaroSample(t, float(s["altitude_m"][i]))
         if stream == "magnetometer":
             return HeadingSample(t, float(s["heading_rad"][i]))
+        if stream == "camera_attitude":
+            return AttitudeSample(t, np.array([s["roll_rad"][i], s["tilt_rad"][i], np.nan]), sensor="camera")
+        if stream == "pan":
+            return PanSample(t, float(s["pan_rad"][i]))
+        if stream == "airspeed":
+            return AirspeedSample(t, float(s["airspeed_mps"][i]))
+        if stream == "click":
+            return OperatorClick(t, np.array([s["u_px"][i], s["v_px"][i]]))
+        if stream == "telemetry":
+            return TelemetrySample(t, np.array([s["n_m"][i], s["e_m"][i], s["d_m"][i]]), float(s["heading_rad"][i]),
+                                   float(s["height_m"][i]), float(s["ground_speed_mps"][i]))
+        if stream == "link":
+            raise ValueError("link.csv rows are deliveries of the navigator's own fixes, not measurements")
         return self._frame(t + self.time_offset_s, s, i)
 
     def image(self, i: int) -> tuple[np.ndarray | None, str | None]:
@@ -319,12 +364,16 @@ class Recording:
             img = self._video_frame(f, i)
         else:
             img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
-        if img is not None and img.ndim == 3:
+        if img is not None and img.ndim == 2 and self.color:
+            img = cv2.cvtColor(img, cv2.COLOR_GRAY2RGB)
+        elif img is not None and img.ndim == 3 and self.color:
+            img = cv2.cvtColor(img, cv2.COLOR_BGR2RGB if img.shape[2] == 3 else cv2.COLOR_BGRA2RGB)
+        elif img is not None and img.ndim == 3:
             img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY if img.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
         cam = self.camera.camera if self.camera else None
         why = ("cannot be decoded" if img is None else f"is {img.dtype}, not 8-bit" if img.dtype != np.uint8 else
                f"is {img.shape[1]}x{img.shape[0]}, camera.yaml says {cam.width}x{cam.height}"
-               if cam is not None and img.shape != (cam.height, cam.width) else None)
+               if cam is not None and img.shape[:2] != (cam.height, cam.width) else None)
         return (img, None) if why is None else (None, f"{f}: {why}")
 
     def _video_frame(self, f: Path, i: int):

@@ -9,7 +9,7 @@ import numpy as np
 
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
-from visnav.io.recording import (COMMANDS, DELIVERY, STREAMS, TRUTH, RecordingError, _TYPE_STREAM, write_camera_yaml,
+from visnav.io.recording import (COMMANDS, DELIVERY, STREAMS, TRUTH, RecordingError, stream_of, write_camera_yaml,
                                  write_csv)
 
 
@@ -36,12 +36,15 @@ class RecordingWriter:
     def add(self, m, t_recv: float, seq: int) -> None:
         import cv2
 
-        kind = _TYPE_STREAM.get(type(m))
+        kind = stream_of(m)
         if kind is None:
             raise RecordingError(f"cannot record a {type(m).__name__}")
         if kind == "frames":
             name = f"frames/{len(self.rows['frames']):06d}.png"
-            if not (self.image_writer or cv2.imwrite)(str(self.dir / name), np.asarray(m.image)):
+            img = np.asarray(m.image)
+            if img.ndim == 3:  # colour frames are RGB in memory; a PNG holds BGR for cv2
+                img = cv2.cvtColor(img, cv2.COLOR_RGB2BGR)
+            if not (self.image_writer or cv2.imwrite)(str(self.dir / name), img):
                 raise RecordingError(f"{self.dir / name}: cannot write the frame")
             row = (m.t, name, m.index)
         elif kind == "imu":
@@ -54,15 +57,27 @@ class RecordingWriter:
             row = (m.t, m.range, m.sensor, m.beam_offset)
         elif kind == "baro":
             row = (m.t, m.altitude)
-        else:
+        elif kind == "magnetometer":
             row = (m.t, m.heading)
+        elif kind == "camera_attitude":
+            row = (m.t, m.euler[0], m.euler[1])
+        elif kind == "pan":
+            row = (m.t, m.pan)
+        elif kind == "airspeed":
+            row = (m.t, m.airspeed)
+        elif kind == "click":
+            row = (m.t, *m.pixel)
+        elif kind == "telemetry":
+            row = (m.t, *m.position, m.heading, m.height, m.ground_speed)
+        else:  # link: a fix the navigator made, delivered back to it; the replay's navigator makes its own
+            row = (m.t,)
         self.rows[kind].append((*row, t_recv, seq))
 
     def add_command(self, t: float, seq: int, method: str, args=(), kwargs=None) -> None:
         text = json.dumps({"args": _plain(args), "kwargs": _plain(kwargs or {})}) if (args or kwargs) else ""
         self.commands.append((t, seq, method, text))
 
-    def close(self, camera: PinholeCamera, mount: FixedMount, time_offset_s: float = 0.0, truth: dict | None = None,
+    def close(self, camera: PinholeCamera, mount: FixedMount | None, time_offset_s: float = 0.0, truth: dict | None = None,
               scenario_toml: str | None = None) -> Path:
         write_camera_yaml(self.dir / "camera.yaml", camera, mount, time_offset_s)
         for kind, spec in STREAMS.items():

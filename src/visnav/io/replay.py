@@ -68,7 +68,7 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
         parts |= {"camera": rec.camera.camera, "mount": rec.camera.mount}
     elif name == "palace":  # no frames and no camera.yaml: the scenario's camera stands in for MPE's
         rec.notes.append("no camera.yaml and no frames: PALACE runs on GPS / inertial only")
-    if name == "witas":
+    if name in ("witas", "geolocation"):
         if opts.map_path:
             from visnav.world.maps import GeoImage
 
@@ -77,7 +77,7 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
             except (OSError, ValueError) as exc:
                 raise RecordingError(f"{opts.map_path}: cannot load the reference map ({exc})") from None
         elif rec.scenario_toml is None:  # a simulated recording has its scenario: the closed loop's map
-            raise RecordingError(f"{rec.path}: the witas navigator needs a reference map: give --map MAP "
+            raise RecordingError(f"{rec.path}: the {name} navigator needs a reference map: give --map MAP "
                                  "(PNG/JPEG + world file)")
     try:
         return make_navigator(name, sc, recorder, **parts), sc
@@ -91,6 +91,9 @@ def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
     from visnav.estimation.timesync import estimate_offset, frame_rotation_angles
 
     rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
+    if rec.camera.mount is None:
+        raise RecordingError(f"{rec.path / 'camera.yaml'}: a gimbal camera (gimbal: true); --time-offset auto needs a "
+                             "camera fixed to the body (R_cam_to_body): give the offset in seconds")
     s = rec.streams["imu"]
     gyro = np.column_stack([s["gx_radps"], s["gy_radps"], s["gz_radps"]])
     decoded = [(float(t), rec.image(i)[0]) for i, t in enumerate(rec.streams["frames"]["t_s"])]
@@ -138,9 +141,10 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
 
     opts = opts or ReplayOptions()
     if navigator not in NAVIGATORS:
-        raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))} "
-                             "(deck and CONDOR follow issue #13)")
-    rec.require(NAVIGATORS[navigator].needs, navigator)
+        raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))}")
+    nspec = NAVIGATORS[navigator]
+    rec.require(nspec.needs, navigator)
+    rec.color = nspec.color_frames
     notes: list[str] = []
     metrics: dict = {}
     if opts.time_offset == "auto":
@@ -152,25 +156,36 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     elif opts.time_offset is not None:
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
-    log = FlightLog()
+    from visnav.io.navigators import stream_table
+
+    log = FlightLog(schema=stream_table(nspec))  # the loop's units and frames (deck: the relative state)
     nav, sc = _navigator(navigator, rec, opts, log.record)
     kinds, a, b, times = _events(rec, opts.output_rate_hz)
     wall0 = time.perf_counter()
+    cpu0 = time.process_time()
     counts, error = _feed(rec, nav, navigator, log, notes, (kinds, a, b, times), opts, progress)
-    wall = time.perf_counter() - wall0
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    if nspec.finish is not None:
+        nspec.finish(nav, log)
     reference = _log_reference(rec, log, opts)
-    h = nav.health(None)
+    h = nav.health(float(times[-1]) if len(times) else 0.0)
     dur = float(times[-1] - times[0]) if len(times) else 0.0
     metrics |= {"frames_used": counts["frames"], "frames_dropped": int(rec.skipped.get("frames", 0)),
                 "frames_in_recording": rec.count("frames"), "imu_samples": counts["imu"],
                 "samples_rejected": int(getattr(h, "rejected_samples", 0))}
     if opts.gps_until_s is not None:
         metrics["gps_withheld"] = counts["gps_withheld"]
+    if counts["fixes"]:  # a navigator with a ground-station half (CONDOR): its fixes over the link
+        metrics |= {"link_fixes": counts["fixes"], "link_fixes_delivered": counts["fixes_delivered"],
+                    "link_fixes_missing": counts["fixes_missing"]}
+        if counts["fixes_missing"]:
+            notes.append(f"link.csv: {counts['fixes_missing']} delivered fix(es) the replayed navigator did not make")
     if reference:
         metrics["reference"] = reference
         metrics |= _accuracy(log, True)
-    metrics |= {"replay_wall_s": wall, "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
-                "flight_duration_s": dur}
+    metrics |= {"replay_wall_s": wall, "replay_cpu_s": cpu,
+                "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
+                "replay_real_time_factor_cpu": dur / cpu if cpu > 0 else float("nan"), "flight_duration_s": dur}
     if counts.get("interrupted"):
         metrics["interrupted"] = True
         notes.append("interrupted (Ctrl-C): the run directory holds the replay up to there")
@@ -180,22 +195,58 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     notes += rec.notes
     if rec.skipped:
         notes.append(f"skipped during the replay: {', '.join(f'{v} {k}' for k, v in rec.skipped.items())}")
-    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes)
+    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes, frame=nspec.frame)
 
 
 def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict, str | None]:
     """The replay loop: samples to ``update``, recorded requests to their methods, estimates to the log."""
+    from visnav.io.navigators import NAVIGATORS
+
     kinds, a, b, times = events
     c = rec.commands
-    counts = {"frames": 0, "imu": 0, "gps_withheld": 0}
+    counts = {"frames": 0, "imu": 0, "gps_withheld": 0, "fixes": 0, "fixes_delivered": 0, "fixes_missing": 0}
     by_index = {STREAM_NAMES.index(s): s for s in rec.streams}
     cut = opts.gps_until_s if opts.gps_until_s is not None else np.inf
+    row = NAVIGATORS[navigator].estimate_row or _estimate_row
+    pending: list = []  # the last estimate query not yet logged: (t, fields); a later one at the same t replaces it
+    uplink = getattr(nav, "pop_uplink", None)  # a ground-station half's fixes (CONDOR): back through link.csv
+    fixes: dict[float, object] = {}
+    via_link = "link" in rec.streams
     k, t = 0, float("nan")
+
+    def flush():
+        if pending:
+            log.record("estimate", pending[0], **pending[1])
+            pending.clear()
+
+    def deliver(m):
+        nav.update(m)
+        if uplink is None:
+            return
+        for fix in uplink():
+            counts["fixes"] += 1
+            if via_link:
+                fixes[float(fix.t)] = fix
+            else:  # no link log: the fix reaches the navigator's on-board half at once
+                counts["fixes_delivered"] += 1
+                nav.update(fix)
+
     try:
         for k in range(len(kinds)):
             t = float(times[k])
             if kinds[k] == 0:
                 name = by_index[a[k]]
+                if name == "link":
+                    t_fix = float(rec.streams["link"]["t_s"][b[k]]) + rec.time_offset_s
+                    for lost in [x for x in fixes if x < t_fix - 1e-9]:  # link.csv is in fix order: lost on the link
+                        del fixes[lost]
+                    key = min(fixes, key=lambda x: abs(x - t_fix), default=None)
+                    if key is None or abs(key - t_fix) > 1e-9:
+                        counts["fixes_missing"] += 1
+                        continue
+                    counts["fixes_delivered"] += 1
+                    nav.update(fixes.pop(key))
+                    continue
                 m = rec.sample(name, int(b[k]))
                 if m is None:
                     continue
@@ -204,12 +255,12 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                     continue
                 if name in ("frames", "imu"):
                     counts[name] += 1
-                nav.update(m)
+                deliver(m)
             elif kinds[k] == 2 or c["method"][b[k]] == "estimate":
                 t = t if kinds[k] == 2 else _query_t(c, b[k], t)
-                e = nav.estimate(t)
-                log.record("estimate", t, position=e.position, velocity=e.velocity, euler=e.attitude,
-                           source=e.source, valid=e.valid)
+                if pending and pending[0] != t:
+                    flush()
+                pending[:] = [t, row(nav.estimate(t))]
             elif c["method"][b[k]] == "health":
                 t = _query_t(c, b[k], t)
                 h = nav.health(t)
@@ -241,7 +292,9 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
     except KeyboardInterrupt:  # Ctrl-C: keep what the replay has
         counts["interrupted"] = True
     except Exception as exc:  # keep what the replay has
+        flush()
         return counts, f"{type(exc).__name__} at t={t:.3f} s (event {k} of {len(kinds)}): {exc}"
+    flush()
     return counts, None
 
 
@@ -253,6 +306,11 @@ def _query_t(c, row: int, t: float) -> float:
         if "t" in kw:
             return float(kw["t"])
     return t
+
+
+def _estimate_row(e) -> dict:
+    """A ``NavEstimate`` as the ``estimate`` stream logs it."""
+    return {"position": e.position, "velocity": e.velocity, "euler": e.attitude, "source": e.source, "valid": e.valid}
 
 
 def _log_reference(rec: Recording, log: FlightLog, opts: ReplayOptions) -> str | None:

@@ -61,6 +61,35 @@ def mav_camera(c) -> PinholeCamera:
                          (c.k1, c.k2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
 
 
+def mission_reference(cfg, geo: GeoImage) -> GeoImage:
+    """The reference image the navigator registers to: the mission's map, degraded (``mission.map.ref_*``)."""
+    m = cfg.map
+    return degrade_reference(geo, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
+
+
+def build_navigator(cfg, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
+    """The navigator of the scenario's ``mission`` block (``mission.registration``, the camera's processing size):
+    used by the loop and by the navigator registry (``io/navigators.py``: replay)."""
+    r, c = cfg.registration, cfg.camera
+    return GeolocationNavigator(reference, camera, hough=r.hough, median_px=r.median_px,
+                                search_radius_m=r.search_radius_m, min_quality=r.min_quality,
+                                registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
+                                gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
+                                check_rotation=r.check_rotation, scale_search=r.scale_search,
+                                rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
+                                rotation_search_deg=r.rotation_search_deg,
+                                rotation_search_step_deg=r.rotation_search_step_deg)
+
+
+def log_samples(record, nav) -> None:
+    """The navigator's samples and the RLS estimates after each (stream ``sample``)."""
+    for s in nav.samples:
+        record("sample", s["t"], reg=s["reg"], map=s["map"], est_reg=s["est_reg"], est_map=s["est_map"],
+               ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],
+               hough=s["hough_applied"], heading_tel=s["heading_tel"], heading_used=s["heading_used"],
+               height_used=s["height_used"], gps=s["gps"], uv=s["uv"])
+
+
 class GeolocWorld(AircraftAir):
     """What the MAV's sensors see: its airspeed now (the pitot) and the ground with the truck (the camera)."""
 
@@ -176,11 +205,7 @@ class GeolocLogger:
         """The navigator's samples and RLS estimates, beside the true target (for the report)."""
         nav, record = self.nav, self.record
         record("target", 0.0, position=self.target.copy())
-        for s in nav.samples:
-            record("sample", s["t"], reg=s["reg"], map=s["map"], est_reg=s["est_reg"], est_map=s["est_map"],
-                   ok=s["ok"], reg_used=s["reg_used"], quality=s["quality"], peak=s["peak"],
-                   hough=s["hough_applied"], heading_tel=s["heading_tel"], heading_used=s["heading_used"],
-                   height_used=s["height_used"], gps=s["gps"], uv=s["uv"])
+        log_samples(record, nav)
         est, est_m, h = nav.estimate(0.0), nav.estimate(0.0, "map_based"), nav.health(0.0)
         record("geoloc_result", t, sim_time=t if completed else math.nan,
                est_reg=est.position, est_reg_valid=est.valid, est_map=est_m.position, est_map_valid=est_m.valid,
@@ -203,8 +228,7 @@ def build(ctx) -> MissionParts:
         raise ValueError(f"mission.target ({t.north_m}, {t.east_m}) m from the map centre is off the map "
                          f"({n1 - n0:.0f} x {e1 - e0:.0f} m)")
     frames_map = paste_truck(geo, target, t.length_m, t.width_m, math.radians(t.heading_deg))
-    m = cfg.map
-    reference = degrade_reference(geo, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
+    reference = mission_reference(cfg, geo)
     c, ctl = cfg.camera, cfg.control
     va = cfg.airframe.airspeed_mps
     wind = scenario_wind(sc.world, rng[0], ctl.altitude_m, va)
@@ -224,15 +248,7 @@ def build(ctx) -> MissionParts:
     telemetry = AutopilotTelemetry(rng[4], tl.rate_hz, tl.gps_sigma_m, tl.gps_bias_m, 600.0, tl.gps_delay_s,
                                    tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg,
                                    gps_rate_hz=tl.gps_rate_hz, link_delay_s=tl.link_delay_s)
-    r = cfg.registration
-    nav = GeolocationNavigator(reference, camera, hough=r.hough, median_px=r.median_px,
-                               search_radius_m=r.search_radius_m, min_quality=r.min_quality,
-                               registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
-                               gate_prob=r.gate_prob or None, process_size=(c.process_width_px, c.process_height_px),
-                               check_rotation=r.check_rotation, scale_search=r.scale_search,
-                               rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
-                               rotation_search_deg=r.rotation_search_deg,
-                               rotation_search_step_deg=r.rotation_search_step_deg)
+    nav = build_navigator(cfg, reference, camera)
     if ctx.navigator_wrapper is not None:
         nav = ctx.navigator_wrapper(nav)
     mission = GeolocationMission(cfg, path, recorder=record)

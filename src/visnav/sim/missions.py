@@ -24,7 +24,7 @@ from visnav.sim.parts import MissionParts  # noqa: F401  (re-exported)
 Builder = Callable[["BuildContext"], "MissionParts"]
 REGISTRY: dict[str, Builder] = {}
 
-#: the missions the R-MAX flies (``visnav record`` records these; the other vehicles' parts have no recorder yet)
+#: the missions the R-MAX flies (the others fly their own vehicle, from their own parts)
 RMAX_MISSIONS = ("palace", "hover", "pfcm", "witas-homing", "pad-landing")
 
 #: the one loop, which flies every mission from its builder's parts (named, not imported: sim/loop.py imports
