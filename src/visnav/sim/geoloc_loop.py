@@ -35,6 +35,7 @@ from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_airc
 from visnav.sim.log import FlightLog
 from visnav.sim.streams import GEOLOC_STREAMS
 from visnav.vehicles.fixedwing import micro_params, trim
+from visnav.world.appearance import another_day
 from visnav.world.maps import GeoImage, degrade_reference
 from visnav.world.scene import World
 from visnav.world.targets import paste_truck
@@ -67,7 +68,7 @@ class GeolocationSimulation:
         self.cfg = cfg = sc.mission
         self.log = FlightLog(schema=GEOLOC_STREAMS)
         self.dt = sc.run.dt_s
-        self.rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(11)]
+        self.rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(12)]
         rng = self.rng
         geo = mission_map(cfg)
         t = cfg.target
@@ -78,7 +79,8 @@ class GeolocationSimulation:
                              f"({n1 - n0:.0f} x {e1 - e0:.0f} m)")
         frames_map = paste_truck(geo, self.target, t.length_m, t.width_m, math.radians(t.heading_deg))
         m = cfg.map
-        self.reference = degrade_reference(geo, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
+        day = another_day(geo, rng[11], m.change_m, m.change_keep, m.relief_level, m.relief_shift_m, m.relief_corr_m)
+        self.reference = degrade_reference(day, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
         c, ctl = cfg.camera, cfg.control
         va = cfg.airframe.airspeed_mps
         self.wind = scenario_wind(sc.world, rng[0], ctl.altitude_m, va)
@@ -93,7 +95,8 @@ class GeolocationSimulation:
         ab = rng[7].normal(0.0, math.radians(g.ahrs_bias_deg), 2)
         self.gimbal = PitchRollGimbal(rng[3], g.lag_s, g.leak, b[0], b[1], math.radians(g.jitter_deg),
                                       ahrs_turn_gain=g.ahrs_turn_gain, ahrs_tau_s=g.ahrs_tau_s,
-                                      ahrs_bias_roll=ab[0], ahrs_bias_pitch=ab[1])
+                                      ahrs_bias_roll=ab[0], ahrs_bias_pitch=ab[1],
+                                      deadband=math.radians(g.deadband_deg), limit=math.radians(g.travel_deg))
         tl = cfg.telemetry
         self.telemetry = AutopilotTelemetry(rng[4], tl.rate_hz, tl.gps_sigma_m, tl.gps_bias_m, 600.0, tl.gps_delay_s,
                                             tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg,
