@@ -97,8 +97,11 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
                        chunk: int = 64, seed: int = 0, unstable_m: float = ANOTHER_DAY["scale_m"],
                        texture_keep: float = ANOTHER_DAY["keep"],
                        relief_level: float | None = ANOTHER_DAY["relief_level"],
-                       shift_m: float = ANOTHER_DAY["shift_m"], shift_corr_m: float = ANOTHER_DAY["corr_m"]) -> Registrability:
-    """The per-cell registrability of ``geo`` (a GeoImage) for frames taken at ``altitude_m``."""
+                       shift_m: float = ANOTHER_DAY["shift_m"], shift_corr_m: float = ANOTHER_DAY["corr_m"],
+                       realizations: int = 4) -> Registrability:
+    """The per-cell registrability of ``geo`` (a GeoImage) for frames taken at ``altitude_m``: the
+    correlation surfaces of ``realizations`` draws of the appearance change (one when there is none)
+    averaged (the expected surface), then peak, ambiguity, sharpness and score (module docstring)."""
     if not (np.isfinite(altitude_m) and altitude_m > 0):
         raise ValueError(f"altitude must be positive, got {altitude_m}")
     k = max(1, int(round(work_res_m / geo.resolution_m)))
@@ -107,9 +110,9 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
                                               interpolation=cv2.INTER_AREA)
     ref = sobel_edges(img)
     rng = np.random.default_rng(seed)
-    sensed = _sensed_edges(appearance_change(img, unstable_m / res, rng, texture_keep, relief_level, shift_m / res,
-                                             shift_corr_m / res), noise_sigma,
-                           median_px, rng)
+    n_real = max(1, int(realizations)) if unstable_m > 0 else 1
+    sensed = [_sensed_edges(appearance_change(img, unstable_m / res, rng, texture_keep, relief_level, shift_m / res,
+                                              shift_corr_m / res), noise_sigma, median_px, rng) for _ in range(n_real)]
     width = 2 * altitude_m * math.tan(math.radians(hfov_deg) / 2)
     q = int(width * aspect / math.sqrt(2) / res)  # the square inside the frame at any heading
     r = int(math.ceil(search_m / res))
@@ -135,10 +138,10 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
     for s in range(0, len(centres), chunk):
         cs = centres[s : s + chunk]
         idx_t = (cs[:, 0, None, None] - a + np.arange(q)[None, :, None], cs[:, 1, None, None] - a + np.arange(q)[None, None, :])
-        tpl = sensed[idx_t]
         wr = np.arange(-half, -half + q + 2 * r)
         win = ref[cs[:, 0, None, None] + wr[None, :, None], cs[:, 1, None, None] + wr[None, None, :]]
-        c = batch_ncc(win, tpl)  # (n, 2r+1, 2r+1), zero shift at (r, r)
+        c = sum(batch_ncc(win, sn[idx_t]) for sn in sensed) / len(sensed)  # (n, 2r+1, 2r+1), zero shift at (r, r)
+        tpl = sensed[0][idx_t]
         pk = c[:, r, r]
         out["peak"][s : s + chunk] = pk
         out["amb"][s : s + chunk] = c[:, far].max(axis=1)
