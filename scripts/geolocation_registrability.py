@@ -122,7 +122,10 @@ def main() -> None:
                              rotation_search_deg=45.0, rotation_search_step_deg=7.5, **kw)
                 row.update(n=a.n, fail_rate=float(v["failed"].mean()), fail_rate_quantile=v["fail_rate_quantile"],
                            score_quantile_edges=v["score_quantile_edges"], fail_rate_low=v["fail_rate_low"],
-                           fail_rate_high=v["fail_rate_high"])
+                           fail_rate_high=v["fail_rate_high"], frames={
+                               "north": v["positions"][:, 0].tolist(), "east": v["positions"][:, 1].tolist(),
+                               "score": v["scores"].tolist(), "failed": v["failed"].tolist(),
+                               "error_m": [float(e) if np.isfinite(e) else None for e in v["error_m"]]})
             rows.append(row)
             print(json.dumps(row), flush=True)
             Path(a.out).write_text(json.dumps(rows, indent=1))

@@ -98,10 +98,12 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
                        texture_keep: float = ANOTHER_DAY["keep"],
                        relief_level: float | None = ANOTHER_DAY["relief_level"],
                        shift_m: float = ANOTHER_DAY["shift_m"], shift_corr_m: float = ANOTHER_DAY["corr_m"],
-                       realizations: int = 4) -> Registrability:
+                       realizations: int = 4, rotations_deg: tuple = (7.5, 15.0)) -> Registrability:
     """The per-cell registrability of ``geo`` (a GeoImage) for frames taken at ``altitude_m``: the
     correlation surfaces of ``realizations`` draws of the appearance change (one when there is none)
-    averaged (the expected surface), then peak, ambiguity, sharpness and score (module docstring)."""
+    averaged (the expected surface), then peak, ambiguity, sharpness and score (module docstring). The
+    ambiguity also counts look-alike places for the frame turned by +-``rotations_deg`` (the heading the
+    pipeline searches is uncertain): the reference turned instead of the template, once per angle."""
     if not (np.isfinite(altitude_m) and altitude_m > 0):
         raise ValueError(f"altitude must be positive, got {altitude_m}")
     k = max(1, int(round(work_res_m / geo.resolution_m)))
@@ -135,16 +137,28 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
     far = rad2 > ex * ex
     ring = np.abs(np.sqrt(rad2) - ex / 2) < 0.5
     a = q // 2
+    wr = np.arange(-half, -half + q + 2 * r)
+    turned = []  # (reference edge image turned by an angle about the map centre, its affine) per angle
+    D = int(np.ceil(math.hypot(H, W))) + 2 * half + 4
+    for ang in [sg * float(t) for t in rotations_deg for sg in (1.0, -1.0) if t != 0]:
+        M = cv2.getRotationMatrix2D((W / 2.0, H / 2.0), ang, 1.0)
+        M[:, 2] += (D / 2.0 - W / 2.0, D / 2.0 - H / 2.0)
+        turned.append((cv2.warpAffine(ref.astype(np.float32), M, (D, D), flags=cv2.INTER_LINEAR, borderValue=0.0), M))
     for s in range(0, len(centres), chunk):
         cs = centres[s : s + chunk]
         idx_t = (cs[:, 0, None, None] - a + np.arange(q)[None, :, None], cs[:, 1, None, None] - a + np.arange(q)[None, None, :])
-        wr = np.arange(-half, -half + q + 2 * r)
         win = ref[cs[:, 0, None, None] + wr[None, :, None], cs[:, 1, None, None] + wr[None, None, :]]
         c = sum(batch_ncc(win, sn[idx_t]) for sn in sensed) / len(sensed)  # (n, 2r+1, 2r+1), zero shift at (r, r)
         tpl = sensed[0][idx_t]
         pk = c[:, r, r]
         out["peak"][s : s + chunk] = pk
-        out["amb"][s : s + chunk] = c[:, far].max(axis=1)
+        amb = c[:, far].max(axis=1)
+        for R_, M in turned:  # the same place or another one, with the frame at a wrong heading
+            ct = np.rint(np.column_stack([cs[:, 1], cs[:, 0], np.ones(len(cs))]) @ M.T).astype(int)  # (x, y)
+            wt = R_[ct[:, 1, None, None] + wr[None, :, None], ct[:, 0, None, None] + wr[None, None, :]]
+            c_t = sum(batch_ncc(wt, sn[idx_t]) for sn in sensed) / len(sensed)
+            amb = np.maximum(amb, c_t[:, far].max(axis=1))
+        out["amb"][s : s + chunk] = amb
         out["sharp"][s : s + chunk] = (pk - c[:, ring].mean(axis=1)) / np.maximum(np.abs(pk), 1e-6)
         out["std"][s : s + chunk] = tpl.std(axis=(1, 2))
     shape = rr.shape
