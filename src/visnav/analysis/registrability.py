@@ -2,14 +2,16 @@
 is reliable): for every cell of a geo-referenced image, how reliably a nadir frame taken above it at
 ``altitude_m`` registers with the ch. 7 pipeline.
 
-Per cell: the *sensed* template is what the pipeline would correlate (the reference as the camera
-would see it: video noise, the median filter, Sobel edges; the largest square inside the frame at any
-heading), the *window* is the reference edge image around the cell extended by the search radius;
-the correlation surface (TM_CCOEFF_NORMED, computed for all cells at once by batched FFTs with window
-sums from cumulative sums) gives
+Per cell: the *sensed* template is what the pipeline would correlate (the ground as the camera would see
+it on another day, ``world/appearance.py``'s ``ANOTHER_DAY`` by default, ``unstable_m=0`` for the
+reference's own day; video noise, the median filter, Sobel edges; the largest square inside the frame
+at any heading), the *window* is the reference edge image around the cell extended by the search
+radius; the correlation surface (TM_CCOEFF_NORMED, computed for all cells at once by batched FFTs with
+window sums from cumulative sums), averaged over ``realizations`` draws of the change, gives
 
 * ``peak``: the correlation at the true position;
-* ``ambiguity``: the highest correlation farther than ``exclusion_m`` from it (a look-alike place);
+* ``ambiguity``: the highest correlation farther than ``exclusion_m`` from it (a look-alike place), also
+  with the frame turned by +-``rotations_deg``;
 * ``sharpness``: the peak minus the mean on a ring at ``exclusion_m / 2``, relative to the peak;
 * ``score`` = max(peak - max(ambiguity, 0), 0) x clip(sharpness, 0, 1), in [0, 1].
 
