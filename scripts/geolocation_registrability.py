@@ -7,9 +7,12 @@ classes below), and the failure rate of full-pipeline registrations per score qu
 Land cover: polygons drawn by eye on the maps (x = column, y = row, in pixels of the map reduced by
 ``scale``: 0.5 for satellite_column, 0.4 for satellite_strip); the road class is the cells within 8 m
 of the gravel roads. Registrations: the mission's pipeline (Algorithm 1, rotation search, scale and
-rotation refinement), heading off by up to +-15 deg, GPS by 4 m. ``--keep``: the share of the fine texture (finer than 2 m) that repeats between
-the reference and the flight (``registrability.unstable_texture``; 1: the frames are drawn from the
-reference orthophoto itself, as in the closed-loop simulation).
+rotation refinement), heading off by up to +-15 deg, GPS by 4 m. ``--models``: the appearance change between
+the reference and the flight (``world/appearance.py``) the score is computed under and the frames are
+rendered with: ``same`` (frames drawn from the reference orthophoto itself), ``day`` (``ANOTHER_DAY``: the
+relief's fine texture changes and moves, the default of the mission and of ``visnav map-quality``),
+``dayL5`` / ``dayL20`` (the same with the relief level at 5 / 20 grey levels instead of 10: sensitivity),
+``uniform`` (round 2's model: the fine texture of every place keeps 0.5, nothing moves).
 """
 
 from __future__ import annotations
@@ -41,6 +44,15 @@ POLYGONS = {
         "shore/reed": [(80, 277), (160, 240), (330, 160), (430, 100), (560, 68), (700, 88), (954, 80), (954, 230),
                        (870, 240), (860, 277)],
     }, []),
+}
+
+
+MODELS = {
+    "same": {"unstable_m": 0.0},
+    "day": {},
+    "dayL5": {"relief_level": 5.0},
+    "dayL20": {"relief_level": 20.0},
+    "uniform": {"texture_keep": 0.5, "relief_level": None, "shift_m": 0.0},
 }
 
 
@@ -87,7 +99,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", required=True)
     ap.add_argument("--n", type=int, default=200)
-    ap.add_argument("--keep", default="1,0.7,0.5")
+    ap.add_argument("--models", default="same,day")
     ap.add_argument("--maps", default="rural,column,strip")
     ap.add_argument("--heading-error-deg", type=float, default=15.0)
     a = ap.parse_args()
@@ -100,17 +112,20 @@ def main() -> None:
         else:
             print(f"{name}: {DATA} not found, skipped")
             continue
-        for keep in (float(k) for k in a.keep.split(",")):
-            um = 0.0 if keep >= 1 else 2.0
-            reg = registrability_map(geo, 70.0, unstable_m=um, texture_keep=keep)
-            row = {"map": name, "texture_keep": keep, "classes": by_class(reg, geo, classes(name, geo.shape))
+        for model in a.models.split(","):
+            kw = MODELS[model]
+            reg = registrability_map(geo, 70.0, **kw)
+            row = {"map": name, "model": model, "classes": by_class(reg, geo, classes(name, geo.shape))
                    if name in POLYGONS else {}}
             if a.n > 0:
-                v = validate(reg, geo, n=a.n, heading_error_deg=a.heading_error_deg, seed=11, unstable_m=um,
-                             texture_keep=keep, rotation_search_deg=45.0, rotation_search_step_deg=7.5)
+                v = validate(reg, geo, n=a.n, heading_error_deg=a.heading_error_deg, seed=11,
+                             rotation_search_deg=45.0, rotation_search_step_deg=7.5, **kw)
                 row.update(n=a.n, fail_rate=float(v["failed"].mean()), fail_rate_quantile=v["fail_rate_quantile"],
                            score_quantile_edges=v["score_quantile_edges"], fail_rate_low=v["fail_rate_low"],
-                           fail_rate_high=v["fail_rate_high"])
+                           fail_rate_high=v["fail_rate_high"], frames={
+                               "north": v["positions"][:, 0].tolist(), "east": v["positions"][:, 1].tolist(),
+                               "score": v["scores"].tolist(), "failed": v["failed"].tolist(),
+                               "error_m": [float(e) if np.isfinite(e) else None for e in v["error_m"]]})
             rows.append(row)
             print(json.dumps(row), flush=True)
             Path(a.out).write_text(json.dumps(rows, indent=1))

@@ -690,6 +690,8 @@ def map_quality(
     cell_m: float = typer.Option(10.0, "--cell-m", help="cell size \\[m]"),
     hfov_deg: float = typer.Option(53.0, "--hfov-deg", help="camera field of view across the frame \\[deg]"),
     validate_n: int = typer.Option(0, "--validate", help="also register N rendered frames and compare failures"),
+    same_day: bool = typer.Option(False, "--same-day", help="frames drawn from the map itself (default: another "
+                                  "day: the relief's texture changes and moves, world/appearance.py)"),
 ) -> None:
     """Registrability of a map: per cell, how reliably a nadir frame taken there registers (PNG + world file + .npy)."""
     from pathlib import Path
@@ -704,7 +706,8 @@ def map_quality(
             raise ValueError(f"--altitude, --cell-m must be > 0, --hfov-deg in (0, 180), --validate >= 0 "
                              f"(got {altitude}, {cell_m}, {hfov_deg}, {validate_n})")
         geo = GeoImage.load(map_file)
-        reg = registrability_map(geo, altitude, hfov_deg=hfov_deg, cell_m=cell_m)
+        day = {"unstable_m": 0.0} if same_day else {}
+        reg = registrability_map(geo, altitude, hfov_deg=hfov_deg, cell_m=cell_m, **day)
         paths = write_registrability(reg, geo, Path(out))
     except (FileNotFoundError, ValueError, OSError) as exc:
         _fail(exc)
@@ -713,7 +716,7 @@ def map_quality(
                   f"{float(np.median(s)):.3f}, 10th-90th percentile {float(np.percentile(s, 10)):.3f}-"
                   f"{float(np.percentile(s, 90)):.3f}")
     if validate_n:
-        v = validate(reg, geo, n=validate_n)
+        v = validate(reg, geo, n=validate_n, **day)
         console.print(f"validation ({validate_n} frames): failure rate {v['fail_rate_low']:.2f} where the score "
                       f"is at most its median ({v['score_median']:.3f}), {v['fail_rate_high']:.2f} above")
     console.print("written: " + ", ".join(str(p) for p in paths.values()))

@@ -93,3 +93,21 @@ def test_gps_fixes_are_held_between_updates_and_the_link_delays_the_whole_sample
         assert 10.0 * (t - 0.1 - 0.25) - 1e-9 <= s.position[0] <= 10.0 * (t - 0.1) + 1e-9
         d = tel.downlink(s)  # the ground station stamps it on arrival, 0.3 s later
         assert d.t == pytest.approx(t + 0.3) and np.array_equal(d.position, s.position)
+
+
+def test_servo_dead_band_leaves_the_camera_half_the_band_behind_on_the_side_it_came_from():
+    # roll ramps 0 -> 10 deg, then back to 5 deg: with a 2 deg dead band (no lag, leak or bias) the servo
+    # trails the command by 1 deg while it moves, and a reversal leaves it 1 deg on the other side
+    db = math.radians(2.0)
+    g = PitchRollGimbal(np.random.default_rng(0), lag_s=0.0, leak=0.0, bias_roll=0.0, bias_pitch=0.0, jitter=0.0,
+                        deadband=db)
+    for phi in np.radians(np.linspace(0.0, 10.0, 201)):
+        g.step(0.01, np.array([phi, 0.0, 0.0]))
+    assert g.residual(np.array([math.radians(10.0), 0.0, 0.0]))[0] == pytest.approx(0.5 * db, abs=1e-12)
+    for phi in np.radians(np.linspace(10.0, 9.5, 11)):  # inside the band: nothing moves
+        g.step(0.01, np.array([phi, 0.0, 0.0]))
+    assert g.servo[0] == pytest.approx(-math.radians(10.0) + 0.5 * db, abs=1e-12)
+    for phi in np.radians(np.linspace(9.5, 5.0, 101)):
+        g.step(0.01, np.array([phi, 0.0, 0.0]))
+    assert g.residual(np.array([math.radians(5.0), 0.0, 0.0]))[0] == pytest.approx(-0.5 * db, abs=1e-12)
+    assert g.residual(np.array([math.radians(5.0), 0.0, 0.0]))[1] == pytest.approx(0.0, abs=1e-12)

@@ -87,7 +87,10 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
         from visnav.analysis.registrability import registrability_map
 
         try:
-            rq = registrability_map(geo, scenario.mission.control.altitude_m)
+            m = scenario.mission.map  # scored under the appearance change this flight's reference had
+            rq = registrability_map(geo, scenario.mission.control.altitude_m, unstable_m=m.change_m,
+                                    texture_keep=m.change_keep, relief_level=m.relief_level,
+                                    shift_m=m.relief_shift_m, shift_corr_m=m.relief_corr_m)
         except ValueError:
             rq = None
         if rq is not None:

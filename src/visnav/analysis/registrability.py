@@ -2,14 +2,16 @@
 is reliable): for every cell of a geo-referenced image, how reliably a nadir frame taken above it at
 ``altitude_m`` registers with the ch. 7 pipeline.
 
-Per cell: the *sensed* template is what the pipeline would correlate (the reference as the camera
-would see it: video noise, the median filter, Sobel edges; the largest square inside the frame at any
-heading), the *window* is the reference edge image around the cell extended by the search radius;
-the correlation surface (TM_CCOEFF_NORMED, computed for all cells at once by batched FFTs with window
-sums from cumulative sums) gives
+Per cell: the *sensed* template is what the pipeline would correlate (the ground as the camera would see
+it on another day, ``world/appearance.py``'s ``ANOTHER_DAY`` by default, ``unstable_m=0`` for the
+reference's own day; video noise, the median filter, Sobel edges; the largest square inside the frame
+at any heading), the *window* is the reference edge image around the cell extended by the search
+radius; the correlation surface (TM_CCOEFF_NORMED, computed for all cells at once by batched FFTs with
+window sums from cumulative sums), averaged over ``realizations`` draws of the change, gives
 
 * ``peak``: the correlation at the true position;
-* ``ambiguity``: the highest correlation farther than ``exclusion_m`` from it (a look-alike place);
+* ``ambiguity``: the highest correlation farther than ``exclusion_m`` from it (a look-alike place), also
+  with the frame turned by +-``rotations_deg``;
 * ``sharpness``: the peak minus the mean on a ring at ``exclusion_m / 2``, relative to the peak;
 * ``score`` = max(peak - max(ambiguity, 0), 0) x clip(sharpness, 0, 1), in [0, 1].
 
@@ -30,6 +32,10 @@ import numpy as np
 from scipy import fft as sfft
 
 from visnav.vision.geolocation_registration import sobel_edges
+from visnav.world.appearance import ANOTHER_DAY, appearance_change
+
+#: the former name (the uniform model: ``relief_level`` None)
+unstable_texture = appearance_change
 
 __all__ = ["Registrability", "registrability_map", "validate", "write_registrability"]
 
@@ -81,25 +87,6 @@ def batch_ncc(windows: np.ndarray, templates: np.ndarray) -> np.ndarray:
     return np.where(den > 1e-6 * max(float(tn.max()), 1e-12), num / np.maximum(den, 1e-12), 0.0)
 
 
-def unstable_texture(img: np.ndarray, scale_px: float, rng: np.random.Generator, keep: float = 0.0) -> np.ndarray:
-    """The image as seen on another day: structure coarser than ``scale_px`` (Gaussian sigma) kept,
-    the finer band (tree crowns and their shadows, crop texture: what sun, season and the parallax of
-    trees change between the reference and a flight) replaced by a band of the same spectrum and the
-    same local power but random phase, so it gives edges that do not correspond to the reference.
-    ``scale_px`` <= 0: the image unchanged."""
-    if scale_px <= 0:
-        return img
-    f = np.asarray(img, np.float32)
-    low = cv2.GaussianBlur(f, (0, 0), scale_px)
-    band = f - low
-    power = np.sqrt(cv2.GaussianBlur(band * band, (0, 0), 2.0 * scale_px))
-    F = np.fft.rfft2(band)
-    phase = np.exp(2j * np.pi * rng.uniform(0.0, 1.0, F.shape))
-    noise = np.fft.irfft2(np.abs(F) * phase, s=band.shape).astype(np.float32)
-    noise /= np.sqrt(cv2.GaussianBlur(noise * noise, (0, 0), 2.0 * scale_px)) + 1e-6
-    return np.clip(low + keep * band + math.sqrt(max(1.0 - keep * keep, 0.0)) * power * noise, 0, 255).astype(np.uint8)
-
-
 def _sensed_edges(img: np.ndarray, noise_sigma: float, median_px: int, rng: np.random.Generator) -> np.ndarray:
     noisy = cv2.add(img, np.clip(np.round(rng.normal(0.0, noise_sigma, img.shape)), -127, 127).astype(np.int16),
                     dtype=cv2.CV_8U) if noise_sigma > 0 else img
@@ -109,9 +96,16 @@ def _sensed_edges(img: np.ndarray, noise_sigma: float, median_px: int, rng: np.r
 def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: float = 288 / 360,
                        cell_m: float = 10.0, search_m: float = 15.0, exclusion_m: float = 4.0,
                        work_res_m: float = 0.5, noise_sigma: float = 4.0, median_px: int = 3,
-                       chunk: int = 64, seed: int = 0, unstable_m: float = 0.0,
-                       texture_keep: float = 0.5) -> Registrability:
-    """The per-cell registrability of ``geo`` (a GeoImage) for frames taken at ``altitude_m``."""
+                       chunk: int = 64, seed: int = 0, unstable_m: float = ANOTHER_DAY["scale_m"],
+                       texture_keep: float = ANOTHER_DAY["keep"],
+                       relief_level: float | None = ANOTHER_DAY["relief_level"],
+                       shift_m: float = ANOTHER_DAY["shift_m"], shift_corr_m: float = ANOTHER_DAY["corr_m"],
+                       realizations: int = 4, rotations_deg: tuple = (7.5, 15.0)) -> Registrability:
+    """The per-cell registrability of ``geo`` (a GeoImage) for frames taken at ``altitude_m``: the
+    correlation surfaces of ``realizations`` draws of the appearance change (one when there is none)
+    averaged (the expected surface), then peak, ambiguity, sharpness and score (module docstring). The
+    ambiguity also counts look-alike places for the frame turned by +-``rotations_deg`` (the heading the
+    pipeline searches is uncertain): the reference turned instead of the template, once per angle."""
     if not (np.isfinite(altitude_m) and altitude_m > 0):
         raise ValueError(f"altitude must be positive, got {altitude_m}")
     k = max(1, int(round(work_res_m / geo.resolution_m)))
@@ -120,7 +114,9 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
                                               interpolation=cv2.INTER_AREA)
     ref = sobel_edges(img)
     rng = np.random.default_rng(seed)
-    sensed = _sensed_edges(unstable_texture(img, unstable_m / res, rng, texture_keep), noise_sigma, median_px, rng)
+    n_real = max(1, int(realizations)) if unstable_m > 0 else 1
+    sensed = [_sensed_edges(appearance_change(img, unstable_m / res, rng, texture_keep, relief_level, shift_m / res,
+                                              shift_corr_m / res), noise_sigma, median_px, rng) for _ in range(n_real)]
     width = 2 * altitude_m * math.tan(math.radians(hfov_deg) / 2)
     q = int(width * aspect / math.sqrt(2) / res)  # the square inside the frame at any heading
     r = int(math.ceil(search_m / res))
@@ -143,16 +139,28 @@ def registrability_map(geo, altitude_m: float, hfov_deg: float = 53.0, aspect: f
     far = rad2 > ex * ex
     ring = np.abs(np.sqrt(rad2) - ex / 2) < 0.5
     a = q // 2
+    wr = np.arange(-half, -half + q + 2 * r)
+    turned = []  # (reference edge image turned by an angle about the map centre, its affine) per angle
+    D = int(np.ceil(math.hypot(H, W))) + 2 * half + 4
+    for ang in [sg * float(t) for t in rotations_deg for sg in (1.0, -1.0) if t != 0]:
+        M = cv2.getRotationMatrix2D((W / 2.0, H / 2.0), ang, 1.0)
+        M[:, 2] += (D / 2.0 - W / 2.0, D / 2.0 - H / 2.0)
+        turned.append((cv2.warpAffine(ref.astype(np.float32), M, (D, D), flags=cv2.INTER_LINEAR, borderValue=0.0), M))
     for s in range(0, len(centres), chunk):
         cs = centres[s : s + chunk]
         idx_t = (cs[:, 0, None, None] - a + np.arange(q)[None, :, None], cs[:, 1, None, None] - a + np.arange(q)[None, None, :])
-        tpl = sensed[idx_t]
-        wr = np.arange(-half, -half + q + 2 * r)
         win = ref[cs[:, 0, None, None] + wr[None, :, None], cs[:, 1, None, None] + wr[None, None, :]]
-        c = batch_ncc(win, tpl)  # (n, 2r+1, 2r+1), zero shift at (r, r)
+        c = sum(batch_ncc(win, sn[idx_t]) for sn in sensed) / len(sensed)  # (n, 2r+1, 2r+1), zero shift at (r, r)
+        tpl = sensed[0][idx_t]
         pk = c[:, r, r]
         out["peak"][s : s + chunk] = pk
-        out["amb"][s : s + chunk] = c[:, far].max(axis=1)
+        amb = c[:, far].max(axis=1)
+        for R_, M in turned:  # the same place or another one, with the frame at a wrong heading
+            ct = np.rint(np.column_stack([cs[:, 1], cs[:, 0], np.ones(len(cs))]) @ M.T).astype(int)  # (x, y)
+            wt = R_[ct[:, 1, None, None] + wr[None, :, None], ct[:, 0, None, None] + wr[None, None, :]]
+            c_t = sum(batch_ncc(wt, sn[idx_t]) for sn in sensed) / len(sensed)
+            amb = np.maximum(amb, c_t[:, far].max(axis=1))
+        out["amb"][s : s + chunk] = amb
         out["sharp"][s : s + chunk] = (pk - c[:, ring].mean(axis=1)) / np.maximum(np.abs(pk), 1e-6)
         out["std"][s : s + chunk] = tpl.std(axis=(1, 2))
     shape = rr.shape
@@ -222,8 +230,10 @@ def _overlay(reg: Registrability, geo, path: Path, marks=None) -> None:
 
 
 def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 15.0, gps_error_m: float = 4.0,
-             fail_m: float = 5.0, seed: int = 0, hough: bool = True, unstable_m: float = 0.0,
-             texture_keep: float = 0.5, quantiles: int = 4, **registration_kw) -> dict:
+             fail_m: float = 5.0, seed: int = 0, hough: bool = True, unstable_m: float = ANOTHER_DAY["scale_m"],
+             texture_keep: float = ANOTHER_DAY["keep"], relief_level: float | None = ANOTHER_DAY["relief_level"],
+             shift_m: float = ANOTHER_DAY["shift_m"], shift_corr_m: float = ANOTHER_DAY["corr_m"], quantiles: int = 4,
+             **registration_kw) -> dict:
     """Register ``n`` frames rendered at random places of the scored area; failure rate by score.
 
     A failure: no match, or the frame centre registered more than ``fail_m`` from the truth. The
@@ -233,7 +243,8 @@ def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 1
     from visnav.geometry.camera import PinholeCamera
     from visnav.sensors.camera import CameraRenderer
     from visnav.vision.geolocation_registration import GeoRegistration, nadir_dcm
-    from visnav.world.maps import GeoImage, degrade_reference
+    from visnav.world.appearance import another_day
+    from visnav.world.maps import degrade_reference
     from visnav.world.scene import World
     from visnav.world.wind import SteadyWind, Wind
 
@@ -241,10 +252,9 @@ def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 1
     f = 360.0 / math.tan(math.radians(26.5))
     cam = PinholeCamera(720, 576, f, f, 359.5, 287.5, (-0.22, 0.06, 0, 0, 0, 0, 0, 0))
     ren = CameraRenderer(cam, 4.0, rng)
-    # optionally the frames are taken on another day than the reference: fine texture does not repeat
-    flight = GeoImage(unstable_texture(geo.image, unstable_m / geo.resolution_m, np.random.default_rng(seed + 1),
-                                       texture_keep),
-                      geo.north0, geo.east0, geo.resolution_m, geo.name) if unstable_m > 0 else geo
+    # the frames are taken on another day than the reference (world/appearance.py; unstable_m 0: the same day)
+    flight = another_day(geo, np.random.default_rng(seed + 1), unstable_m, texture_keep, relief_level, shift_m,
+                         shift_corr_m)
     world = World(ground=flight, surface="map", wind=Wind(SteadyWind(0.0, 0.0)))
     ref = degrade_reference(geo, geo.resolution_m, 0.85, 20.0, 1.15, 0.3)
     kw = {"scale_search": 0.06, "rot_step_deg": 0.75, **registration_kw}

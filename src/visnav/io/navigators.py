@@ -161,7 +161,7 @@ def _geolocation(sc, recorder, camera, mount, reference=None, **_):
     from visnav.sim.geoloc_parts import build_navigator, mission_map, mission_reference
 
     if reference is None:
-        reference = mission_reference(sc.mission, mission_map(sc.mission))
+        reference = mission_reference(sc.mission, mission_map(sc.mission), sc.run.seed)
     return build_navigator(sc.mission, reference, camera)
 
 

@@ -10,6 +10,7 @@ from pydantic import Field
 
 from visnav.scenarios.base import _M
 from visnav.scenarios.config_fixedwing import FixedWingSensorsConfig
+from visnav.world.appearance import ANOTHER_DAY
 
 
 class MavMapConfig(_M):
@@ -21,6 +22,18 @@ class MavMapConfig(_M):
     ref_offset: float = Field(20.0, ge=-100.0, le=100.0)
     ref_gamma: float = Field(1.15, ge=0.5, le=2.0)
     ref_blur_m: float = Field(0.3, ge=0.0, le=3.0)
+    change_m: float = Field(0.0, ge=0.0, le=10.0, description="the reference shows another day "
+                            "(world/appearance.py): texture finer than this (Gaussian sigma) changes where it is "
+                            "relief; 0 (default): the frames are drawn from the reference's own day; "
+                            f"{ANOTHER_DAY['scale_m']}: the registrability map's model")
+    change_keep: float = Field(ANOTHER_DAY["keep"], ge=0.0, le=1.0, description="correlation the relief's fine "
+                               "texture keeps between the reference and the flight")
+    relief_level: float = Field(ANOTHER_DAY["relief_level"], gt=0.0, le=100.0, description="fine-texture rms "
+                                "[grey levels] above which unoriented texture counts as relief")
+    relief_shift_m: float = Field(ANOTHER_DAY["shift_m"], ge=0.0, le=20.0, description="rms displacement of the "
+                                  "relief (parallax, shadows)")
+    relief_corr_m: float = Field(ANOTHER_DAY["corr_m"], gt=0.0, le=100.0, description="correlation length of "
+                                 "that displacement")
 
 
 class MavTargetConfig(_M):
@@ -55,6 +68,10 @@ class MavGimbalConfig(_M):
     leak: float = Field(0.05, ge=0.0, le=1.0)
     bias_deg: float = Field(1.5, ge=0.0, le=10.0, description="1-sigma mount misalignment per axis")
     jitter_deg: float = Field(0.5, ge=0.0, le=5.0)
+    deadband_deg: float = Field(1.0, ge=0.0, le=10.0, description="servo dead band + gear backlash, full width "
+                                "per axis (a micro servo's 8 us dead band on 1000 us for 90 deg = 0.7 deg, plus "
+                                "backlash: 1 deg assumed)")
+    travel_deg: float = Field(45.0, ge=5.0, le=90.0, description="servo travel +- per axis (assumed)")
     ahrs_turn_gain: float = Field(0.3, ge=0.0, le=1.0, description="share of the bank the autopilot's AHRS "
                                   "loses in a sustained turn (the gimbal counters the estimate)")
     ahrs_tau_s: float = Field(8.0, gt=0.0, le=120.0)

@@ -167,15 +167,22 @@ class PitchRollGimbal:
     commanded angles through
     a first-order lag (``lag_s``) and compensate only ``1 - leak`` of them; the camera sits on the unit
     with a static misalignment (``bias_roll``, ``bias_pitch``) and jitters (Gauss-Markov, ``jitter``
-    rad, 0.5 s). ``camera_dcm(euler)`` is the true C_cn (camera -> NED); the image top points along
-    the aircraft's yaw (the unit has no pan axis)."""
+    rad, 0.5 s). The micro servos of a few-gram gimbal neither move for a command change smaller than
+    their dead band nor take up their gear backlash: ``deadband`` (rad, full width) is a hysteresis on
+    each axis, so the camera stays up to half of it off where the command asks, on the side it came
+    from (a roll reversal leaves it there). Travel is limited to +-``limit`` (the camera tilts by the
+    excess in steeper banks). ``camera_dcm(euler)`` is the true C_cn (camera -> NED); the image top
+    points along the aircraft's yaw (the unit has no pan axis)."""
 
     #: OpenCV camera axes in body axes for a nadir camera: x = body right, y = body backward, z = down
     R_CAM_BODY = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
     def __init__(self, rng: np.random.Generator, lag_s: float, leak: float, bias_roll: float, bias_pitch: float,
                  jitter: float, limit: float = np.radians(45.0), ahrs_turn_gain: float = 0.0,
-                 ahrs_tau_s: float = 8.0, ahrs_bias_roll: float = 0.0, ahrs_bias_pitch: float = 0.0) -> None:
+                 ahrs_tau_s: float = 8.0, ahrs_bias_roll: float = 0.0, ahrs_bias_pitch: float = 0.0,
+                 deadband: float = 0.0) -> None:
+        self.deadband = float(deadband)
+        self.held: np.ndarray | None = None  # the command the servos settle on (after the dead band)
         self.ahrs_bias = np.array([ahrs_bias_roll, ahrs_bias_pitch], float)  # the attitude estimate's bias [rad]
         self.rng, self.lag, self.leak, self.limit = rng, float(lag_s), float(leak), float(limit)
         self.turn_gain, self.ahrs_tau = float(ahrs_turn_gain), float(ahrs_tau_s)
@@ -192,6 +199,12 @@ class PitchRollGimbal:
         self.ahrs_err += (self.turn_gain * e[0] - self.ahrs_err) * min(1.0, dt / self.ahrs_tau)
         cmd = -(1.0 - self.leak) * (e[:2] - np.array([self.ahrs_err, 0.0]) + self.ahrs_bias)
         cmd = np.clip(cmd, -self.limit, self.limit)
+        if self.deadband > 0:  # dead band + backlash: the servo moves only when the command leaves the band
+            if self.held is None:
+                self.held = cmd.copy()
+            hb = 0.5 * self.deadband
+            self.held = np.clip(self.held, cmd - hb, cmd + hb)
+            cmd = self.held
         self.servo += (cmd - self.servo) * (min(1.0, dt / self.lag) if self.lag > 0 else 1.0)
         if self.jitter > 0:
             a = np.exp(-dt / 0.5)

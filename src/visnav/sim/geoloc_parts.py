@@ -35,6 +35,7 @@ from visnav.sim.parts import MissionParts, VehicleTruth
 from visnav.sim.rmax_parts import WindEnvironment
 from visnav.sim.streams import GEOLOC_STREAMS
 from visnav.vehicles.fixedwing import micro_params, trim
+from visnav.world.appearance import another_day
 from visnav.world.maps import GeoImage, degrade_reference
 from visnav.world.scene import World
 from visnav.world.targets import paste_truck
@@ -61,10 +62,14 @@ def mav_camera(c) -> PinholeCamera:
                          (c.k1, c.k2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
 
 
-def mission_reference(cfg, geo: GeoImage) -> GeoImage:
-    """The reference image the navigator registers to: the mission's map, degraded (``mission.map.ref_*``)."""
+def mission_reference(cfg, geo: GeoImage, seed: int) -> GeoImage:
+    """The reference image the navigator registers to: the mission's map on another day (``mission.map.change_m``
+    > 0, ``world/appearance.another_day``, drawn from the run's 12th random stream), degraded
+    (``mission.map.ref_*``). The registry (replay) calls it with the recording's seed and gets the loop's image."""
     m = cfg.map
-    return degrade_reference(geo, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
+    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(12)[11])
+    day = another_day(geo, rng, m.change_m, m.change_keep, m.relief_level, m.relief_shift_m, m.relief_corr_m)
+    return degrade_reference(day, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
 
 
 def build_navigator(cfg, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
@@ -219,7 +224,7 @@ def build(ctx) -> MissionParts:
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
     dt = sc.run.dt_s
-    rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(11)]
+    rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(12)]
     geo = mission_map(cfg)
     t = cfg.target
     target = map_centre(geo) + np.array([t.north_m, t.east_m])
@@ -228,7 +233,7 @@ def build(ctx) -> MissionParts:
         raise ValueError(f"mission.target ({t.north_m}, {t.east_m}) m from the map centre is off the map "
                          f"({n1 - n0:.0f} x {e1 - e0:.0f} m)")
     frames_map = paste_truck(geo, target, t.length_m, t.width_m, math.radians(t.heading_deg))
-    reference = mission_reference(cfg, geo)
+    reference = mission_reference(cfg, geo, sc.run.seed)
     c, ctl = cfg.camera, cfg.control
     va = cfg.airframe.airspeed_mps
     wind = scenario_wind(sc.world, rng[0], ctl.altitude_m, va)
@@ -243,7 +248,8 @@ def build(ctx) -> MissionParts:
     ab = rng[7].normal(0.0, math.radians(g.ahrs_bias_deg), 2)
     gimbal = PitchRollGimbal(rng[3], g.lag_s, g.leak, b[0], b[1], math.radians(g.jitter_deg),
                              ahrs_turn_gain=g.ahrs_turn_gain, ahrs_tau_s=g.ahrs_tau_s,
-                             ahrs_bias_roll=ab[0], ahrs_bias_pitch=ab[1])
+                             ahrs_bias_roll=ab[0], ahrs_bias_pitch=ab[1],
+                             deadband=math.radians(g.deadband_deg), limit=math.radians(g.travel_deg))
     tl = cfg.telemetry
     telemetry = AutopilotTelemetry(rng[4], tl.rate_hz, tl.gps_sigma_m, tl.gps_bias_m, 600.0, tl.gps_delay_s,
                                    tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg,
