@@ -128,7 +128,7 @@ def test_cli_record_writes_the_folder(tmp_path):
     assert CliRunner().invoke(app, again + ["--force"]).exit_code == 0
     assert len(list((out / "frames").glob("*.png"))) == 5  # the earlier frames are gone
     r = CliRunner().invoke(app, ["record", "deck-static", "--out", str(tmp_path / "deck")])
-    assert r.exit_code == 2 and "issue #13" in r.output
+    assert r.exit_code == 2 and "'deck' flies another vehicle" in r.output
 
 
 def test_corrupt_frame_inside_a_replay_is_counted_not_fatal(palace_rec, tmp_path):
