@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visnav.estimation.deck import SEA_STATES as _SEA_STATES
-from visnav.geometry.rotations import dcm_to_euler, euler_rates_to_body_rates, euler_to_dcm
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_rates_to_body_rates, euler_to_dcm
 
 #: the four LEDs of eq. 5.10 (deck frame, m)
 LEDS_EQ_5_10 = np.array([[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.0], [0.058, 0.0, 0.0]])
@@ -117,8 +117,8 @@ def relative_state(vehicle, ds: DeckState) -> np.ndarray:
     Ch = euler_to_dcm(vehicle.euler)
     r = Ch.T @ (ds.position - vehicle.position)
     e = dcm_to_euler(ds.C.T @ Ch)
-    v = Ch.T @ (ds.velocity - vehicle.velocity) - np.cross(vehicle.body_rates, r)
-    return np.r_[r, e, v, ds.body_rates]
+    v = Ch.T @ (ds.velocity - vehicle.velocity) - cross3(vehicle.body_rates, r)
+    return np.concatenate([r, e, v, np.asarray(ds.body_rates, float)])
 
 
 @dataclass
