@@ -100,13 +100,21 @@ class DeckMotion:
         return d, dd
 
     def state(self, t: float) -> DeckState:
+        """The deck at ``t``; the last one is kept (the loop, the camera and the observer ask for the same
+        instant), its arrays read-only so that no reader can change what the next one gets."""
+        last = getattr(self, "_last", None)
+        if last is not None and last.t == t:
+            return last
         d, dd = self.displacement(t)
         pos = self.p0 + self._Rz @ d[:3]
         vel = self._Rz @ dd[:3]
         euler = np.array([d[3], d[4], self.heading + d[5]])
-        rates = euler_rates_to_body_rates(euler, dd[3:])
-        return DeckState(t=t, position=pos, velocity=vel, euler=euler, body_rates=np.asarray(rates),
-                         C=euler_to_dcm(euler))
+        rates = np.asarray(euler_rates_to_body_rates(euler, dd[3:]))
+        C = euler_to_dcm(euler)
+        for a in (pos, vel, euler, rates, C):
+            a.flags.writeable = False
+        self._last = DeckState(t=t, position=pos, velocity=vel, euler=euler, body_rates=rates, C=C)
+        return self._last
 
 
 def relative_state(vehicle, ds: DeckState) -> np.ndarray:
