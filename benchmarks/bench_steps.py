@@ -1,4 +1,5 @@
-"""Per-step cost of the 100 Hz blocks: R-MAX model, fixed wing, ESKF predict, INS, position filter.
+"""Per-step cost of the 100 Hz blocks: R-MAX model, fixed wing, ESKF predict, INS, position filter, Dryden
+gusts; the deck loop's per-step truth (deck motion, relative state, gear point), UKF prediction and LED frame.
 
     PYTHONPATH=src python benchmarks/bench_steps.py [--blocks 15]
 
@@ -41,7 +42,9 @@ def measure(blocks: int) -> dict:
     rng = np.random.default_rng(0)
     out = {}
     cmds = [YacsCommand(0.0, *rng.normal(0, 30, 4)) for _ in range(200)]
-    winds = [rng.normal(0, 2, 3) for _ in range(200)]
+    from visnav.vehicles.base import Environment
+
+    winds = [Environment(wind_ned=rng.normal(0, 2, 3)) for _ in range(200)]
     m = RmaxModel(position=(0, 0, -40))
     out["rmax_step_us"] = _min_block(lambda i: m.step(cmds[i % 200], 0.01, winds[i % 200]), 200, blocks)
     p = FixedWingParams()
@@ -76,6 +79,54 @@ def measure(blocks: int) -> dict:
         pf.predict(tt[0], acc)
 
     out["position_filter_predict_us"] = _min_block(pf_step, 400, blocks)
+    from visnav.world.wind import DrydenTurbulence
+
+    dr = DrydenTurbulence("moderate", np.random.default_rng(1), 30.0, 8.0)
+    out["dryden_step_us"] = _min_block(lambda i: dr.step(0.01, 30.0 + 0.01 * (i % 7), 8.0), 400, blocks)
+    out.update(_deck(blocks))
+    return out
+
+
+def _deck(blocks: int) -> dict:
+    """The deck loop's blocks on the deck-moving scenario's own objects (built, not flown)."""
+    from visnav.estimation import deck as dm
+    from visnav.measurements import ImuSample
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.missions import make_simulation
+    from visnav.world.deck import relative_state
+
+    sim = make_simulation(load_scenario("deck-moving", seed=1))
+    out = {}
+    motion, veh = sim.world.motion, sim.vehicle
+    tt = [0.0]
+
+    def truth(i):  # per step: the loop's deck state, the observer's (every 2nd step), the log's relative state
+        tt[0] += 0.01
+        ds = motion.state(tt[0])
+        if i % 2 == 0:
+            relative_state(veh.state, motion.state(tt[0]))
+        relative_state(veh.state, ds)
+        veh.gear_point(), veh.gear_point(), veh.gear_point()
+
+    out["deck_truth_per_step_us"] = _min_block(truth, 200, blocks)
+    nav = sim.nav
+    inner = getattr(nav, "inner", nav)  # the faults wrapper, if any
+    rng = np.random.default_rng(2)
+    t0 = [0.0]
+    inner._rp = np.zeros(2)
+
+    x0, P0 = inner.ukf.x.copy(), inner.ukf.P.copy()
+
+    def imu(i):
+        if i == 0:  # no frame corrects it: start every block from the first state (P stays positive)
+            inner.ukf.x, inner.ukf.P = x0.copy(), P0.copy()
+        t0[0] += 0.01
+        inner._imu(ImuSample(t=t0[0], accel=np.array([0.0, 0.0, -9.81]) + 0.01 * rng.standard_normal(3),
+                             gyro=0.01 * rng.standard_normal(3)))
+
+    out["deck_ukf_imu_predict_us"] = _min_block(imu, 100, blocks)
+    cam, hist = sim.camera, sim.history
+    out["deck_led_frame_us"] = _min_block(lambda i: cam.sample(0.0, hist, sim.world), 20, blocks)
     return out
 
 

@@ -55,3 +55,17 @@ def test_drag_acts_on_the_airspeed():
     v = Multirotor(p, [0.0, 0.0, -5.0])
     s = v.step(AttitudeThrustCommand(0, 0, 0, 0, p.hover_throttle), 0.01, Environment(wind_ned=np.array([2.0, 0.0, 0.0])))
     assert s.velocity[0] == pytest.approx(p.drag * 2.0 * 0.01, rel=1e-9)
+
+
+def test_gear_point_follows_each_step_and_returns_a_copy():
+    p = MultirotorParams()
+    m = Multirotor(p, [0.0, 0.0, -2.0])
+    g0 = m.gear_point()
+    g0[:] = 99.0  # the caller's copy
+    np.testing.assert_allclose(m.gear_point(), [0.0, 0.0, -2.0 + p.gear_offset])
+    m.step(AttitudeThrustCommand(0.0, 0.3, 0.0, 0.0, 0.6), 0.01)
+    m.step(AttitudeThrustCommand(0.0, 0.3, 0.0, 0.0, 0.6), 0.01)
+    from visnav.geometry.rotations import euler_to_dcm
+
+    want = m.state.position + euler_to_dcm(m.state.euler) @ np.array([0.0, 0.0, p.gear_offset])
+    np.testing.assert_array_equal(m.gear_point(), want)

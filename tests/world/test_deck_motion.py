@@ -45,3 +45,17 @@ def test_light_layouts():
         validate_lights([[0, 0, 0], [0, 0, 0], [0.1, 0, 0]])
     with pytest.raises(ValueError, match="finite"):
         validate_lights([[0, 0, 0], [np.nan, 0, 0], [0.1, 0, 0]])
+
+
+def test_state_kept_for_one_instant_is_read_only_and_equals_a_fresh_evaluation():
+    """The loop, the camera and the observer ask for the same instant: one evaluation, read-only arrays."""
+    m = DeckMotion.from_sea_state("stewart", np.random.default_rng(3), n_sinusoids=2, heading=0.2)
+    fresh = DeckMotion(m.a, m.w, m.ph, m.p0, m.heading)
+    s = m.state(1.25)
+    assert m.state(1.25) is s
+    with pytest.raises(ValueError):
+        s.position[0] = 0.0
+    m.state(1.26)
+    for a, b in ((m.state(1.25), fresh.state(1.25)), (m.state(1.26), fresh.state(1.26))):
+        for k in ("position", "velocity", "euler", "body_rates", "C"):
+            np.testing.assert_array_equal(getattr(a, k), getattr(b, k))

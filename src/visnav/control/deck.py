@@ -25,6 +25,7 @@ from visnav.control.multirotor import ThrottleController, attitude_command, foll
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.guidance.deck_approach import level_deck_geometry, rot_z
 from visnav.measurements import AttitudeThrustCommand, DeckReference
+from visnav.scalar import clip as _clip
 
 G = 9.81
 
@@ -37,7 +38,7 @@ def flare(a_cmd_ld: np.ndarray, n_up: np.ndarray, t_go: float, flare_s: float) -
     second attitude matters more than those errors, so the commanded specific force is blended, linearly
     in time, into one along ``n_up`` with the same vertical component (the vertical channel is kept).
     """
-    w = float(np.clip(1.0 - t_go / flare_s, 0.0, 1.0))
+    w = _clip(1.0 - t_go / flare_s, 0.0, 1.0)
     if w <= 0.0 or n_up[2] > -0.5:
         return a_cmd_ld
     f = a_cmd_ld - np.array([0.0, 0.0, G])  # specific force, level-deck frame (z down: f[2] < 0)

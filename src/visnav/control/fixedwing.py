@@ -22,13 +22,11 @@ import math
 from dataclasses import dataclass
 
 from visnav.measurements import Controls, FixedWingEstimate, TurnReference
+from visnav.scalar import clip as _clip
 
 G = 9.81
 
 
-def _clip(x: float, lo: float, hi: float) -> float:
-    """``float(np.clip(x, lo, hi))`` for one number, without numpy's per-call overhead (same result, NaN too)."""
-    return float(min(max(x, lo), hi))
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ commander's roll and pitch come straight from the commanded acceleration.
 from __future__ import annotations
 
 import numpy as np
+from visnav.scalar import clip as _clip
 
 G = 9.81
 
@@ -50,12 +51,12 @@ class ThrottleController:
 
     def hover_throttle(self, height_m: float) -> float:
         """T0(h): linear between the deck (h = 0) and 1 m, constant above (§4.3.1)."""
-        h = float(np.clip(height_m, 0.0, 1.0))
+        h = _clip(height_m, 0.0, 1.0)
         return self.t0 + (self.t1 - self.t0) * h
 
     def command(self, a_up_cmd: float, a_up_meas: float, height_m: float, tilt_cos: float, dt: float) -> float:
         err = a_up_cmd - a_up_meas
-        self.integral = float(np.clip(self.integral + err * dt, -self.lim / self.ki, self.lim / self.ki))
+        self.integral = _clip(self.integral + err * dt, -self.lim / self.ki, self.lim / self.ki)
         T0 = self.hover_throttle(height_m)
         ff = T0 * (1.0 + a_up_cmd / G) / max(tilt_cos, 0.5)
-        return float(np.clip(ff + self.kp * err + self.ki * self.integral, 0.0, 1.0))
+        return _clip(ff + self.kp * err + self.ki * self.integral, 0.0, 1.0)

@@ -20,6 +20,7 @@ import numpy as np
 from scipy import optimize
 
 from visnav.measurements import NavEstimate, PositionReference, YacsCommand
+from visnav.scalar import clip as _clip
 
 G = 9.81
 #: seed 002 eq. 3.4 (num, den): roll [deg], pitch [deg], yaw rate [deg/s] per YACS unit, heave [g]
@@ -394,8 +395,8 @@ class RmaxPositionController:
         i_b = to_body @ self._int_ne
         a_x = k.kp_lon * e_b[0] + k.kd_lon * ev_b[0] + i_b[0] - xu * vr_b[0]
         a_y = k.kp_lat * e_b[1] + k.kd_lat * ev_b[1] + i_b[1] - yv * vr_b[1]
-        theta_c = float(np.clip(-a_x / G, -k.max_tilt, k.max_tilt))
-        phi_c = float(np.clip(a_y / G, -k.max_tilt, k.max_tilt))
+        theta_c = _clip(-a_x / G, -k.max_tilt, k.max_tilt)
+        phi_c = _clip(a_y / G, -k.max_tilt, k.max_tilt)
         sat = np.array([abs(a_x / G) > k.max_tilt, abs(a_y / G) > k.max_tilt])
         self._slow_time = self._slow_time + dt if np.hypot(*ev[:2]) < k.integral_speed_zone else 0.0
         settled = np.hypot(*ep[:2]) < k.integral_zone or self._slow_time >= k.integral_settle_time
@@ -410,14 +411,14 @@ class RmaxPositionController:
         thr = (k.kp_vert * e_h + k.kd_vert * ed_h + self._int_z) / CLIMB_GAIN
         if abs(thr) < k.input_limit:
             zmax = k.input_limit * CLIMB_GAIN
-            self._int_z = float(np.clip(self._int_z + (k.ki_vert * e_h - zw * hd_ref) * dt, -zmax, zmax))
-        r_c = float(np.clip(k.k_yaw * _wrap(ref.yaw - psi), -k.max_yaw_rate, k.max_yaw_rate))
+            self._int_z = _clip(self._int_z + (k.ki_vert * e_h - zw * hd_ref) * dt, -zmax, zmax)
+        r_c = _clip(k.k_yaw * _wrap(ref.yaw - psi), -k.max_yaw_rate, k.max_yaw_rate)
         self.attitude_command = np.array([phi_c, theta_c])
         lim = k.input_limit
         return YacsCommand(
             t=t,
-            ail=float(np.clip(math.degrees(phi_c) / ROLL_DC, -lim, lim)),
-            ele=float(np.clip(math.degrees(theta_c) / PITCH_DC, -lim, lim)),
-            rud=float(np.clip(math.degrees(r_c) / YAW_RATE_DC, -lim, lim)),
-            thr=float(np.clip(thr, -lim, lim)),
+            ail=_clip(math.degrees(phi_c) / ROLL_DC, -lim, lim),
+            ele=_clip(math.degrees(theta_c) / PITCH_DC, -lim, lim),
+            rud=_clip(math.degrees(r_c) / YAW_RATE_DC, -lim, lim),
+            thr=_clip(thr, -lim, lim),
         )

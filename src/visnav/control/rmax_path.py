@@ -67,6 +67,7 @@ from visnav.control.rmax_roll import ROLL_COMPENSATOR, RollCompensator, check_ga
 from visnav.guidance.pfcm import PathReference, heading_rotation
 from visnav.measurements import NavEstimate, YacsCommand
 from visnav.log_schema import register_stream
+from visnav.scalar import clip as _clip
 
 register_stream("pfcm_control", phi_c=("rad", "", "roll command"), theta_c=("rad", "", "pitch command"),
                 climb_c=("m/s", "up", "climb-rate command"), yaw_rate_c=("rad/s", "", "yaw-rate command"),
@@ -83,8 +84,6 @@ register_stream("pfcm_control", phi_c=("rad", "", "roll command"), theta_c=("rad
 G = 9.81
 
 
-def _clip(x: float, lo: float, hi: float) -> float:
-    return min(max(float(x), lo), hi)
 
 
 #: lateral gains K1r, K2r, K3r designed on the eq. 4.26 inner roll loop (``design_path_loop`` with

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm
 
 __all__ = [
     "OMEGA_EARTH",
@@ -220,13 +220,6 @@ class NavState:
                         self.accel_bias.copy(), self.gyro_bias.copy())
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """3-vector cross product without np.cross's per-call overhead."""
-    a0, a1, a2 = a.tolist()
-    b0, b1, b2 = b.tolist()
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
-
-
 def _check_finite(x, what: str) -> np.ndarray:
     a = np.asarray(x, dtype=float)
     if a.shape != (3,) or not all(map(math.isfinite, a.tolist())):
@@ -290,7 +283,7 @@ class StrapdownINS:
         q_new /= math.sqrt(q_new.dot(q_new))  # np.linalg.norm's own formula, without its overhead
         # velocity: specific force through the mid-interval attitude, Coriolis, gravity
         g = self.gravity_at(s.position)
-        acc = quat_to_dcm(q_mid) @ f - _cross(2.0 * w_ie + w_en, s.velocity) + g
+        acc = quat_to_dcm(q_mid) @ f - cross3(2.0 * w_ie + w_en, s.velocity) + g
         v_new = s.velocity + acc * dt
         p_new = s.position + 0.5 * (s.velocity + v_new) * dt
         return NavState(s.t + dt, p_new, v_new, q_new, s.accel_bias.copy(), s.gyro_bias.copy())

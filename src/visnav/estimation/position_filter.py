@@ -99,10 +99,11 @@ class PositionFilter:
 
     def covariance(self) -> np.ndarray:
         C = np.zeros((6, 6))
-        i = np.arange(3)
-        C[i, i] = self.P00
-        C[i, i + 3] = C[i + 3, i] = self.P01
-        C[i + 3, i + 3] = self.P11
+        d = C.reshape(-1)  # the diagonals as strided views: (i, i), (i, i + 3), (i + 3, i), (i + 3, i + 3)
+        d[0:15:7] = self.P00
+        d[3:18:7] = self.P01
+        d[18:33:7] = self.P01
+        d[21:36:7] = self.P11
         return C
 
 

@@ -65,7 +65,7 @@ class SigmaWeights:
         """The 2n+1 sigma points: x, x + rows of U, x - rows of U with U^T U = (n + lambda) P."""
         n = self.n
         A = (self.lam + n) * P
-        if not np.all(np.isfinite(A)):
+        if not np.isfinite(A).all():
             raise np.linalg.LinAlgError("UKF covariance is not positive definite: it holds NaN or inf")
         try:
             U = np.linalg.cholesky(A).T  # upper factor, U^T U = A (as scipy.linalg.cholesky)

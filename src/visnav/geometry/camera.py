@@ -33,6 +33,14 @@ def _points(x, dim: int, name: str) -> np.ndarray:
     return a
 
 
+def _pair(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.stack([a, b], axis=-1)`` for two arrays of one shape, without np.stack's per-call overhead."""
+    out = np.empty(np.shape(a) + (2,))
+    out[..., 0] = a
+    out[..., 1] = b
+    return out
+
+
 @dataclass(frozen=True)
 class PinholeCamera:
     """Intrinsics ``K`` = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] plus rational distortion ``dist``."""
@@ -108,7 +116,7 @@ class PinholeCamera:
         g, _ = self._radial(r2)
         xd = x * g + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
         yd = y * g + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
-        return np.stack([xd, yd], axis=-1)
+        return _pair(xd, yd)
 
     def _distortion_jacobian(self, x: np.ndarray, y: np.ndarray):
         _, _, p1, p2, *_ = self.dist
@@ -132,7 +140,7 @@ class PinholeCamera:
                 break
             a, b, c, d = self._distortion_jacobian(xy[..., 0], xy[..., 1])
             det = a * d - b * c
-            step = np.stack([d * res[..., 0] - b * res[..., 1], a * res[..., 1] - c * res[..., 0]], -1)
+            step = _pair(d * res[..., 0] - b * res[..., 1], a * res[..., 1] - c * res[..., 0])
             with np.errstate(divide="ignore", invalid="ignore"):
                 xy = xy + step / det[..., None]
         res = np.abs(target - self.distort_normalized(xy)).max(axis=-1, initial=0.0)
@@ -146,12 +154,12 @@ class PinholeCamera:
     def normalized_to_pixel(self, xy) -> np.ndarray:
         """Pixels (u, v) of undistorted normalized coordinates (x/z, y/z), applying distortion."""
         xd = self.distort_normalized(xy)
-        return np.stack([self.fx * xd[..., 0] + self.cx, self.fy * xd[..., 1] + self.cy], axis=-1)
+        return _pair(self.fx * xd[..., 0] + self.cx, self.fy * xd[..., 1] + self.cy)
 
     def pixel_to_normalized(self, uv) -> np.ndarray:
         """Undistorted normalized coordinates (x/z, y/z) of pixels (u, v); inverse of the above."""
         uv = _points(uv, 2, "uv")
-        xd = np.stack([(uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy], axis=-1)
+        xd = _pair((uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy)
         return self.undistort_normalized(xd)
 
     def project(self, p_cam) -> np.ndarray:

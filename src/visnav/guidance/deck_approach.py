@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm
 from visnav.guidance.tau import duration_for_touchdown_acceleration, higher_order_tau
 
 G = 9.81
@@ -144,7 +144,7 @@ def level_deck_geometry(x: np.ndarray, gyro: np.ndarray, roll: float, pitch: flo
     Ch0 = euler_to_dcm([roll, pitch, 0.0])
     r, e, v, wd = x[0:3], x[3:6], x[6:9], x[9:12]
     p = -Ch0 @ r
-    vel = -Ch0 @ (v + np.cross(gyro, r))
+    vel = -Ch0 @ (v + cross3(gyro, r))
     Cd0 = Ch0 @ euler_to_dcm(e).T
     psi_d = float(dcm_to_euler(Cd0)[2])
     return p, vel, Cd0, psi_d, wd

@@ -23,6 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from visnav.scalar import clip as _clip
 
 LOGICS = ("original", "modified", "coordinated")
 
@@ -53,8 +54,8 @@ class OrbitGuidance:
         plotted in Figs. 7.6 / 7.12."""
         self.v_avg += (v_ias - self.v_avg) * min(1.0, dt / self.tau)
         nominal = self.v_nom / self.r_des
-        base_orig = float(np.clip(v_ias / max(R, 1.0), (1 - self.base_limit) * nominal,
-                                  (1 + self.base_limit) * nominal))  # eq. 5.2 limited +-40 %
+        base_orig = _clip(v_ias / max(R, 1.0), (1 - self.base_limit) * nominal,
+                                  (1 + self.base_limit) * nominal)  # eq. 5.2 limited +-40 %
         err_orig = self._err(self.g_orig, R, Rdot)
         if self.logic == "original":
             base, err, v_bank = base_orig, err_orig, v_ias

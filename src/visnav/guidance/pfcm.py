@@ -51,12 +51,11 @@ from visnav.guidance.speed_limits import (  # noqa: F401  (re-exported: the PFCM
     nz_max_for_mass,
 )
 from visnav.measurements import NavEstimate
+from visnav.scalar import clip as _clip
 
 G = 9.81
 
 
-def _clip(x: float, lo: float, hi: float) -> float:
-    return min(max(float(x), lo), hi)
 
 
 # ---------------------------------------------------------------------------------- outputs

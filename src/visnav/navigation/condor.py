@@ -256,15 +256,26 @@ class CondorNavigator(AutopilotNavigator):
                 if math.isfinite(self.va) and math.isfinite(h_now):
                     pos[:2] += self.va * (t - tf) * np.array([math.cos(h_now), math.sin(h_now)])
                 pos[2] = -base["height"]
-                # radial: sigma_R; across: R sigma_heading; rotate to NED
-                c, s = math.cos(b), math.sin(b)
-                Rot = np.array([[c, -s], [s, c]])
-                P = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
-                cov = np.full((6, 6), np.nan)
-                cov[:2, :2] = P
+                cov = self._position_cov()
         return FixedWingEstimate(t=t, position=pos, velocity=vel, covariance=cov,
                                  valid=math.isfinite(pos[0]) and math.isfinite(pos[1]), source=self.source, ground_speed=gs,
                                  radius=R, radius_rate=Rdot, radius_valid=bool(valid), **base)
+
+    def _position_cov(self) -> np.ndarray:
+        """Covariance (6, 6) of ``estimate``'s position (NaN where unknown); it does not depend on ``t``."""
+        if self.source == "gps":
+            return self._gps_cov if self.gps_pos is not None else _NAN66
+        if self.fix is not None and self.target is not None and math.isfinite(self.fix[4]):
+            _, Rf, psi_vb, pan, head = self.fix
+            b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
+            # radial: sigma_R; across: R sigma_heading; rotate to NED
+            c, s = math.cos(b), math.sin(b)
+            Rot = np.array([[c, -s], [s, c]])
+            P = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
+            cov = np.full((6, 6), np.nan)
+            cov[:2, :2] = P
+            return cov
+        return _NAN66
 
     def health(self, t: float) -> Health:
         """``tracking``: the vision radius is coming in (not stale); integrity of the radius filter and the
@@ -272,7 +283,7 @@ class CondorNavigator(AutopilotNavigator):
         h = Health(source=self.source, tracking=not self.radius.stale(t))
         key = (self.radius_updates, self.source)
         if self._assess is None or key != self._assess_key or t - self._assess_t >= self.health_period_s:
-            P_h = self.estimate(t).covariance[:2, :2]
+            P_h = self._position_cov()[:2, :2]  # what estimate(t).covariance holds, without the estimate
             ok = math.isfinite(P_h[0, 0]) and math.isfinite(P_h[1, 1])
             self._assess = self.integrity.assess(t, P_h if ok else None)
             self._assess_key, self._assess_t = key, t

@@ -230,7 +230,7 @@ class WitasNavigator(CommandDispatch):
         return self.att.newest()
 
     def _on_imu(self, m: ImuSample) -> None:
-        if not (np.all(np.isfinite(m.accel)) and np.all(np.isfinite(m.gyro))) or (
+        if not all(map(math.isfinite, np.concatenate((m.accel, m.gyro), axis=None).tolist())) or (
                 self._last_imu is not None and m.t <= self._last_imu.t):
             self.h.rejected_samples += 1
             return

@@ -16,6 +16,7 @@ from visnav.geometry.mounts import FixedMount
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import Frame
 from visnav.sensors.base import TruthAt
+from visnav.scalar import clip as _clip
 
 
 def ground_homography(K: np.ndarray, cam_pos: np.ndarray, C_cn: np.ndarray, affine: np.ndarray) -> np.ndarray:
@@ -131,7 +132,7 @@ class CameraRenderer:
         # frame costs one warp.
         lf = float(np.log2(gsd * self.lod_bias / ground.resolution_m))
         L0 = int(np.clip(np.floor(lf), 0, max(ground.max_level - 1, 0)))
-        q = int(round(8 * float(np.clip(lf - L0, 0.0, 1.0)))) if ground.max_level > 0 else 0
+        q = int(round(8 * _clip(lf - L0, 0.0, 1.0))) if ground.max_level > 0 else 0
         if q == 8:
             L0, q = min(L0 + 1, ground.max_level), 0
         img = self._warp(self._blended_level(ground, L0, q), ground.affine(L0), cam_pos, C_cn, ground)
@@ -153,7 +154,7 @@ class CameraRenderer:
             Ht = ground_homography(self.K, cam_pos, C_cn, At)
             det = cv2.warpPerspective(tile, Ht, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
             # fade the detail in as the ground sample distance shrinks below 3 cm
-            wgt = float(np.clip((0.03 - gsd) / 0.02, 0.0, 1.0))
+            wgt = _clip((0.03 - gsd) / 0.02, 0.0, 1.0)
             img = cv2.addWeighted(img, 1.0, det, wgt, -128.0 * wgt)
         sky = self._sky_mask(C_cn)
         if sky is not None:

@@ -11,14 +11,12 @@ import numpy as np
 
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import AttitudeSample, PanSample
+from visnav.scalar import clip as _clip
 
 #: OpenCV camera axes (x right, y down, z optical axis) from camera-body axes (x fwd, y right, z down)
 C_CV_CB = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
 
-def _clip(x: float, lo: float, hi: float) -> float:
-    """``float(np.clip(x, lo, hi))`` for one number, without numpy's per-call overhead (same result, NaN too)."""
-    return float(min(max(x, lo), hi))
 
 
 def camera_dcm(pan: float, tilt: float, roll: float) -> np.ndarray:

@@ -52,7 +52,10 @@ class LedCamera:
     def render(self, position: np.ndarray, C_bn: np.ndarray, lights_ned: np.ndarray, deck_corners_ned: np.ndarray,
                extra_ned: np.ndarray | None = None) -> np.ndarray:
         cam = self.camera
-        img = np.full((cam.height, cam.width), float(self.sea_gray), np.float32)
+        img = getattr(self, "_img", None)  # one float buffer for every frame (a new one page-faults each time)
+        if img is None:
+            img = self._img = np.empty((cam.height, cam.width), np.float32)
+        img.fill(float(self.sea_gray))
         uvc, okc = self.project(deck_corners_ned, position, C_bn)
         if okc.sum() >= 3:
             cv2.fillPoly(img, [np.round(uvc[okc]).astype(np.int32)], float(self.deck_gray))
@@ -75,7 +78,7 @@ class LedCamera:
         if self._noise is not None:
             dy, dx = self.rng.integers(0, 64, 2)
             img += self._noise[dy:dy + cam.height, dx:dx + cam.width]
-        return np.clip(img, 0, 255).astype(np.uint8)
+        return np.clip(img, 0, 255, out=img).astype(np.uint8)
 
     def sample(self, t: float, truth_at, world) -> Frame:
         """The frame taken at ``t`` of the deck scene ``world`` (``world/deck.DeckWorld``)."""

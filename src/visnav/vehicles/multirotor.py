@@ -86,7 +86,7 @@ class Multirotor:
         ed[2] += (cmd.yaw_rate - ed[2]) * min(dt / p.yaw_rate_tau, 1.0)
         e += ed * dt
         ge = p.ground_effect(rotor_height_m)
-        T_cmd = float(np.clip(cmd.throttle, 0.0, 1.0)) * p.max_thrust * ge
+        T_cmd = min(max(float(cmd.throttle), 0.0), 1.0) * p.max_thrust * ge
         thrust = s.thrust + (T_cmd - s.thrust) * min(dt / p.thrust_tau, 1.0)
         C = euler_to_dcm(e)
         f_n = C @ np.array([0.0, 0.0, -thrust / p.mass]) - p.drag * (s.velocity - wind)  # specific force, NED
@@ -99,5 +99,9 @@ class Multirotor:
 
     def gear_point(self) -> np.ndarray:
         """NED position of the landing gear (``gear_offset`` below the body origin along body z)."""
-        C = euler_to_dcm(self.state.euler)
-        return self.state.position + C @ np.array([0.0, 0.0, self.p.gear_offset])
+        s = self.state
+        cached = getattr(self, "_gear", None)
+        if cached is None or cached[0] is not s:  # once per state (the loop asks several times a step)
+            C = euler_to_dcm(s.euler)
+            cached = self._gear = (s, s.position + C @ np.array([0.0, 0.0, self.p.gear_offset]))
+        return cached[1].copy()

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visnav.estimation.deck import SEA_STATES as _SEA_STATES
-from visnav.geometry.rotations import dcm_to_euler, euler_rates_to_body_rates, euler_to_dcm
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_rates_to_body_rates, euler_to_dcm
 
 #: the four LEDs of eq. 5.10 (deck frame, m)
 LEDS_EQ_5_10 = np.array([[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.0], [0.058, 0.0, 0.0]])
@@ -100,13 +100,21 @@ class DeckMotion:
         return d, dd
 
     def state(self, t: float) -> DeckState:
+        """The deck at ``t``; the last one is kept (the loop, the camera and the observer ask for the same
+        instant), its arrays read-only so that no reader can change what the next one gets."""
+        last = getattr(self, "_last", None)
+        if last is not None and last.t == t:
+            return last
         d, dd = self.displacement(t)
         pos = self.p0 + self._Rz @ d[:3]
         vel = self._Rz @ dd[:3]
         euler = np.array([d[3], d[4], self.heading + d[5]])
-        rates = euler_rates_to_body_rates(euler, dd[3:])
-        return DeckState(t=t, position=pos, velocity=vel, euler=euler, body_rates=np.asarray(rates),
-                         C=euler_to_dcm(euler))
+        rates = np.asarray(euler_rates_to_body_rates(euler, dd[3:]))
+        C = euler_to_dcm(euler)
+        for a in (pos, vel, euler, rates, C):
+            a.flags.writeable = False
+        self._last = DeckState(t=t, position=pos, velocity=vel, euler=euler, body_rates=rates, C=C)
+        return self._last
 
 
 def relative_state(vehicle, ds: DeckState) -> np.ndarray:
@@ -117,8 +125,8 @@ def relative_state(vehicle, ds: DeckState) -> np.ndarray:
     Ch = euler_to_dcm(vehicle.euler)
     r = Ch.T @ (ds.position - vehicle.position)
     e = dcm_to_euler(ds.C.T @ Ch)
-    v = Ch.T @ (ds.velocity - vehicle.velocity) - np.cross(vehicle.body_rates, r)
-    return np.r_[r, e, v, ds.body_rates]
+    v = Ch.T @ (ds.velocity - vehicle.velocity) - cross3(vehicle.body_rates, r)
+    return np.concatenate([r, e, v, np.asarray(ds.body_rates, float)])
 
 
 @dataclass

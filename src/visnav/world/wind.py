@@ -188,8 +188,9 @@ class DrydenTurbulence:
         tau = np.array([p["L_u"], p["L_v"], p["L_w"]]) / p["V"]
         return sig, tau
 
-    def _output(self) -> np.ndarray:
-        sig, _ = self._sigmas_taus()
+    def _output(self, sig: np.ndarray | None = None) -> np.ndarray:
+        if sig is None:
+            sig, _ = self._sigmas_taus()
         return np.array([s * float(f.c @ x) for s, f, x in zip(sig, _UNITS, self._x)])
 
     def _discrete(self, i: int, h: float) -> tuple[np.ndarray, np.ndarray]:
@@ -217,12 +218,12 @@ class DrydenTurbulence:
             self.altitude_m = _finite("altitude_m", altitude_m)
         if airspeed_mps is not None:
             self.airspeed_mps = _finite("airspeed_mps", airspeed_mps)
+        sig, tau = self._sigmas_taus()  # once a step: the output uses the same altitude and airspeed
         if dt > 0.0:
-            _, tau = self._sigmas_taus()
             for i in range(3):
                 ad, lq = self._discrete(i, dt / tau[i])
                 self._x[i] = ad @ self._x[i] + lq @ self.rng.standard_normal(lq.shape[1])
-        self.gust = self._output()
+        self.gust = self._output(sig)
         return self.gust.copy()
 
     def generate(self, n: int, dt: float) -> np.ndarray:
