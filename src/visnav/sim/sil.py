@@ -284,7 +284,7 @@ class SilLink:
 def sil_simulation(sc):
     """The scenario's simulation with ``SilLink`` in its navigator slot (``sim.sil_link``)."""
     from visnav.io.navigators import navigator_for
-    from visnav.sim.missions import simulation_class
+    from visnav.sim.missions import make_simulation
 
     kind = getattr(sc.mission, "type", "palace")
     try:
@@ -297,7 +297,7 @@ def sil_simulation(sc):
                          + ("the pad navigator, which needs a pan-tilt link" if name == "pad" else "none"))
     frames = FrameStreamServer()
     link = SilLink(free_port(), frames, LocalTangentPlane(*ORIGIN))
-    sim = simulation_class(getattr(sc.mission, "type", "palace"))(sc, navigator_wrapper=lambda nav: link)
+    sim = make_simulation(sc, navigator_wrapper=lambda nav: link)
     sim.sil_link = link
     return sim
 
