@@ -45,7 +45,7 @@ class LedCamera:
         s = p_b @ self.T_cam.T
         front = s[:, 2] > 0.05
         xy = s[:, :2] / np.where(front, s[:, 2], 1.0)[:, None]
-        uv = self.camera.normalized_to_pixel(self.camera.distort_normalized(xy))
+        uv = self.camera.normalized_to_pixel(xy)  # (applies the lens distortion, eq. 5.3-5.7, once)
         inside = front & self.camera.in_image(uv, margin=2.0) & (np.abs(xy).max(axis=1) < 1.5)
         return uv, inside
 

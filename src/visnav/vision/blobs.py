@@ -57,7 +57,7 @@ def pixels_to_bearings(uv: np.ndarray, camera) -> np.ndarray:
     uv = np.asarray(uv, float).reshape(-1, 2)
     if uv.shape[0] == 0:
         return np.zeros((0, 2))
-    xy = camera.undistort_normalized(camera.pixel_to_normalized(uv))
+    xy = camera.pixel_to_normalized(uv)  # (removes the lens distortion, eq. 5.3-5.7, once)
     return np.arctan(xy)
 
 
