@@ -158,6 +158,8 @@ def test_thesis_camera_loses_every_light_over_the_deck_origin():
     0.101 m) once the body is over the deck origin, so no height keeps one in view. Over the moving
     scenario's landing point (0.2 m behind the origin, §2.3's "desired landing location") three stay in
     view down to contact, as the thesis' deck "within view during the whole duration of the flights".
+    Higher up (0.5-0.8 m) fewer are in view there: the lens distortion (applied once, as a real lens does)
+    does not pull the near lights into the image the way the earlier double distortion did.
     """
     sim = make_simulation(load_scenario("deck-static", seed=1))
     cam, lights, go = sim.camera, sim.world.lights, sim.info["params"].gear_offset
@@ -169,8 +171,8 @@ def test_thesis_camera_loses_every_light_over_the_deck_origin():
         _, over = cam.project(lights, np.array([0.0, 0.0, -(gear_h + go)]), np.eye(3))
         assert not over.any()
         _, behind = cam.project(lights, np.array([-0.3, 0.0, -(gear_h + go)]), np.eye(3))
-        assert behind.sum() >= 3
-        if gear_h <= 0.3:
+        if gear_h <= 0.3:  # the last 0.3 m: three lights in view 0.2-0.3 m behind the origin
+            assert behind.sum() >= 3
             _, at_land = cam.project(lights, land - [0.0, 0.0, gear_h + go], np.eye(3))
             assert at_land.sum() >= 3
 
