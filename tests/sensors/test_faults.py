@@ -203,3 +203,17 @@ def test_scenario_faults_are_validated_in_one_line():
         load_scenario("palace-landing", ["faults=[{kind='map_offset'}]"])
     with pytest.raises(ScenarioError, match="faults.0.kind"):
         load_scenario("palace-landing", ["faults=[{kind='volcano'}]"])
+
+
+def test_a_wrapped_sensor_renders_asynchronously_only_where_the_sensor_itself_does():
+    """The loop renders on its second thread where ``hasattr(sensor, "sample_async")``: a faulted GPS (which has
+    no such method) must not claim one (the palace GPS-spoof campaign failed at t = 0 when it did)."""
+
+    class AsyncCamera(FakeCamera):
+        def sample_async(self, t, truth_at=None, world=None, pool=None):
+            return None
+
+    gps = apply_faults({"gps": FakeGps()}, [fault(kind="gps_spoof")], np.random.default_rng(0))["gps"]
+    cam = apply_faults({"camera": AsyncCamera()}, [fault(kind="camera_blackout")], np.random.default_rng(0))["camera"]
+    assert not hasattr(gps, "sample_async")
+    assert hasattr(cam, "sample_async") and cam.sample_async(0.0) is None
