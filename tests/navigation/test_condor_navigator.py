@@ -80,7 +80,7 @@ def test_plain_list_gives_the_closed_loop_estimate():
         else:
             _same(nav.estimate(e[1]), e[2])
             # health() reads the position covariance without building an estimate: the same matrix
-            np.testing.assert_array_equal(nav._position_cov(), e[2].covariance)
+            np.testing.assert_array_equal(nav._position_cov(e[1]), e[2].covariance)
             n += 1
     assert n > 1500  # 50 Hz control + 10 Hz log over 30 s
     # after the switch the vision range is what the guidance flies on, and it is close to truth

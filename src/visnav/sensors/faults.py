@@ -72,6 +72,9 @@ class FaultySensor:
         object.__setattr__(self, "_state", {})  # per-fault memory (frozen image, stuck range)
 
     def __getattr__(self, name):
+        if name == "sample_async":  # only where the wrapped sensor renders asynchronously (the loop asks hasattr)
+            getattr(self._inner, name)
+            return self._sample_async
         return getattr(self._inner, name)
 
     def __setattr__(self, name, value):
@@ -81,7 +84,7 @@ class FaultySensor:
     def sample(self, t, *args, **kwargs):
         return self.apply(self._inner.sample(t, *args, **kwargs))
 
-    def sample_async(self, t, *args, **kwargs):
+    def _sample_async(self, t, *args, **kwargs):
         pending = self._inner.sample_async(t, *args, **kwargs)
         return _FaultyPending(pending, self) if pending is not None else None
 
@@ -94,11 +97,16 @@ class FaultySensor:
             t = next((m.t for m in ms if m is not None), None)
             if t is None:
                 return out
-            for i, f in enumerate(self._faults):
-                if f.active(t) and f.kind == "imu_drop" and self._rng.random() < f.drop_probability:
-                    return tuple(None for _ in ms)
+            if self._dropped(t):
+                return tuple(None for _ in ms)
             return tuple(self._one(m) if m is not None else None for m in ms)
+        if self._dropped(out.t):  # a sensor that sends its IMU sample alone (the deck's, CONDOR's autopilot)
+            return None
         return self._one(out)
+
+    def _dropped(self, t: float) -> bool:
+        return any(f.active(t) and f.kind == "imu_drop" and self._rng.random() < f.drop_probability
+                   for f in self._faults)
 
     def _one(self, m):
         t0 = m.t
