@@ -133,13 +133,15 @@ class IntegrityStatus:
     """The navigator's integrity as the R-MAX loop logs it (``status``: mode, source, integrity code, HPL,
     k^2, in the R-MAX's fields) for a system whose navigator does not log its own transitions (the deck,
     CONDOR): each change of state seen here is also an ``integrity_event`` (state, reason, HPL), so that
-    ``analysis/integrity_metrics.py`` scores these runs as it scores the R-MAX's. A change is stamped at the
-    first logged step that shows it (the deck logs every step, CONDOR at 10 Hz)."""
+    ``analysis/integrity_metrics.py`` scores these runs as it scores the R-MAX's (an alarm is a departure
+    from ``ok`` once the navigator has been ok: the first logged state is an event, so a navigator ok from
+    the start has been ok). A change is stamped at the first logged step that shows it (the deck logs every
+    step, CONDOR at 10 Hz)."""
 
     def __init__(self, record) -> None:
         from visnav.navigation.integrity import STATE_CODES
 
-        self.record, self.codes, self.code = record, STATE_CODES, STATE_CODES["ok"]  # as NavIntegrity starts
+        self.record, self.codes, self.code = record, STATE_CODES, None  # the first state is an event too
 
     def __call__(self, t: float, health, mode) -> None:
         if health is None:
