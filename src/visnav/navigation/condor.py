@@ -97,14 +97,15 @@ class CondorNavigator(AutopilotNavigator):
                  radius_filter: RadiusFilter | None = None, gps_gain: float = 0.3, gps_stale_s: float = 1.0,
                  radius_sigma_pct: float = 1.0, heading_sigma_deg: float = 3.0, gps_sigma_m: float = 1.0,
                  integrity: IntegrityConfig | None = None, carry_sigma_mps: float = 5.0,
-                 gps_accel_mps2: float = 3.0) -> None:
+                 gps_accel_mps2: float = 3.0, reject_repeated_frames: bool = True) -> None:
         """``vision``: a ``VisionRange``; ``camera``: its ``PinholeCamera``; ``altimeter``: (measured outside
         temperature [C], c0, c1) of eq. 2.1; ``gps_gain``: the complementary filter's weight of a GPS fix;
         ``radius_sigma_pct``, ``heading_sigma_deg``, ``gps_sigma_m``: what the navigator assumes of its
         sensors (integrity and the protection level); ``carry_sigma_mps``: 1-sigma per axis of the rate at which the
         vision position carried from its fix along the compass heading at airspeed drifts (the unknown wind,
         the turn); ``gps_accel_mps2``: the acceleration the GPS smoother does not see (it holds the fix's
-        velocity: the orbit's centripetal v^2/R, 2.7 m/s^2 on the 120 m loiter at 18 m/s)."""
+        velocity: the orbit's centripetal v^2/R, 2.7 m/s^2 on the 120 m loiter at 18 m/s);
+        ``reject_repeated_frames``: no fix from a frame bit-identical to the previous one (a frozen link)."""
         super().__init__(altimeter)
         self.vision, self.camera = vision, camera
         self.tracker = tracker or BlobTracker()
@@ -122,6 +123,8 @@ class CondorNavigator(AutopilotNavigator):
         self.pan: PanSample | None = None
         self.uplink: list[TargetRangeSample] = []
         self.last_vision: dict | None = None
+        self._last_image: np.ndarray | None = None  # the previous frame's image (the frozen-link check)
+        self.reject_repeated_frames = bool(reject_repeated_frames)
         # on board
         self.gps_pos: np.ndarray | None = None
         self.gps_vel = np.zeros(3)
@@ -179,6 +182,13 @@ class CondorNavigator(AutopilotNavigator):
         self.last_vision = rec
         if not self.tracker_started:
             rec["reason"] = "tracker not started"
+            return
+        # a live camera's noise never repeats an image bit for bit: a repeat is a frozen video link (issue #18),
+        # no fix is made from it (the radius goes stale -> unusable -> the mission's GPS fallback)
+        same = self._last_image is not None and np.array_equal(f.image, self._last_image)
+        self._last_image = f.image
+        if same and self.reject_repeated_frames:
+            rec["reason"] = "frozen video (the image repeats the previous one)"
             return
         tr = self.tracker.track(f.image)
         if self.cam_att is not None:
