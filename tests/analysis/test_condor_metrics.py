@@ -34,7 +34,9 @@ def test_metrics_from_log_h5(tmp_path, overrides):
     assert r.error is None, r.error
     p = tmp_path / "log.h5"
     r.log.to_hdf5(p)
-    back = condor_metrics(FlightLog.from_hdf5(p), sc, wall_time_s=1.0)
+    from visnav.analysis.run_metrics import compute_metrics  # the condor metrics + the integrity ones (issue #18)
+
+    back = compute_metrics(FlightLog.from_hdf5(p), sc, wall_time_s=1.0)
     _same(r.metrics, back)
     if overrides:
         assert back["switched_at_s"] == pytest.approx(10.0, abs=0.05)

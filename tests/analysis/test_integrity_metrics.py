@@ -86,7 +86,7 @@ def test_fault_row_aggregates_runs():
 
 
 def test_fault_sets_validate_and_unknown_names_are_one_line():
-    for scen in ("palace-landing", "witas-homing", "pad-landing"):
+    for scen in ("palace-landing", "witas-homing", "pad-landing", "deck-static", "deck-moving", "condor-orbit"):
         for d in faults_for(scen, [], ["all"]):  # every definition is a valid fault of that mission
             from visnav.analysis.fault_campaign import _toml_inline
 
@@ -95,4 +95,64 @@ def test_fault_sets_validate_and_unknown_names_are_one_line():
     with pytest.raises(ValueError, match="unknown fault volcano"):
         faults_for("palace-landing", [], ["volcano"])
     with pytest.raises(ValueError, match="no fault set"):
-        faults_for("deck-static", [], ["all"])
+        faults_for("pfcm-segment", [], ["all"])
+    assert faults_for("deck-static", [], ["all"]) == FAULT_SETS["deck"]  # the two deck scenarios share it
+
+
+def _deck_log(touchdown):
+    from visnav.sim.streams import DECK_STREAMS
+
+    log = FlightLog(schema=DECK_STREAMS)
+    for k in range(10):
+        log.record("status", 0.1 * k, mode="approach", source="camera", integrity=0, hpl_m=0.05, k2=1.0)
+    if touchdown is not None:
+        d, v, on = touchdown
+        log.record("touchdown", 1.0, rel_speed=v, pos_err=d, on_deck=on, att_mismatch=1.0)
+    return log
+
+
+@pytest.mark.parametrize("touchdown,outcome", [
+    ((0.05, 0.4, True), "safe"), ((0.05, 1.2, True), "unsafe"), ((0.25, 0.4, False), "unsafe"),
+    ((1.1, 0.4, True), "unsafe"), (None, "safe")])
+def test_deck_outcome_from_the_touchdown(touchdown, outcome):
+    m = integrity_metrics(_deck_log(touchdown), load_scenario("deck-moving"))
+    assert m["outcome"] == outcome, m["outcome_reason"]
+
+
+def test_condor_outcome_orbit_radius_while_ok():
+    from visnav.sim.streams import CONDOR_STREAMS
+
+    sc = load_scenario("condor-orbit")  # 110 m orbit, vision from 60 s, 40 s transition
+    def log_with(radius_at, code_at):
+        log = FlightLog(schema=CONDOR_STREAMS)
+        for k in range(0, 2000):
+            t = 0.1 * k
+            r = radius_at(t)
+            log.record("truth", t, position=np.array([r, 0.0, -100.0]), velocity=np.zeros(3), euler=np.zeros(3),
+                       body_rates=np.zeros(3), airspeed=18.0, beta=0.0)
+            log.record("status", t, mode="gps_loiter" if t < 60 else "vision_orbit", source="vision",
+                       integrity=code_at(t), hpl_m=20.0, k2=1.0)
+        return log
+    far = lambda t: 150.0 if 120 <= t < 125 else 112.0  # noqa: E731  (40 m off for 5 s)
+    m = integrity_metrics(log_with(far, lambda t: 0), sc)
+    assert m["outcome"] == "unsafe" and "40.0 m off" in m["outcome_reason"]
+    m = integrity_metrics(log_with(far, lambda t: 2 if 119 <= t < 126 else 0), sc)  # not claiming ok there
+    assert m["outcome"] == "safe" and "2.0 m" in m["outcome_reason"]
+    early = lambda t: 150.0 if 70 <= t < 75 else 112.0  # noqa: E731  (inside the transition: not scored)
+    assert integrity_metrics(log_with(early, lambda t: 0), sc)["outcome"] == "safe"
+
+
+def test_a_deck_run_logs_and_scores_its_integrity():
+    from visnav.sim.loop import Simulation
+
+    r = Simulation(load_scenario("deck-moving", ["run.seed=2"])).run()
+    st = r.log.get("status")
+    assert st is not None and np.all(np.isfinite(st["hpl_m"][st["integrity"] == 0]))
+    m = r.metrics
+    assert m["hpl_samples_ok"] > 500 and m["hpl_bound_violations"] <= m["hpl_samples_ok"] // 1000
+    assert m["outcome"] == "safe" and m["faults_injected"] == 0
+    # the relative-position error compared with the HPL: that of the logged deck-frame estimate
+    tr, es = r.log.get("truth"), r.log.get("estimate")
+    e = np.hypot(*(es["position"][:, :2] - tr["position"][:, :2]).T)
+    ok = (st["integrity"] == 0) & np.isfinite(e)
+    assert m["worst_error_while_ok_m"] == pytest.approx(float(e[ok].max()))

@@ -36,7 +36,7 @@ def test_fault_campaign_writes_faults_csv_and_resumes(tmp_path):
 
 
 def test_fault_campaign_errors_are_one_line(tmp_path):
-    for args, text in ((["deck-static"], "no fault set"), (["palace-landing", "--faults", "volcano"], "unknown fault")):
+    for args, text in ((["pfcm-segment"], "no fault set"), (["palace-landing", "--faults", "volcano"], "unknown fault")):
         r = _invoke("faults", *args, "-n", "1", "--out", tmp_path / "x")
         assert r.exit_code == 2, r.output
         lines = r.stderr.strip().splitlines()

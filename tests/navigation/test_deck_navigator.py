@@ -218,3 +218,42 @@ def test_health_reports_the_hand_over_check_and_integrity():
     assert h.converged and h.tracking
     assert h.integrity in ("ok", "degraded") and np.isfinite(h.hpl_m)
     assert set(h.nis_per_dof) == {"bearing", "rate"}
+
+
+def test_a_repeated_image_is_a_frozen_link_not_a_view():
+    """issue #18: a frame bit-identical to the previous one is not fused (the camera's noise never repeats an
+    image); the integrity monitor sees a rejected update and, with no accepted one for stale_s, unusable."""
+    from visnav.estimation.integrity import IntegrityConfig
+
+    truth = np.r_[1.0, 0.0, 1.0, np.zeros(9)]
+    b, _ = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    make = _render_uv(b[0])
+    for reject in (True, False):
+        nav = _nav(reject_repeated_frames=reject, integrity=IntegrityConfig(stale_s=0.5))
+        nav.command(NavCommand(0.0, "track"))
+        nav.update(ImuSample(0.0, ACC, np.zeros(3)))
+        nav.update(make(0.0))
+        assert nav.stats.lights_used_last == 4
+        for k in range(1, 30):  # the same image again every 1/30 s for ~1 s
+            t = k / 30.0
+            nav.update(ImuSample(t, ACC, np.zeros(3)))
+            x = nav.x.copy()
+            nav.update(make(t))
+            if reject:
+                np.testing.assert_array_equal(nav.x, x)  # not fused
+        assert nav.stats.frames_frozen == (29 if reject else 0)
+        assert (nav.health(29 / 30.0).integrity == "unusable") == reject
+        if reject:  # a new image after the frozen ones is fused again
+            nav.update(ImuSample(1.0, ACC, np.zeros(3)))
+            img = make(1.0)
+            img.image[0, 0] ^= 1
+            x = nav.x.copy()
+            nav.update(img)
+            assert nav.stats.lights_used_last == 4 and not np.array_equal(nav.x, x)
+
+
+def test_the_mission_config_turns_the_frozen_link_check_on():
+    cfg = load_scenario("deck-moving").mission
+    assert DeckNavConfig.from_mission(cfg, 1 / 30).reject_repeated_frames
+    off = load_scenario("deck-moving", ["mission.filter.reject_repeated_frames=false"]).mission
+    assert not DeckNavConfig.from_mission(off, 1 / 30).reject_repeated_frames

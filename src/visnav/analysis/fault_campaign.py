@@ -8,7 +8,10 @@ the sub-campaigns' ``runs.csv`` (the integrity metrics of ``analysis/integrity_m
 
 The faults and their timing per mission (``FAULT_SETS``) are placed where each mission depends on the
 faulted sensor: PALACE during the MPE descent (about 40-67 s), the WITAS homing along the loop after GPS
-loss (8 s), the pad landing during the approach. ``feature_poor`` and ``map_offset`` are build-time
+loss (8 s), the pad landing during the approach, the deck landing from 9 s (deck-moving: the end of the
+5 s hover and the tau approach, which starts at 8.5-14 s; deck-static: inside its 15 s approach from 5 s;
+the whole deck flight is flown on the vision UKF), CONDOR on the vision orbit (from 60 s; faults at 100 s,
+after its 40 s transition, the GPS walk-off from 70 s: GPS is then only the fallback's). ``feature_poor`` and ``map_offset`` are build-time
 faults: their ``start_s`` is when the vehicle is expected to reach the area / when the vision navigator
 engages, the instant the detection delay is measured from.
 """
@@ -65,6 +68,30 @@ FAULT_SETS: dict[str, list[dict]] = {
         dict(kind="imu_drop", start_s=15.0, duration_s=5.0, drop_probability=0.5),
         dict(kind="clock_jump", sensor="camera", start_s=15.0, duration_s=3.0, jump_s=0.2),
         dict(kind="wind_gust", start_s=15.0, duration_s=4.0, speed_mps=8.0, from_deg=90.0),
+    ],
+    # deck-static and deck-moving (the LED camera renders an image; the IMU is accelerometers + gyros)
+    "deck": [
+        dict(kind="camera_blackout", start_s=9.0, duration_s=2.0),
+        dict(kind="camera_frozen", start_s=9.0, duration_s=2.0),
+        dict(kind="camera_brightness", start_s=9.0, duration_s=3.0, gain=1.6, offset_dn=40.0),
+        dict(kind="camera_blur", start_s=9.0, duration_s=3.0, blur_px=9),
+        dict(kind="imu_gyro_bias", start_s=9.0, duration_s=5.0, bias=[0.5, 0.5, 0.5]),
+        dict(kind="imu_accel_bias", start_s=9.0, duration_s=5.0, bias=[0.3, 0.3, 0.0]),
+        dict(kind="imu_drop", start_s=9.0, duration_s=3.0, drop_probability=0.5),
+        dict(kind="clock_jump", sensor="camera", start_s=9.0, duration_s=3.0, jump_s=0.2),
+        dict(kind="wind_gust", start_s=9.0, duration_s=2.0, speed_mps=3.0, from_deg=90.0),
+    ],
+    "condor": [
+        dict(kind="camera_blackout", start_s=100.0, duration_s=5.0),
+        dict(kind="camera_frozen", start_s=100.0, duration_s=5.0),
+        dict(kind="camera_brightness", start_s=100.0, duration_s=10.0, gain=1.6, offset_dn=40.0),
+        dict(kind="camera_blur", start_s=100.0, duration_s=10.0, blur_px=9),
+        dict(kind="imu_gyro_bias", start_s=100.0, duration_s=20.0, bias=[0.5, 0.5, 0.5]),
+        dict(kind="imu_accel_bias", start_s=100.0, duration_s=20.0, bias=[0.3, 0.3, 0.0]),
+        dict(kind="imu_drop", start_s=100.0, duration_s=5.0, drop_probability=0.5),
+        dict(kind="clock_jump", sensor="camera", start_s=100.0, duration_s=5.0, jump_s=0.2),
+        dict(kind="gps_spoof", start_s=70.0, duration_s=30.0, walk_mps=1.0, walk_deg=90.0, lost_after=False),
+        dict(kind="wind_gust", start_s=100.0, duration_s=4.0, speed_mps=8.0, from_deg=90.0),
     ],
 }
 

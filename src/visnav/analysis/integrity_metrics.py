@@ -20,7 +20,18 @@ Definitions:
   (``hpl_samples_ok``: the ok steps it is counted over);
 * ``outcome`` (``unsafe`` as the issue defines it): a landing more than 1 m from its point or faster
   than 1 m/s, a crash (ground contact of a mission that does not land, an exception), or a homing that
-  ends more than 30 m from home while claiming ``ok``; ``safe`` otherwise.
+  ends more than 30 m from home while claiming ``ok``; ``safe`` otherwise. The deck (seed 003): a
+  touchdown off the plate (the thesis' "landed" is on the plate, all 84 flights), more than 1 m from the
+  landing point or faster than 1 m/s relative to the deck (``touchdown`` stream); no touchdown (held,
+  went around) is safe. CONDOR (seed 004): the 5 m floor (the run stops on an exception) or, on the vision
+  orbit after its ``transition_s`` and while the navigator claims ``ok``, a true orbit radius more than
+  ``ORBIT_RADIUS_BOUND_M`` (30 m, 27 % of the 110 m orbit; fault-free the error stays below 12 m) from
+  ``radius_m``.
+
+For the deck the "horizontal" error of the HPL is that of the relative position (the deck origin seen
+from the vehicle, body FRD x and y: ``truth.position`` / ``estimate.position`` of the deck streams), the
+plane of the UKF's ``P[0:2, 0:2]`` the HPL is computed from; for CONDOR it is the NED position of
+``estimate`` (smoothed GPS in the loiter, eq. 3.23-3.24 on the vision orbit) against truth.
 """
 
 from __future__ import annotations
@@ -33,6 +44,7 @@ DETECT_GRACE_S = 5.0
 LANDING_RADIUS_M = 1.0
 LANDING_SPEED_MPS = 1.0
 HOMING_RADIUS_M = 30.0
+ORBIT_RADIUS_BOUND_M = 30.0  # CONDOR: true orbit radius error while claiming ok on the vision orbit
 
 
 FLIGHT_ACTIONS = ("fallback", "abort", "go-around")
@@ -66,6 +78,16 @@ def _outcome(log, scenario, code_last: int | None) -> tuple[str, str]:
     if log.get("error"):
         return "unsafe", "the run stopped on an exception"
     td = log.get("touchdown")
+    if mtype == "deck":
+        if not td:
+            return "safe", "no touchdown (held or went around)"
+        d, v, on = (float(np.asarray(td[k], float)[0]) for k in ("pos_err", "rel_speed", "on_deck"))
+        what = f"touched down {d:.2f} m from the point at {v:.2f} m/s" + (" on the plate" if on else " off the plate")
+        if not on or d > LANDING_RADIUS_M or (math.isfinite(v) and v > LANDING_SPEED_MPS):
+            return "unsafe", what
+        return "safe", what
+    if mtype == "condor":
+        return _condor_outcome(log, scenario)
     if mtype in ("palace", "pad-landing"):
         if not td:
             return "safe", "no landing (held or aborted)"
@@ -86,6 +108,30 @@ def _outcome(log, scenario, code_last: int | None) -> tuple[str, str]:
                 return "unsafe", f"ended {d:.1f} m from home claiming ok"
             return "safe", f"ended {d:.1f} m from home" + (" claiming ok" if code_last == 0 else " (not claiming ok)")
     return "safe", ""
+
+
+def _condor_outcome(log, scenario) -> tuple[str, str]:
+    st, tr = log.get("status"), log.get("truth")
+    cfg = scenario.mission
+    if getattr(cfg, "experiment", "orbit") != "orbit" or not st or not tr or "mode" not in st:
+        return "safe", ""
+    o = cfg.control.orbit
+    t = np.asarray(st["t"], float)
+    tt = np.asarray(tr["t"], float)
+    i = np.clip(np.searchsorted(tt, t), 0, max(tt.size - 1, 0))
+    p = np.asarray(tr["position"], float)[i]
+    e = np.abs(np.hypot(p[:, 0] - cfg.target.north_m, p[:, 1] - cfg.target.east_m) - o.radius_m)
+    vision = np.array([str(m) == "vision_orbit" for m in st["mode"]])
+    on = np.nonzero(vision)[0]
+    if not on.size:
+        return "safe", "never on the vision orbit"
+    sel = vision & (t >= t[on[0]] + o.transition_s) & (np.abs(tt[i] - t) < 1e-6)
+    claim = sel & (np.asarray(st["integrity"], int) == 0)
+    worst = float(e[claim].max()) if claim.any() else float("nan")
+    if claim.any() and worst > ORBIT_RADIUS_BOUND_M:
+        k = int(np.argmax(np.where(claim, e, -1.0)))
+        return "unsafe", f"orbit radius {worst:.1f} m off claiming ok at {t[k]:.1f} s"
+    return "safe", (f"orbit radius error up to {worst:.1f} m while ok" if claim.any() else "no ok vision-orbit step")
 
 
 def integrity_metrics(log, scenario) -> dict:

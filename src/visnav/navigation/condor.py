@@ -95,12 +95,17 @@ def _wrap(a: float) -> float:
 class CondorNavigator(AutopilotNavigator):
     def __init__(self, vision, camera, altimeter: tuple[float, float, float], tracker: BlobTracker | None = None,
                  radius_filter: RadiusFilter | None = None, gps_gain: float = 0.3, gps_stale_s: float = 1.0,
-                 radius_sigma_pct: float = 1.0, heading_sigma_deg: float = 2.0, gps_sigma_m: float = 1.0,
-                 integrity: IntegrityConfig | None = None) -> None:
+                 radius_sigma_pct: float = 1.0, heading_sigma_deg: float = 3.0, gps_sigma_m: float = 1.0,
+                 integrity: IntegrityConfig | None = None, carry_sigma_mps: float = 5.0,
+                 gps_accel_mps2: float = 3.0, reject_repeated_frames: bool = True) -> None:
         """``vision``: a ``VisionRange``; ``camera``: its ``PinholeCamera``; ``altimeter``: (measured outside
         temperature [C], c0, c1) of eq. 2.1; ``gps_gain``: the complementary filter's weight of a GPS fix;
         ``radius_sigma_pct``, ``heading_sigma_deg``, ``gps_sigma_m``: what the navigator assumes of its
-        sensors (integrity and the protection level)."""
+        sensors (integrity and the protection level); ``carry_sigma_mps``: 1-sigma per axis of the rate at which the
+        vision position carried from its fix along the compass heading at airspeed drifts (the unknown wind,
+        the turn); ``gps_accel_mps2``: the acceleration the GPS smoother does not see (it holds the fix's
+        velocity: the orbit's centripetal v^2/R, 2.7 m/s^2 on the 120 m loiter at 18 m/s);
+        ``reject_repeated_frames``: no fix from a frame bit-identical to the previous one (a frozen link)."""
         super().__init__(altimeter)
         self.vision, self.camera = vision, camera
         self.tracker = tracker or BlobTracker()
@@ -108,6 +113,7 @@ class CondorNavigator(AutopilotNavigator):
         self.gps_gain, self.gps_stale_s = float(gps_gain), float(gps_stale_s)
         self.radius_sigma, self.heading_sigma = radius_sigma_pct / 100.0, math.radians(heading_sigma_deg)
         self.gps_sigma = float(gps_sigma_m)
+        self.carry_sigma, self.gps_accel = float(carry_sigma_mps), float(gps_accel_mps2)
         self.integrity = IntegrityMonitor(integrity or IntegrityConfig(window=20, stale_s=self.radius.stale_s))
         self.source = "gps"
         self.target: np.ndarray | None = None
@@ -117,6 +123,8 @@ class CondorNavigator(AutopilotNavigator):
         self.pan: PanSample | None = None
         self.uplink: list[TargetRangeSample] = []
         self.last_vision: dict | None = None
+        self._last_image: np.ndarray | None = None  # the previous frame's image (the frozen-link check)
+        self.reject_repeated_frames = bool(reject_repeated_frames)
         # on board
         self.gps_pos: np.ndarray | None = None
         self.gps_vel = np.zeros(3)
@@ -124,8 +132,8 @@ class CondorNavigator(AutopilotNavigator):
         self.headings: deque = deque(maxlen=64)
         self.fix: tuple | None = None  # (t, R, Psi_VB, pan, heading at t)
         self.fixes = self.radius_updates = 0
-        var = self.gps_sigma ** 2 * self.gps_gain / (2.0 - self.gps_gain)  # the GPS smoother's steady variance
-        self._gps_cov = np.diag([var, var, var, np.nan, np.nan, np.nan])
+        self._gps_var = math.nan  # the GPS smoother's variance per axis (white fix noise; sigma^2 at the first fix)
+        self._gps_dt = 0.0  # the last interval between fixes
         self.health_period_s = 0.1
         self._assess: dict | None = None
         self._assess_key: tuple | None = None
@@ -175,6 +183,13 @@ class CondorNavigator(AutopilotNavigator):
         if not self.tracker_started:
             rec["reason"] = "tracker not started"
             return
+        # a live camera's noise never repeats an image bit for bit: a repeat is a frozen video link (issue #18),
+        # no fix is made from it (the radius goes stale -> unusable -> the mission's GPS fallback)
+        same = self._last_image is not None and np.array_equal(f.image, self._last_image)
+        self._last_image = f.image
+        if same and self.reject_repeated_frames:
+            rec["reason"] = "frozen video (the image repeats the previous one)"
+            return
         tr = self.tracker.track(f.image)
         if self.cam_att is not None:
             rec["roll"], rec["tilt"] = float(self.cam_att.euler[0]), float(self.cam_att.euler[1])
@@ -221,9 +236,13 @@ class CondorNavigator(AutopilotNavigator):
         p = np.asarray(m.position, float)
         if self.gps_pos is None:
             self.gps_pos = p.copy()
+            self._gps_var = self.gps_sigma ** 2
         else:
             pred = self.gps_pos + self.gps_vel * (m.t - self.gps_t)
             self.gps_pos = pred + self.gps_gain * (p - pred)
+            g = self.gps_gain  # -> sigma^2 g / (2 - g), the steady variance
+            self._gps_var = (1.0 - g) ** 2 * self._gps_var + g * g * self.gps_sigma ** 2
+            self._gps_dt = float(m.t - self.gps_t)
         self.gps_vel = np.asarray(m.velocity, float).copy()
         self.gps_t = float(m.t)
 
@@ -239,7 +258,7 @@ class CondorNavigator(AutopilotNavigator):
                 pos = self.gps_pos + self.gps_vel * (t - self.gps_t)
                 vel = self.gps_vel
                 gs = math.hypot(vel[0], vel[1])
-                cov = self._gps_cov
+                cov = self._position_cov(t)
                 if self.target is not None:
                     rn, re = pos[0] - self.target[0], pos[1] - self.target[1]
                     R = math.hypot(rn, re)
@@ -256,22 +275,36 @@ class CondorNavigator(AutopilotNavigator):
                 if math.isfinite(self.va) and math.isfinite(h_now):
                     pos[:2] += self.va * (t - tf) * np.array([math.cos(h_now), math.sin(h_now)])
                 pos[2] = -base["height"]
-                cov = self._position_cov()
+                cov = self._position_cov(t)
         return FixedWingEstimate(t=t, position=pos, velocity=vel, covariance=cov,
                                  valid=math.isfinite(pos[0]) and math.isfinite(pos[1]), source=self.source, ground_speed=gs,
                                  radius=R, radius_rate=Rdot, radius_valid=bool(valid), **base)
 
-    def _position_cov(self) -> np.ndarray:
-        """Covariance (6, 6) of ``estimate``'s position (NaN where unknown); it does not depend on ``t``."""
+    def _position_cov(self, t: float) -> np.ndarray:
+        """Covariance (6, 6) of ``estimate(t)``'s position (NaN where unknown).
+
+        GPS (the loiter): the smoother's variance per axis (``_gps_var``) plus, as a bias, what holding the
+        fix's velocity misses in a turn: ``gps_accel`` (T^2 / (2 g) + tau^2 / 2) (T: the interval between
+        fixes, the smoother's lag; tau: the time carried since the fix). Vision (eq. 3.23-3.24): sigma_R
+        along the bearing, R sigma_heading across it, plus ``(carry_sigma (t - t_fix))^2`` per axis for the
+        carry along the compass heading at airspeed since the fix (the wind and the turn it does not know)."""
         if self.source == "gps":
-            return self._gps_cov if self.gps_pos is not None else _NAN66
+            if self.gps_pos is None:
+                return _NAN66
+            tau = max(t - self.gps_t, 0.0)
+            b = self.gps_accel * (self._gps_dt ** 2 / (2.0 * self.gps_gain) + 0.5 * tau * tau)
+            var = self._gps_var + b * b
+            cov = np.full((6, 6), np.nan)
+            cov[:3, :3] = np.diag([var, var, var])
+            return cov
         if self.fix is not None and self.target is not None and math.isfinite(self.fix[4]):
-            _, Rf, psi_vb, pan, head = self.fix
+            tf, Rf, psi_vb, pan, head = self.fix
             b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
             # radial: sigma_R; across: R sigma_heading; rotate to NED
             c, s = math.cos(b), math.sin(b)
             Rot = np.array([[c, -s], [s, c]])
             P = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
+            P = P + (self.carry_sigma * max(t - tf, 0.0)) ** 2 * np.eye(2)
             cov = np.full((6, 6), np.nan)
             cov[:2, :2] = P
             return cov
@@ -283,7 +316,7 @@ class CondorNavigator(AutopilotNavigator):
         h = Health(source=self.source, tracking=not self.radius.stale(t))
         key = (self.radius_updates, self.source)
         if self._assess is None or key != self._assess_key or t - self._assess_t >= self.health_period_s:
-            P_h = self._position_cov()[:2, :2]  # what estimate(t).covariance holds, without the estimate
+            P_h = self._position_cov(t)[:2, :2]  # what estimate(t).covariance holds, without the estimate
             ok = math.isfinite(P_h[0, 0]) and math.isfinite(P_h[1, 1])
             self._assess = self.integrity.assess(t, P_h if ok else None)
             self._assess_key, self._assess_t = key, t

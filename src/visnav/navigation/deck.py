@@ -8,7 +8,8 @@ It implements the ``Navigator`` interface (``navigation/base.py``) and takes onl
   telescopes in the velocity, while a low-pass lag biases the Euler term during manoeuvres).
   Samples out of order or with NaN are dropped and counted.
 * ``AttitudeSample`` - the autopilot's roll and pitch (yaw unused).
-* ``Frame`` - the image: blobs (``vision/blobs.find_blobs``), their bearings and frame-to-frame rates
+* ``Frame`` - the image (one bit-identical to the previous frame's is a frozen link: dropped, counted in
+  ``stats.frames_frozen`` and as a rejected update of the integrity monitor): blobs (``vision/blobs.find_blobs``), their bearings and frame-to-frame rates
   (``BearingTracker``), association with the expected lights (eq. 3.11-3.12, bearings only, the
   covariance of each light's predicted bearings from the unscented transform plus R) and the
   correction with the matched bearings and, for blobs matched to the previous frame, their rates
@@ -56,6 +57,7 @@ class DeckNavStats:
     imu_dropped: int = 0
     frames: int = 0
     frames_dropped: int = 0  # older than the history, or before initialisation
+    frames_frozen: int = 0  # bit-identical to the previous frame (a frozen video link): not fused
     empty_frames: int = 0
     blobs: int = 0
     blobs_rejected: int = 0
@@ -83,6 +85,7 @@ class DeckNavConfig:
     gyro_dot_tau: float = 0.0
     history_s: float = 0.5
     integrity: IntegrityConfig = field(default_factory=IntegrityConfig)
+    reject_repeated_frames: bool = False  # a frame bit-identical to the previous one is a frozen link
 
     @classmethod
     def from_mission(cls, cfg, frame_interval_s: float) -> "DeckNavConfig":
@@ -109,7 +112,8 @@ class DeckNavConfig:
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,
                    gate=f.gate, alpha=f.alpha, beta=f.beta, kappa=f.kappa, blob_threshold=c.blob_threshold,
                    converged_bearing_rms=np.radians(f.converged_bearing_rms_deg),
-                   integrity=IntegrityConfig(stale_s=f.integrity_stale_s))
+                   integrity=IntegrityConfig(stale_s=f.integrity_stale_s),
+                   reject_repeated_frames=f.reject_repeated_frames)
 
 
 @dataclass(frozen=True)
@@ -160,6 +164,7 @@ class DeckNavigator(CommandDispatch):
         self.recorder = recorder
         self.stats = DeckNavStats()
         self.integrity = IntegrityMonitor(config.integrity)
+        self._last_image: np.ndarray | None = None  # the previous frame's image (the frozen-link check)
         self.ukf: UnscentedKalmanFilter | None = None
         self.bearing_var, self.rate_var = (s**2 for s in config.acquisition_sigmas)
         self._t: float | None = None  # time of the filter's state
@@ -323,6 +328,15 @@ class DeckNavigator(CommandDispatch):
             self.stats.frames_dropped += 1
             return
         t = float(f.t)
+        # a live camera's noise never repeats an image bit for bit: a repeat is a frozen link, not a view
+        # (issue #18); nothing is fused, so the navigator goes stale -> unusable as with no frame at all
+        same = (self.cfg.reject_repeated_frames and self._last_image is not None
+                and np.array_equal(f.image, self._last_image))
+        self._last_image = f.image
+        if same:
+            self.stats.frames_frozen += 1
+            self.integrity.record(t, "bearing", float("nan"), 0, False)
+            return
         uv = find_blobs(f.image, self.tracker.threshold)
         bf = self.tracker.from_pixels(t, uv)
         if t >= self._t - 1e-12:

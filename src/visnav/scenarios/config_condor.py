@@ -78,7 +78,14 @@ class CondorNavigationConfig(_M):
 
     gps_gain: float = Field(0.3, gt=0.0, le=1.0, description="complementary filter weight of a GPS fix")
     radius_sigma_pct: float = Field(1.0, gt=0.0, le=20.0, description="vision radius noise the integrity test assumes")
-    heading_sigma_deg: float = Field(2.0, gt=0.0, le=30.0, description="compass error the protection level assumes")
+    heading_sigma_deg: float = Field(3.0, gt=0.0, le=30.0, description="bearing error the protection level assumes "
+                                     "(compass calibration residual and noise, pan pot, vision bearing; issue #18: "
+                                     "seed 1's cross-range error was -3.0 +- 1.9 deg)")
+    carry_sigma_mps: float = Field(5.0, gt=0.0, le=50.0, description="drift rate of the vision position carried "
+                                   "from its fix at airspeed along the compass heading (the unknown wind, the turn), "
+                                   "1 sigma per axis, for the protection level")
+    gps_accel_mps2: float = Field(3.0, ge=0.0, le=50.0, description="acceleration the GPS smoother does not see "
+                                  "(the loiter's v^2/R), for the protection level")
     radius_alpha: float = Field(0.5, gt=0.0, le=1.0, description="radius filter alpha")
     radius_beta: float = Field(0.1, ge=0.0, le=1.0, description="radius filter beta")
     radius_stale_s: float = Field(3.0, gt=0.0, le=30.0, description="radius held this long across dropouts")

@@ -117,6 +117,9 @@ class DeckFilterConfig(_M):
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
     integrity_stale_s: float = Field(0.5, gt=0, le=60, description="integrity unusable when no frame was fused "
                                      "for this long (15 frames at 30 Hz; issue #18)")
+    reject_repeated_frames: bool = Field(True, description="drop a frame bit-identical to the previous one (a "
+                                         "frozen video link: the camera's noise never repeats an image; issue #18). "
+                                         "Turn off with camera.noise_gray = 0 over a still deck")
 
 
 class DeckGuidanceConfig(_M):

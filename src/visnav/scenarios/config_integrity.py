@@ -103,6 +103,11 @@ FAULTS_APPLY = {
     "pfcm": _IMU + ("clock_jump", "gps_spoof", "wind_gust"),
     "witas-homing": _CAMERA + _IMU + ("clock_jump", "gps_spoof", "map_offset", "feature_poor", "wind_gust"),
     "pad-landing": _CAMERA + _IMU + ("clock_jump", "wind_gust"),
+    # the deck: LED camera (an image), IMU (accelerometers + gyros alone; the roll/pitch AHRS is "ahrs"),
+    # a gust in the (otherwise still) air of the lab
+    "deck": _CAMERA + _IMU + ("clock_jump", "wind_gust"),
+    # CONDOR: gimbal camera, the autopilot's IMU (gyros + accelerometers), GPS (loiter and fallback)
+    "condor": _CAMERA + _IMU + ("clock_jump", "gps_spoof", "wind_gust"),
 }
 
 

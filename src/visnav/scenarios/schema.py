@@ -326,7 +326,7 @@ def _fixed_wing(world: str) -> list[tuple[str, tuple[str, ...], str]]:
             ("navigation", (), "its estimation is configured under mission.*")]
 
 
-_NO_FAULTS = "its simulation injects no faults (issue #18: the R-MAX missions)"
+_NO_FAULTS = "its simulation injects no faults (issue #18: the R-MAX, deck and CONDOR missions do)"
 NOT_APPLICABLE: dict[str, list[tuple[str, tuple[str, ...], str]]] = {
     "deck": [
         ("world", (), "its world is the ship deck, mission.deck.*"),
@@ -335,9 +335,8 @@ NOT_APPLICABLE: dict[str, list[tuple[str, tuple[str, ...], str]]] = {
         ("sensors.camera", (), "its camera is mission.camera.*"),
         ("sensors", (), "its sensors are mission.imu.* and mission.camera.*"),
         ("navigation", (), "its filter is mission.filter.*"),
-        ("faults", (), _NO_FAULTS),
     ],
-    "condor": _fixed_wing("mission.target.*") + [("faults", (), _NO_FAULTS)],
+    "condor": _fixed_wing("mission.target.*"),
     "mav-geolocation": _fixed_wing("mission.map.* and mission.target.*") + [("faults", (), _NO_FAULTS)],
     "witas-homing": [
         ("navigation", (), "its navigator is configured by mission.filter.*"),

@@ -15,6 +15,7 @@ camera_blur         camera     linear motion blur of ``blur_px`` pixels along ``
 imu_gyro_bias       imu        gyro + ``bias`` [deg/s] (the attitude solution is the autopilot's: unchanged)
 imu_accel_bias      imu        accelerometer + ``bias`` [m/s^2]
 imu_drop            imu        the IMU message (rates, forces, attitude) lost with ``drop_probability``
+                               (the deck's and CONDOR's IMU send rates and forces alone: that message)
 clock_jump          ``sensor`` every time stamp of the stream + ``jump_s`` (the data unchanged)
 range_dropout       ``sensor`` laser / sonar: no return (range NaN)
 range_stuck         ``sensor`` laser / sonar: the range of the first sample in the fault, repeated
@@ -97,11 +98,16 @@ class FaultySensor:
             t = next((m.t for m in ms if m is not None), None)
             if t is None:
                 return out
-            for i, f in enumerate(self._faults):
-                if f.active(t) and f.kind == "imu_drop" and self._rng.random() < f.drop_probability:
-                    return tuple(None for _ in ms)
+            if self._dropped(t):
+                return tuple(None for _ in ms)
             return tuple(self._one(m) if m is not None else None for m in ms)
+        if self._dropped(out.t):  # a sensor that sends its IMU sample alone (the deck's, CONDOR's autopilot)
+            return None
         return self._one(out)
+
+    def _dropped(self, t: float) -> bool:
+        return any(f.active(t) and f.kind == "imu_drop" and self._rng.random() < f.drop_probability
+                   for f in self._faults)
 
     def _one(self, m):
         t0 = m.t
@@ -215,9 +221,11 @@ def apply_faults(sensors: dict, faults, rng: np.random.Generator) -> dict:
 
 
 def inject_faults(sensors: dict, world, faults, rng: np.random.Generator) -> dict:
-    """The R-MAX loop's hook (``sim/loop.py``): its sensors (role -> sensor: ``imu gps laser sonar camera
-    baro compass`` as the mission's builder named them) with the faulted ones wrapped; a ``wind_gust``
-    fault wraps ``world.wind`` in place."""
+    """The loop's hook (``sim/loop.py``, every system): its sensors (role -> sensor as the mission's builder
+    named them: the R-MAX's ``imu gps laser sonar camera baro compass``, the deck's ``ahrs imu camera``,
+    CONDOR's ``ahrs imu pitot baro compass gps camera_ahrs pan_pot camera``) with the faulted ones wrapped;
+    a ``wind_gust`` fault wraps ``world.wind`` in place (the deck's still air and CONDOR's wind are
+    ``world.wind`` too)."""
     faults = list(faults or ())
     if not faults:
         return dict(sensors)

@@ -30,7 +30,7 @@ from visnav.sensors.gimbal import CameraAhrs, Gimbal, PanPotentiometer
 from visnav.sensors.gps import Gps
 from visnav.sensors.link import Link
 from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
-from visnav.sim.parts import CurrentTruth, MissionParts
+from visnav.sim.parts import CurrentTruth, IntegrityStatus, MissionParts
 from visnav.sim.rmax_parts import WindEnvironment
 from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
 from visnav.vehicles.fixedwing import FixedWingParams, trim
@@ -41,9 +41,10 @@ class CondorWorld(AircraftAir):
     """What CONDOR's sensors see besides the aircraft's state: the gimbal (its true pan, tilt and the
     camera's attitude), the tent's outline, and the aircraft's airspeed at the current step."""
 
-    def __init__(self, gimbal: Gimbal, outline: np.ndarray, vehicle) -> None:
+    def __init__(self, gimbal: Gimbal, outline: np.ndarray, vehicle, wind) -> None:
         super().__init__(vehicle)
         self.gimbal, self.outline = gimbal, outline
+        self.wind = wind  # the scenario's wind (a wind_gust fault wraps it after the build)
 
 
 def build_navigator(cfg, camera) -> CondorNavigator:
@@ -53,7 +54,8 @@ def build_navigator(cfg, camera) -> CondorNavigator:
     return CondorNavigator(vision, camera, (a.t_measured_c, a.c0, a.c1),
                            radius_filter=RadiusFilter(n.radius_alpha, n.radius_beta, n.radius_stale_s),
                            gps_gain=n.gps_gain, radius_sigma_pct=n.radius_sigma_pct,
-                           heading_sigma_deg=n.heading_sigma_deg, gps_sigma_m=cfg.gps_noise_m)
+                           heading_sigma_deg=n.heading_sigma_deg, gps_sigma_m=cfg.gps_noise_m,
+                           carry_sigma_mps=n.carry_sigma_mps, gps_accel_mps2=n.gps_accel_mps2)
 
 
 class Operator:
@@ -95,6 +97,7 @@ class CondorLogger:
 
     def __init__(self, vehicle, mission, autopilot, nav, record) -> None:
         self.vehicle, self.mission, self.autopilot, self.nav, self.record = vehicle, mission, autopilot, nav, record
+        self.status = IntegrityStatus(record)
 
     def __call__(self, step) -> None:
         t, u, record = step.t, step.command, self.record
@@ -108,6 +111,7 @@ class CondorLogger:
         e = self.nav.estimate(t)
         record("estimate", t, position=e.position, euler=e.attitude, valid=e.valid, source=e.source,
                radius=e.radius, radius_valid=e.radius_valid, airspeed=e.airspeed, height=e.height)
+        self.status(t, step.health, self.mission.mode)  # the navigator's integrity (issue #18)
 
 
 def floor(vehicle, min_agl_m: float):
@@ -123,6 +127,7 @@ def floor(vehicle, min_agl_m: float):
 
 def build(ctx) -> MissionParts:
     from visnav.analysis.condor_metrics import condor_metrics
+    from visnav.analysis.integrity_metrics import integrity_metrics
 
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
@@ -157,11 +162,11 @@ def build(ctx) -> MissionParts:
     g = cfg.gimbal
     gimbal = Gimbal(math.pi / 2, -math.atan2(h, o.loiter_radius_m), math.radians(g.pan_rate_deg_s),
                     math.radians(g.tilt_rate_deg_s), g.roll_leak, math.radians(g.roll_bias_deg))
-    world = CondorWorld(gimbal, outline, vehicle)
+    world = CondorWorld(gimbal, outline, vehicle, wind)
     a, sn = cfg.altimeter, cfg.sensors
     # order matters at equal time stamps: the camera's AHRS, pot and baro reach the ground station before the frame
     ap = build_autopilot_sensors(sn, rng[8:11])
-    sensors = {f"autopilot{i}": x for i, x in enumerate(ap)}
+    sensors = dict(zip(("ahrs", "imu", "pitot"), ap))  # (the names [[faults]] target: imu)
     sensors.update({
         "baro": Baro(rng[4], a.rate_hz, a.noise_m, 0.0, t_outside_c=a.t_outside_c, c0=a.c0, c1=a.c1),
         "compass": Compass(rng[11], sn.compass.rate_hz, sn.compass.noise_deg, sn.compass.bias_deg),
@@ -183,7 +188,7 @@ def build(ctx) -> MissionParts:
     mission = CondorMission(cfg, nav, recorder=record)
     truth = CurrentTruth(vehicle)
     operator = Operator(cfg, nav, camera, renderer, gimbal, vehicle, truth, target, mission, record)
-    environment = WindEnvironment(lambda: wind, dt, lambda: max(-vehicle.x[2], 1.0),
+    environment = WindEnvironment(lambda: world.wind, dt, lambda: max(-vehicle.x[2], 1.0),
                                   lambda: max(vehicle.air["Va"], 1.0), initial=wind.velocity_ned(0.0, 0.0))
     return MissionParts(
         world=world, sensors=sensors, navigator=nav, mission=mission, controller=autopilot, metrics=condor_metrics,
@@ -192,5 +197,6 @@ def build(ctx) -> MissionParts:
         logger=CondorLogger(vehicle, mission, autopilot, nav, record), after_step=floor(vehicle, 5.0),
         world_step=gimbal.step, uplink=link, on_delivered=operator.after, start=operator.start,
         nav_init=NavInit(0.0, "survey", position=target.copy()), streams=CONDOR_STREAMS, camera_model=camera,
+        extra_metrics=(integrity_metrics,),
         info={"target": target, "gimbal": gimbal, "renderer": renderer, "trim": trim_level, "params": params,
               "link": link})

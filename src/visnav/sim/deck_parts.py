@@ -28,10 +28,11 @@ from visnav.sensors.deck_observer import RelativeStateSensor
 from visnav.sensors.imu import AccelGyro, RollPitchAhrs
 from visnav.sensors.led_camera import LedCamera
 from visnav.sim.clock import rate_divisor
-from visnav.sim.parts import MissionParts, VehicleTruth
+from visnav.sim.parts import IntegrityStatus, MissionParts, VehicleTruth
 from visnav.sim.streams import DECK_STREAMS
 from visnav.vehicles.base import Environment
 from visnav.vehicles.multirotor import Multirotor, MultirotorParams
+from visnav.world.wind import SteadyWind, Wind
 from visnav.world.deck import DeckMotion, DeckWorld, relative_state
 
 #: the mission and controller rate [Hz]
@@ -60,6 +61,7 @@ class DeckContact:
         self.params, self.cfg, self.record = params, cfg, record
         self.landing_point = np.asarray(cfg.guidance.landing_point_m, float)
         self._t, self._ds = None, None
+        self.status = IntegrityStatus(record)
 
     def deck(self, t: float):
         if t != self._t:
@@ -72,7 +74,9 @@ class DeckContact:
 
     def environment(self, k: int, t: float) -> Environment:
         p = self.params
-        return Environment(rotor_height_m=self.gear_height(self.deck(t)) + p.gear_offset + p.rotor_height)
+        # the air of the lab is still (world.wind: zero) unless a wind_gust fault wraps it (sensors/faults.py)
+        return Environment(wind_ned=self.world.wind.velocity_ned(t, 0.0),
+                           rotor_height_m=self.gear_height(self.deck(t)) + p.gear_offset + p.rotor_height)
 
     def contact(self, t: float) -> bool:
         ds = self.deck(t)
@@ -113,10 +117,12 @@ class DeckContact:
                gear_height=self.gear_height(ds))
         record("deck", t, position=ds.position, euler=ds.euler)
         record("command", t, roll=cmd.roll, pitch=cmd.pitch, yaw_rate=cmd.yaw_rate, throttle=cmd.throttle)
+        self.status(t, step.health, self.mission.mode)  # the navigator's integrity (issue #18)
 
 
 def build(ctx) -> MissionParts:
     from visnav.analysis.deck_metrics import deck_metrics
+    from visnav.analysis.integrity_metrics import integrity_metrics
 
     sc, record = ctx.scenario, ctx.record
     wrap = ctx.navigator_wrapper or (lambda nav: nav)
@@ -127,6 +133,7 @@ def build(ctx) -> MissionParts:
     motion = (DeckMotion.static() if d.motion == "static"
               else DeckMotion.from_sea_state(d.sea_state, rng[0], d.sinusoids, d.motion_scale))
     world = DeckWorld(motion, d.lights_m, d.size_m, c.extra_blobs_deck_m, c.hide_light, c.hide_after_s)
+    world.wind = Wind(SteadyWind(0.0, 0.0))  # still air (a wind_gust fault adds its gust)
 
     v = cfg.vehicle
     params = MultirotorParams(mass=v.mass_kg, thrust_to_weight=v.thrust_to_weight,
@@ -181,4 +188,5 @@ def build(ctx) -> MissionParts:
         vehicle=vehicle, truth=truth, sensor_grid=True, end_inclusive=True, mission_hz=1.0 / (d_ctrl * dt), log_hz=1.0 / dt,
         initial_command=AttitudeThrustCommand(0.0, 0.0, 0.0, 0.0, hov), environment=deck.environment,
         logger=deck.log, contact=deck.contact, observers={RelativeStateSample: mission.observe}, streams=DECK_STREAMS,
+        extra_metrics=(integrity_metrics,),
         info={"landing_point": deck.landing_point, "frame_steps": frame_steps, "params": params})

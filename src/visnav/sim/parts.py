@@ -127,3 +127,28 @@ class CurrentTruth:
             raise ValueError(f"truth is asked for t={t:.4f}s at step t={self.now:.4f}s: a sensor that "
                              f"describes another instant needs sensors/base.TruthHistory")
         return self.vehicle.state
+
+
+class IntegrityStatus:
+    """The navigator's integrity as the R-MAX loop logs it (``status``: mode, source, integrity code, HPL,
+    k^2, in the R-MAX's fields) for a system whose navigator does not log its own transitions (the deck,
+    CONDOR): each change of state seen here is also an ``integrity_event`` (state, reason, HPL), so that
+    ``analysis/integrity_metrics.py`` scores these runs as it scores the R-MAX's (an alarm is a departure
+    from ``ok`` once the navigator has been ok: the first logged state is an event, so a navigator ok from
+    the start has been ok). A change is stamped at the first logged step that shows it (the deck logs every
+    step, CONDOR at 10 Hz)."""
+
+    def __init__(self, record) -> None:
+        from visnav.navigation.integrity import STATE_CODES
+
+        self.record, self.codes, self.code = record, STATE_CODES, None  # the first state is an event too
+
+    def __call__(self, t: float, health, mode) -> None:
+        if health is None:
+            return
+        code = self.codes.get(health.integrity, -1)
+        self.record("status", t, mode=mode or "", source=health.source, integrity=code, hpl_m=float(health.hpl_m),
+                    k2=float(health.consistency_k2))
+        if code != self.code:
+            self.code = code
+            self.record("integrity_event", t, state=code, reason=health.integrity_reason, hpl=float(health.hpl_m))

@@ -48,6 +48,14 @@ RMAX_STREAMS = {
                   "speed": ("m/s", "", "true speed at ground contact")},
 }
 
+def _status(frame: str) -> dict:
+    """The ``status`` stream of a system whose logger records the navigator's integrity (``sim/parts.IntegrityStatus``)."""
+    return {"mode": ("text", "", "mission mode"), "source": ("text", "", "navigation source (Health.source)"),
+            "integrity": RMAX_STREAMS["status"]["integrity"],
+            "hpl_m": ("m", frame, "navigator's horizontal protection level (inf: none)"),
+            "k2": RMAX_STREAMS["status"]["k2"]}
+
+
 _DECK_STATE = {
     "position": ("m", "vehicle body FRD", "position of the deck origin relative to the vehicle (seed 003 eq. 2.2)"),
     "euler": ("rad", "3-2-1 Euler angles of the deck frame relative to the vehicle body frame",
@@ -92,6 +100,7 @@ DECK_STREAMS = {
                   "on_deck": ("bool", "", "the gear is on the square plate"),
                   "att_mismatch": ("deg", "", "angle between the vehicle's and the deck's z axes")},
     "retarget_skipped": {"reason": ("text", "", "why the touchdown point was not re-aimed")},
+    "status": _status("vehicle body FRD x, y (of the relative position: the UKF's P[0:2, 0:2])"),
 }
 
 #: the CONDOR orbit (sim/condor_parts.py)
@@ -136,6 +145,7 @@ CONDOR_STREAMS = {
                  "position": ("m", NED, "the tent's surveyed position given to the navigator"),
                  "velocity": ("m/s", NED, "not given (NaN)"), "attitude": (EULER[0], EULER[1], "not given (NaN)")},
     "click": {"pixel": ("px", "image (u right, v down)", "the operator's click that starts the tracker on the tent")},
+    "status": _status("horizontal NED (of the estimate's position)"),
 }
 
 #: the CONDOR ground test (sim/condor_ground.py): one row per table row, ``t`` is the row index
