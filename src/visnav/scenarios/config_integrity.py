@@ -38,7 +38,20 @@ class IntegrityBlock(_M):
                                stale_s=self.stale_s)
 
 
-class PalaceIntegrityConfig(IntegrityBlock):
+class GpsCheckBlock(IntegrityBlock):
+    """The GPS walk-off check's keys (navigators that fly on GPS before vision: PALACE, WITAS)."""
+
+    gps_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="GPS walk-off onset: level of the GPS-inertial "
+                                   "velocity test (chi-square(2); navigation/integrity.GpsInertialCheck)")
+    gps_check_window_s: float = Field(1.0, gt=0, le=30, description="its window: GPS velocity change vs the "
+                                      "integrated acceleration over this long")
+    gps_velocity_sigma_mps: float = Field(0.03, gt=0, le=5, description="1-sigma GPS velocity noise per axis "
+                                          "(the receiver: 0.02 m/s)")
+    gps_check_accel_sigma_mps2: float = Field(0.05, gt=0, le=5, description="1-sigma error of the navigation-frame "
+                                              "acceleration (accelerometer, attitude) per axis")
+
+
+class PalaceIntegrityConfig(GpsCheckBlock):
     """PALACE: landing on a point (1 m), MPE at 10 Hz and GPS at 10 Hz."""
 
     alert_limit_m: float = Field(4.0, gt=0, description="unusable when the HPL exceeds it")
@@ -49,17 +62,9 @@ class PalaceIntegrityConfig(IntegrityBlock):
                                      "reference when it is set (GPS fix or estimate)")
     mpe_drift_mps: float = Field(0.015, ge=0, le=1, description="1-sigma horizontal drift of MPE per second "
                                  "since the ground reference was set (fault-free campaign: 0.2-0.5 m in 25 s)")
-    gps_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="GPS walk-off onset: level of the GPS-inertial "
-                                   "velocity test (chi-square(2); navigation/integrity.GpsInertialCheck)")
-    gps_check_window_s: float = Field(1.0, gt=0, le=30, description="its window: GPS velocity change vs the "
-                                      "integrated acceleration over this long")
-    gps_velocity_sigma_mps: float = Field(0.03, gt=0, le=5, description="1-sigma GPS velocity noise per axis "
-                                          "(the receiver: 0.02 m/s)")
-    gps_check_accel_sigma_mps2: float = Field(0.05, gt=0, le=5, description="1-sigma error of the navigation-frame "
-                                              "acceleration (accelerometer, attitude) per axis")
 
 
-class WitasIntegrityConfig(IntegrityBlock):
+class WitasIntegrityConfig(GpsCheckBlock):
     """WITAS homing: back within 30 m of home (the issue's unsafe homing), PMF -> KF updates at 5 Hz."""
 
     alert_limit_m: float = Field(30.0, gt=0, description="unusable when the HPL exceeds it")
@@ -67,14 +72,6 @@ class WitasIntegrityConfig(IntegrityBlock):
     pmf_in_hpl: bool = Field(True, description="add the point-mass filter's covariance (largest eigenvalue per "
                              "axis) to the HPL's: the KF fuses the PMF mean every frame as if its errors were "
                              "independent, they are not")
-    gps_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="GPS walk-off onset: level of the GPS-inertial "
-                                   "velocity test (chi-square(2); navigation/integrity.GpsInertialCheck)")
-    gps_check_window_s: float = Field(1.0, gt=0, le=30, description="its window: GPS velocity change vs the "
-                                      "integrated acceleration over this long")
-    gps_velocity_sigma_mps: float = Field(0.03, gt=0, le=5, description="1-sigma GPS velocity noise per axis "
-                                          "(the receiver: 0.02 m/s)")
-    gps_check_accel_sigma_mps2: float = Field(0.05, gt=0, le=5, description="1-sigma error of the navigation-frame "
-                                              "acceleration (accelerometer, attitude) per axis")
     handover_check: bool = Field(True, description="compare the PMF fixes with the odometry from the GPS hand-over; "
                                  "a persistent offset (map offset, spoofed start) is latched: degraded, HPL + offset, "
                                  "the Kalman filter kept in the hand-over frame (navigation/integrity.HandoverCheck)")
