@@ -11,7 +11,7 @@ import numpy as np
 from visnav.analysis.report import _fig_to_img
 
 
-def _figures(log) -> list[tuple[str, str]]:
+def _figures(log, frame: str = "") -> list[tuple[str, str]]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -24,14 +24,21 @@ def _figures(log) -> list[tuple[str, str]]:
     p, t = np.asarray(es["position"], float)[v], np.asarray(es["t"], float)[v]
     out = []
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
+    body = frame.startswith("deck-relative")  # the deck origin seen from the vehicle, body FRD: z is down
+    up = 1.0 if body else -1.0
     if tr:
         q = np.asarray(tr["position"], float)
         ax[0].plot(q[:, 1], q[:, 0], label="reference")
-        ax[1].plot(tr["t"], -q[:, 2], label="reference")
+        ax[1].plot(tr["t"], up * q[:, 2], label="reference")
     ax[0].plot(p[:, 1], p[:, 0], "--", label="estimate")
-    ax[1].plot(t, -p[:, 2], "--", label="estimate")
-    ax[0].set_xlabel("east [m]"), ax[0].set_ylabel("north [m]"), ax[0].set_title("Top view"), ax[0].axis("equal")
-    ax[1].set_xlabel("t [s]"), ax[1].set_ylabel("height [m]"), ax[1].set_title("Height")
+    ax[1].plot(t, up * p[:, 2], "--", label="estimate")
+    if body:
+        ax[0].set_xlabel("body y, right [m]"), ax[0].set_ylabel("body x, forward [m]")
+        ax[0].set_title("Deck origin from the vehicle (body x-y)"), ax[0].axis("equal")
+        ax[1].set_xlabel("t [s]"), ax[1].set_ylabel("body z, down [m]"), ax[1].set_title("Deck origin below the vehicle")
+    else:
+        ax[0].set_xlabel("east [m]"), ax[0].set_ylabel("north [m]"), ax[0].set_title("Top view"), ax[0].axis("equal")
+        ax[1].set_xlabel("t [s]"), ax[1].set_ylabel("height [m]"), ax[1].set_title("Height")
     ax[0].legend(), ax[1].legend()
     out.append(("Trajectory", _fig_to_img(fig)))
     if tr and len(t):
@@ -56,7 +63,7 @@ def write_replay_report(result, path: Path, title: str) -> None:
                    f"<tr><td>{html.escape(k)}</td><td>{html.escape(str(v))}</td></tr>"
                    for k, v in result.metrics.items())
     notes = "".join(f"<li>{html.escape(n)}</li>" for n in result.notes)
-    figs = "".join(f"<h2>{html.escape(t)}</h2>{img}" for t, img in _figures(result.log))
+    figs = "".join(f"<h2>{html.escape(t)}</h2>{img}" for t, img in _figures(result.log, getattr(result, "frame", "") or ""))
     Path(path).write_text(f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td{{padding:2px 10px;border-bottom:1px solid #ddd}}
 img{{max-width:100%}}</style></head><body><h1>{html.escape(title)}</h1><p>frame: {html.escape(result.frame)}</p>
