@@ -65,7 +65,7 @@ def condor_metrics(log, scenario, *, wall_time_s: float, error: str | None = Non
             out["radius_est_error_rms_pct"] = float(np.sqrt(np.mean(e**2)))
             out["radius_est_error_max_pct"] = float(np.abs(e).max())
             out["radius_est_error_mean_pct"] = float(np.mean(e))
-        frame_dt = 1.0 / cfg.camera.frame_hz
+        frame_dt = 1.0 / scenario.sensors.camera.frame_hz
         out["tracking_lost_s"] = float(np.count_nonzero(~vis["tracked"].astype(bool)) * frame_dt)
         out["vision_valid_fraction"] = float(np.mean(vis["valid"].astype(bool)))
     if tr and t0 is not None:

@@ -15,14 +15,14 @@ def _error_map_figure(scenario):
     from visnav.vision.rectification import CameraGeometry
     from visnav.vision.rectification_errors import error_maps
 
-    c = scenario.mission.camera
+    c = scenario.sensors.camera
     half_h = math.radians(c.hfov_deg) / 2
     geom = CameraGeometry(c.width_px, c.height_px, half_h, math.atan(math.tan(half_h) * c.height_px / c.width_px))
     names = [("h", "+1 m height"), ("tilt", "+1 deg tilt"), ("roll", "+1 deg roll"), ("X", "+1 px X"),
              ("Y", "+1 px Y"), ("total", "sum (eq. 3.25)")]
     fig, ax = plt.subplots(3, 6, figsize=(18, 7.5), sharex=True, sharey=True, layout="constrained")
     for i, tilt in enumerate((-20.0, -30.0, -40.0)):
-        m = error_maps(geom, 100.0, tilt, 0.0, step_px=8, method=scenario.mission.vision.method)
+        m = error_maps(geom, 100.0, tilt, 0.0, step_px=8, method=scenario.navigation.vision.method)
         ext = [m["X_px"].min(), m["X_px"].max(), m["Y_px"].min(), m["Y_px"].max()]
         for j, (k, label) in enumerate(names):
             z = m[k]

@@ -49,7 +49,7 @@ def geolocation_metrics(log, scenario, *, wall_time_s: float, error: str | None 
     tab = sample_table(log, target)
     ok = tab["ok"]
     reg_err = tab["reg_err"][ok]
-    fm = cfg.registration.false_match_m
+    fm = scenario.navigation.false_match_m
     res = log.get("geoloc_result")
 
     def last(k, default=math.nan):

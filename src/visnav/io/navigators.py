@@ -53,29 +53,20 @@ def _palace(sc, recorder, camera, mount, **_):
     return PalaceNavigator(sc.navigation, camera, mount, recorder=recorder)
 
 
-def _witas_camera(sc):
-    from visnav.geometry.camera import PinholeCamera
-    from visnav.geometry.mounts import FixedMount
-
-    cc = sc.mission.camera
-    return (PinholeCamera.ideal(cc.width, cc.height, cc.focal_px),
-            FixedMount.depressed(cc.depression_deg, lever_arm=tuple(cc.lever_arm_m)))
-
-
 def _witas(sc, recorder, camera, mount, reference=None, **_):
     from visnav.navigation.witas import WitasNavigator
     from visnav.world.witas_map import make_ground, mission_rngs, reference_map
 
     cfg = sc.mission
     if reference is None:  # the same degraded map as the closed loop's
-        reference = reference_map(cfg, make_ground(cfg, sc.run.seed)[0])
-    return WitasNavigator(cfg.filter, camera.K, mount, reference, recorder=recorder, rng=mission_rngs(sc.run.seed)[4])
+        reference = reference_map(cfg, make_ground(cfg, sc.run.seed, sc.sensors.camera)[0])
+    return WitasNavigator(sc.navigation, camera.K, mount, reference, recorder=recorder, rng=mission_rngs(sc.run.seed)[4])
 
 
 def _pad_camera(sc):
     from visnav.geometry.camera import PinholeCamera
 
-    cc = sc.mission.camera
+    cc = sc.sensors.camera
     return PinholeCamera.ideal(cc.width, cc.height, cc.focal_px), None  # the mount is the pan-tilt unit
 
 
@@ -88,18 +79,18 @@ def _pad(sc, recorder, camera, mount, ptu=None, layout=None, **_):
         raise ValueError("the pad navigator needs its pan-tilt unit (ptu): it points the camera; replay and bridge "
                          "of the pad landing need pan-tilt frames and a pan-tilt link (not there yet)")
     cfg = sc.mission
-    pc, fc = cfg.pad, cfg.filter
+    pc, fc = cfg.pad, sc.navigation
     layout = layout or PadLayout(tuple(pc.legs_m), tuple(pc.ring_ratio), tuple(pc.inner_ratio))
     detector = PadDetector(layout, camera.K, sigma_floor_px=fc.sigma_floor_px, cov_inflation=fc.cov_inflation)
     return PadNavigator(fc, detector, ptu, recorder=recorder)
 
 
 def _deck_camera(sc):
-    """The deck vehicle's LED camera (``mission.camera``): intrinsics with eq. 5.6-5.7 distortion, fixed mount
+    """The deck vehicle's LED camera (``sensors.camera``): intrinsics with eq. 5.6-5.7 distortion, fixed mount
     (T_cam: body -> camera, so R_cam_to_body = T_cam^T; lever arm = the camera position rho)."""
     from visnav.geometry.mounts import FixedMount
 
-    c = sc.mission.camera
+    c = sc.sensors.camera
     return c.pinhole(), FixedMount(c.rotation().T, tuple(c.position_m))
 
 
@@ -107,18 +98,18 @@ def _deck_frame_interval(sc) -> float:
     """The interval between the frames the deck loop delivers (a whole number of dynamics steps)."""
     from visnav.sim.clock import rate_divisor
 
-    return rate_divisor(sc.mission.camera.rate_hz, sc.run.dt_s) * sc.run.dt_s
+    return rate_divisor(sc.sensors.camera.rate_hz, sc.run.dt_s) * sc.run.dt_s
 
 
 def _deck(sc, recorder, camera, mount, **_):
-    """``DeckNavigator`` tuned from ``mission.filter`` (``DeckNavConfig.from_mission``); the camera's intrinsics,
+    """``DeckNavigator`` tuned from ``navigation`` (``DeckNavConfig.from_mission``); the camera's intrinsics,
     distortion and mount are the ones given (a recording's camera.yaml) when they are."""
     from dataclasses import replace
 
     from visnav.estimation.deck import CameraGeometry
     from visnav.navigation.deck import DeckNavConfig, DeckNavigator
 
-    cfg = DeckNavConfig.from_mission(sc.mission, _deck_frame_interval(sc))
+    cfg = DeckNavConfig.from_mission(sc, _deck_frame_interval(sc))
     if mount is None:
         raise ValueError("the deck navigator needs the camera's mount (R_cam_to_body and lever_arm_m in camera.yaml)")
     cfg = replace(cfg, camera=camera, cam=CameraGeometry(rho=np.asarray(mount.lever_arm, float),
@@ -136,7 +127,7 @@ def _deck_row(e) -> dict:
 def _condor_camera(sc):
     from visnav.sensors.condor_camera import condor_camera
 
-    c = sc.mission.camera  # on the gimbal: no fixed mount (camera_attitude.csv, pan.csv)
+    c = sc.sensors.camera  # on the gimbal: no fixed mount (camera_attitude.csv, pan.csv)
     return condor_camera(c.width_px, c.height_px, c.hfov_deg, c.k1, c.k2, c.crop_dx_px, c.crop_dy_px), None
 
 
@@ -146,23 +137,23 @@ def _condor(sc, recorder, camera, mount, **_):
     if sc.mission.experiment != "orbit":
         raise ValueError(f"the condor navigator flies the orbit experiment; this scenario's is "
                          f"{sc.mission.experiment!r}")
-    return build_navigator(sc.mission, camera)
+    return build_navigator(sc, camera)
 
 
 def _geolocation_camera(sc):
     from visnav.sim.geoloc_parts import mav_camera
 
-    return mav_camera(sc.mission.camera), None  # on the pitch-roll gimbal: no fixed mount
+    return mav_camera(sc.sensors.camera), None  # on the pitch-roll gimbal: no fixed mount
 
 
 def _geolocation(sc, recorder, camera, mount, reference=None, **_):
-    """``GeolocationNavigator`` of ``mission.registration``; the reference image given (``--map``) or, for a
+    """``GeolocationNavigator`` of ``navigation`` (kind geolocation); the reference image given (``--map``) or, for a
     simulated recording, the closed loop's (the mission's map, degraded)."""
     from visnav.sim.geoloc_parts import build_navigator, mission_map, mission_reference
 
     if reference is None:
         reference = mission_reference(sc.mission, mission_map(sc.mission), sc.run.seed)
-    return build_navigator(sc.mission, reference, camera)
+    return build_navigator(sc, reference, camera)
 
 
 def _target_row(e) -> dict:
@@ -192,19 +183,19 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
     "palace": NavigatorSpec("palace-landing", ("palace", "hover", "pfcm"), ("imu", "attitude", "gps"), rmax_camera,
                             _rmax_camera_hz, _palace),
     "witas": NavigatorSpec("witas-homing", ("witas-homing",), ("imu", "attitude", "gps", "baro", "frames"),
-                           _witas_camera, lambda sc: float(sc.mission.filter.odometry_hz), _witas),
+                           rmax_camera, lambda sc: float(sc.navigation.odometry_hz), _witas),
     "pad": NavigatorSpec("pad-landing", ("pad-landing",), ("imu", "attitude", "frames"), _pad_camera,
-                         lambda sc: float(sc.mission.camera.rate_hz), _pad),
+                         lambda sc: float(sc.sensors.camera.rate_hz), _pad),
     "deck": NavigatorSpec("deck-moving", ("deck",), ("imu", "attitude", "frames"), _deck_camera,
                           lambda sc: 1.0 / _deck_frame_interval(sc), _deck,
                           frame="deck-relative: deck origin relative to the vehicle in body FRD, deck -> body Euler",
                           estimate_row=_deck_row, streams="visnav.sim.streams:DECK_STREAMS"),
     "condor": NavigatorSpec("condor-orbit", ("condor",), ("imu", "attitude", "gps", "baro", "magnetometer", "airspeed",
                                                           "camera_attitude", "pan", "frames", "click"),
-                            _condor_camera, lambda sc: float(sc.mission.camera.frame_hz), _condor, color_frames=True,
+                            _condor_camera, lambda sc: float(sc.sensors.camera.frame_hz), _condor, color_frames=True,
                             streams="visnav.sim.streams:CONDOR_STREAMS"),
     "geolocation": NavigatorSpec("mav-geolocation", ("mav-geolocation",), ("telemetry", "frames", "click"),
-                                 _geolocation_camera, lambda sc: float(sc.mission.camera.frame_hz), _geolocation,
+                                 _geolocation_camera, lambda sc: float(sc.sensors.camera.frame_hz), _geolocation,
                                  frame="target position: NED world, on the ground (down 0)", estimate_row=_target_row,
                                  finish=_geolocation_finish, truth=_target_truth,
                                  streams="visnav.sim.streams:GEOLOC_STREAMS"),

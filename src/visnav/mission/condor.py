@@ -25,11 +25,12 @@ from visnav.mission.integrity import IntegrityWatch
 
 
 class CondorMission:
-    def __init__(self, cfg, navigator, recorder=None) -> None:
-        """``cfg``: the scenario's ``mission`` block (``config_condor.CondorMissionConfig``)."""
-        self.cfg, self.nav = cfg, navigator
+    def __init__(self, cfg, navigator, airspeed_mps: float, recorder=None) -> None:
+        """``cfg``: the scenario's ``mission`` block (``config_condor.CondorMissionConfig``); ``airspeed_mps``: the
+        aircraft's (``vehicle.airspeed_mps``)."""
+        self.cfg, self.nav, self.airspeed = cfg, navigator, airspeed_mps
         self.record = recorder or (lambda *a, **k: None)
-        o, va = cfg.control.orbit, cfg.airframe.airspeed_mps
+        o, va = cfg.control.orbit, airspeed_mps
         g_orig, g_mod = OrbitGains(o.kp_original, o.kd_original), OrbitGains(o.kp_modified, o.kd_modified)
         self.guidance = OrbitGuidance(o.logic, o.radius_m, va, g_orig, g_mod, o.base_limit)
         # the GPS loiter knows its ground speed: base rate V_GS / R_loiter from a 0.5 s mean of it
@@ -90,7 +91,7 @@ class CondorMission:
         self.info = {"R": e.radius, "Rdot": e.radius_rate, "base": ref["base"], "err": ref["err"],
                      "psidot_ref": ref["psidot_ref_ail"]}
         return TurnReference(t, ref["psidot_ref_ail"], ref["psidot_ref_rud"], ref["v_bank"], cfg.control.altitude_m,
-                             cfg.airframe.airspeed_mps), self.mode
+                             self.airspeed), self.mode
 
 
 class GroundTestMission:

@@ -44,10 +44,11 @@ from visnav.mission.integrity import IntegrityWatch
 
 
 class DeckMission:
-    def __init__(self, cfg, navigator, hold_point, gear_offset: float, period_s: float, recorder=None):
-        """``cfg``: the ``DeckMissionConfig``; ``hold_point``: the start point held in ``manual`` and ``hover``
+    def __init__(self, cfg, navigator, hold_point, gear_offset: float, period_s: float, recorder=None, *, filter_cfg):
+        """``cfg``: the ``DeckMissionConfig``; ``filter_cfg``: the navigator's (``navigation``, its start and yaw
+        hypotheses for restarts); ``hold_point``: the start point held in ``manual`` and ``hover``
         (level-deck frame, vehicle relative to the deck); ``period_s``: the interval ``step`` is called at."""
-        self.cfg, self.nav = cfg, navigator
+        self.cfg, self.nav, self.filter_cfg = cfg, navigator, filter_cfg
         self.period = period_s
         self.start_rel_ld = np.asarray(hold_point, float)
         self.gear_offset = gear_offset
@@ -156,7 +157,7 @@ class DeckMission:
                              flare_time_left=np.inf if tau else None), self.mode
 
     def _restart(self, t: float) -> None:
-        f = self.cfg.filter
+        f = self.filter_cfg
         hyp = f.yaw_hypotheses_deg
         if self._n_restarts >= len(hyp):
             raise RuntimeError("the deck filter did not converge from any initial yaw hypothesis")

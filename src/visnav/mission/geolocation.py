@@ -21,8 +21,8 @@ __all__ = ["GeolocationMission"]
 
 
 class GeolocationMission:
-    def __init__(self, cfg, path: FigureEight, recorder=None) -> None:
-        self.cfg, self.path = cfg, path
+    def __init__(self, cfg, path: FigureEight, airspeed_mps: float, recorder=None) -> None:
+        self.cfg, self.path, self.airspeed = cfg, path, airspeed_mps
         self.mode = "search"
         self.done = False
         self.record = recorder or (lambda *a, **k: None)
@@ -38,7 +38,7 @@ class GeolocationMission:
         psidot, info = self.path.heading_rate(tel.position[:2], vel)
         self.info = info
         c = self.cfg
-        return psidot, c.control.altitude_m, c.airframe.airspeed_mps
+        return psidot, c.control.altitude_m, self.airspeed
 
     def _switch(self, t: float, mode: str, reason: str) -> None:
         self.mode = mode

@@ -88,14 +88,15 @@ class DeckNavConfig:
     reject_repeated_frames: bool = False  # a frame bit-identical to the previous one is a frozen link
 
     @classmethod
-    def from_mission(cls, cfg, frame_interval_s: float) -> "DeckNavConfig":
-        """From a ``DeckMissionConfig``: ``filter.*``, the IMU's and camera's specifications, the light layout.
+    def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
+        """From a deck scenario: ``navigation.*``, the IMU's and camera's specifications (``sensors.imu``,
+        ``sensors.camera``), the light layout (``mission.deck.lights_m``).
 
         ``frame_interval_s`` is the interval between the frames the camera delivers (the bearing-rate
         sigma is a two-frame difference). The deck's true motion (``deck.motion``, ``deck.motion_scale``)
-        is not read: the ship noise is ``filter.sea_state`` x ``filter.motion_scale``.
+        is not read: the ship noise is ``navigation.sea_state`` x ``navigation.motion_scale``.
         """
-        f, c, imu = cfg.filter, cfg.camera, cfg.imu
+        f, c, imu = sc.navigation, sc.sensors.camera, sc.sensors.imu
         period = 1.0 / imu.rate_hz
         sea = f.sea_state if f.sea_state is not None else "calm"
         ship_var = dm.ship_process_noise(sea, f.motion_scale, f.ship_accel_scale, period)
@@ -106,7 +107,7 @@ class DeckNavConfig:
         sig_r = (np.radians(f.bearing_rate_noise_deg_s) if f.bearing_rate_noise_deg_s is not None
                  else np.sqrt(2.0) * sig_b / frame_interval_s)
         acq = (np.radians(f.acquisition_bearing_noise_deg), np.radians(f.acquisition_rate_noise_deg_s))
-        return cls(lights=np.asarray(cfg.deck.lights_m, float),
+        return cls(lights=np.asarray(sc.mission.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,

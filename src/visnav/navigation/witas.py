@@ -112,7 +112,7 @@ class _EskfBackend:
             from visnav.estimation.ins import NavState, euler_to_quat
         except ImportError as exc:  # pragma: no cover - the ESKF lives in estimation/eskf.py
             raise RuntimeError(f"filter.backend 'eskf' needs visnav.estimation.eskf ({exc}); "
-                               "use --set mission.filter.backend=ahrs") from None
+                               "use --set navigation.backend=ahrs") from None
         s = NavState(t=float(t), position=np.asarray(position, float).copy(),
                      velocity=np.asarray(velocity, float).copy(), quat=euler_to_quat(euler))
         sa = math.radians(sigma_att_deg)

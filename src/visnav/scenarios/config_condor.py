@@ -1,8 +1,10 @@
 """Scenario config of the CONDOR missions (seed 004): fixed wing + gimbal camera orbit, ground test.
 
 ``mission.type = "condor"``; ``mission.experiment`` picks the static ground test of Tables 4.1-4.2
-or the closed-loop orbit of ch. 6-7. Everything lives under ``mission`` (``--set
-mission.control.orbit.logic=coordinated``).
+or the closed-loop orbit of ch. 6-7 (``--set mission.control.orbit.logic=coordinated``). Its aircraft is
+``[vehicle] kind = "fixedwing"``, its camera ``[sensors.camera] kind = "gimbal-camera"`` on ``[sensors.gimbal]
+kind = "condor-gimbal"``, its video and telemetry link ``[sensors.link] kind = "link"``, its navigator
+``[navigation] kind = "condor"``.
 """
 
 from __future__ import annotations
@@ -12,15 +14,16 @@ from typing import Literal
 from pydantic import Field
 
 from visnav.scenarios.base import _M
-from visnav.scenarios.config_fixedwing import FixedWingSensorsConfig
 
 
 class AirframeConfig(_M):
+    kind: Literal["fixedwing"] = "fixedwing"
     airspeed_mps: float = Field(17.0, ge=15.0, le=18.0, description="Skywalker cruise (seed 004)")
     mass_kg: float = Field(5.0, ge=2.0, le=15.0)
 
 
 class CondorCameraConfig(_M):
+    kind: Literal["gimbal-camera"] = "gimbal-camera"
     width_px: int = Field(640, ge=160, le=1920)
     height_px: int = Field(480, ge=120, le=1080)
     hfov_deg: float = Field(53.0, ge=30.0, le=120.0, description="across the processed frame")
@@ -41,6 +44,7 @@ class TargetConfig(_M):
 
 
 class GimbalConfig(_M):
+    kind: Literal["condor-gimbal"] = "condor-gimbal"
     pan_rate_deg_s: float = Field(60.0, gt=0.0, le=360.0)
     tilt_rate_deg_s: float = Field(30.0, gt=0.0, le=360.0)
     roll_leak: float = Field(0.05, ge=0.0, le=1.0, description="fraction of the aircraft bank left on the camera")
@@ -57,24 +61,26 @@ class GimbalConfig(_M):
     operator_gain_per_s: float = Field(0.6, ge=0.0, le=5.0, description="how fast the operator re-centres the tent")
 
 
-class AltimeterConfig(_M):
-    rate_hz: float = Field(50.0, gt=0.0, le=200.0)
-    noise_m: float = Field(0.3, ge=0.0, le=5.0)
-    t_outside_c: float = Field(20.0, ge=-20.0, le=45.0)
-    t_measured_c: float = Field(20.0, ge=-20.0, le=45.0, description="temperature the correction uses")
-    c0: float = Field(0.0004, ge=0.0, le=0.01, description="eq. 2.1 constant (print: 0.004, see docs/condor.md)")
-    c1: float = Field(0.000005, ge=0.0, le=0.001, description="eq. 2.1 per-degree term (print: 0.00005)")
-
-
 class LinkConfig(_M):
+    kind: Literal["link"] = "link"
     latency_s: float = Field(0.33, ge=0.0, le=2.0)
     drop_prob: float = Field(0.1, ge=0.0, le=0.9)
     outage_rate_hz: float = Field(0.01, ge=0.0, le=1.0)
     outage_s: float = Field(1.0, ge=0.0, le=10.0)
 
 
+class VisionConfig(_M):
+    method: Literal["exact", "thesis"] = "exact"
+    lut: Literal["full", "thesis", "none"] = "full"
+    board_distance_m: float = Field(2.0, ge=0.5, le=20.0)
+    board_spacing_m: float = Field(0.04, ge=0.005, le=0.5)
+
+
 class CondorNavigationConfig(_M):
-    """What the navigator assumes (``navigation/condor.py``), never taken from the world."""
+    """What the navigator assumes (``navigation/condor.py``), never taken from the world; ``vision``: its image
+    processing (radius method, look-up table)."""
+
+    kind: Literal["condor"] = "condor"
 
     gps_gain: float = Field(0.3, gt=0.0, le=1.0, description="complementary filter weight of a GPS fix")
     radius_sigma_pct: float = Field(1.0, gt=0.0, le=20.0, description="vision radius noise the integrity test assumes")
@@ -89,13 +95,7 @@ class CondorNavigationConfig(_M):
     radius_alpha: float = Field(0.5, gt=0.0, le=1.0, description="radius filter alpha")
     radius_beta: float = Field(0.1, ge=0.0, le=1.0, description="radius filter beta")
     radius_stale_s: float = Field(3.0, gt=0.0, le=30.0, description="radius held this long across dropouts")
-
-
-class VisionConfig(_M):
-    method: Literal["exact", "thesis"] = "exact"
-    lut: Literal["full", "thesis", "none"] = "full"
-    board_distance_m: float = Field(2.0, ge=0.5, le=20.0)
-    board_spacing_m: float = Field(0.04, ge=0.005, le=0.5)
+    vision: VisionConfig = VisionConfig()
 
 
 class OrbitConfig(_M):
@@ -133,15 +133,6 @@ class GroundTestConfig(_M):
 class CondorMissionConfig(_M):
     type: Literal["condor"] = "condor"
     experiment: Literal["orbit", "ground_test"] = "orbit"
-    airframe: AirframeConfig = AirframeConfig()
-    camera: CondorCameraConfig = CondorCameraConfig()
     target: TargetConfig = TargetConfig()
-    gimbal: GimbalConfig = GimbalConfig()
-    altimeter: AltimeterConfig = AltimeterConfig()
-    link: LinkConfig = LinkConfig()
-    vision: VisionConfig = VisionConfig()
     control: ControlConfig = ControlConfig()
     ground_test: GroundTestConfig = GroundTestConfig()
-    gps_noise_m: float = Field(1.0, ge=0.0, le=10.0, description="GPS of the loiter before the switch (1 sigma, horizontal)")
-    sensors: FixedWingSensorsConfig = FixedWingSensorsConfig()
-    navigation: CondorNavigationConfig = CondorNavigationConfig()

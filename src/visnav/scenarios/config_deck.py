@@ -1,4 +1,6 @@
-"""Scenario config of the ship-deck landing mission (seed 003, issue #6): ``[mission] type = "deck"``."""
+"""Scenario config of the ship-deck landing (seed 003, issue #6): ``[mission] type = "deck"`` (deck, guidance,
+start), its ``[vehicle] kind = "multirotor"``, ``[sensors.imu] kind = "multirotor-imu"``, ``[sensors.camera]
+kind = "led-camera"`` and ``[navigation] kind = "deck"``."""
 
 from __future__ import annotations
 
@@ -34,6 +36,7 @@ class DeckWorldConfig(_M):
 
 
 class MultirotorConfig(_M):
+    kind: Literal["multirotor"] = "multirotor"
     mass_kg: float = Field(2.4, gt=0.2, le=50)
     thrust_to_weight: float = Field(2.0, gt=1.2, le=5)
     attitude_bandwidth_rad_s: float = Field(12.0, gt=1, le=60)
@@ -45,6 +48,7 @@ class MultirotorConfig(_M):
 
 
 class DeckCameraConfig(_M):
+    kind: Literal["led-camera"] = "led-camera"
     width_px: int = Field(752, ge=64, le=4096)
     height_px: int = Field(480, ge=64, le=4096)
     focal_px: float = Field(420.0, gt=50, le=5000)
@@ -80,6 +84,7 @@ class DeckCameraConfig(_M):
 
 
 class DeckImuConfig(_M):
+    kind: Literal["multirotor-imu"] = "multirotor-imu"
     accel_noise_mps2: float = Field(0.05, ge=0, le=2)
     gyro_noise_rad_s: float = Field(0.003, ge=0, le=0.5)
     attitude_noise_deg: float = Field(0.1, ge=0, le=5, description="autopilot roll/pitch used for T_g g (eq. 3.4)")
@@ -88,6 +93,7 @@ class DeckImuConfig(_M):
 
 
 class DeckFilterConfig(_M):
+    kind: Literal["deck"] = "deck"
     alpha: float = Field(0.1, gt=0, le=1)
     beta: float = Field(2.0, ge=0, le=10)
     kappa: float = Field(0.0, ge=-11, le=10)
@@ -182,18 +188,8 @@ class DeckStartConfig(_M):
 class DeckMissionConfig(_M):
     type: Literal["deck"] = "deck"
     deck: DeckWorldConfig = DeckWorldConfig()
-    vehicle: MultirotorConfig = MultirotorConfig()
-    camera: DeckCameraConfig = DeckCameraConfig()
-    imu: DeckImuConfig = DeckImuConfig()
-    filter: DeckFilterConfig = DeckFilterConfig()
     guidance: DeckGuidanceConfig = DeckGuidanceConfig()
     start: DeckStartConfig = DeckStartConfig()
-
-    @model_validator(mode="after")
-    def _filter_sea_state(self):
-        if self.filter.sea_state is None:  # the nominal sea state of the deck the scenario names
-            self.filter.sea_state = self.deck.sea_state if self.deck.motion == "moving" else "calm"
-        return self
 
     @model_validator(mode="after")
     def _landing_point_on_plate(self):

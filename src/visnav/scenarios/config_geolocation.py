@@ -1,5 +1,8 @@
 """Scenario config of the ground-target geo-location mission (seed 002 ch. 7): ``mission.type =
-"mav-geolocation"``. Everything lives under ``mission`` (``--set mission.registration.hough=false``).
+"mav-geolocation"`` (map, target, control). Its aircraft is ``[vehicle] kind = "mav"``, its camera
+``[sensors.camera] kind = "mav-camera"`` on ``[sensors.gimbal] kind = "mav-gimbal"``, the autopilot's downlinked
+state ``[sensors.telemetry] kind = "mav-telemetry"``, its navigator ``[navigation] kind = "geolocation"``
+(``--set navigation.hough=false``).
 """
 
 from __future__ import annotations
@@ -9,7 +12,6 @@ from typing import Literal, Optional
 from pydantic import Field
 
 from visnav.scenarios.base import _M
-from visnav.scenarios.config_fixedwing import FixedWingSensorsConfig
 from visnav.world.appearance import ANOTHER_DAY
 
 
@@ -46,12 +48,14 @@ class MavTargetConfig(_M):
 
 
 class MavAirframeConfig(_M):
+    kind: Literal["mav"] = "mav"
     mass_kg: float = Field(0.434, ge=0.2, le=2.0, description="PingWing, Table 7.1")
     span_m: float = Field(1.1, ge=0.3, le=3.0)
     airspeed_mps: float = Field(13.0, ge=11.0, le=16.0)
 
 
 class MavCameraConfig(_M):
+    kind: Literal["mav-camera"] = "mav-camera"
     width_px: int = Field(720, ge=160, le=1920, description="grabbed (§7.4.3)")
     height_px: int = Field(576, ge=120, le=1080)
     process_width_px: int = Field(360, ge=80, le=1920, description="registered at half size (§7.4.3)")
@@ -64,6 +68,7 @@ class MavCameraConfig(_M):
 
 
 class MavGimbalConfig(_M):
+    kind: Literal["mav-gimbal"] = "mav-gimbal"
     lag_s: float = Field(0.1, ge=0.0, le=2.0)
     leak: float = Field(0.05, ge=0.0, le=1.0)
     bias_deg: float = Field(1.5, ge=0.0, le=10.0, description="1-sigma mount misalignment per axis")
@@ -81,6 +86,7 @@ class MavGimbalConfig(_M):
 
 
 class MavTelemetryConfig(_M):
+    kind: Literal["mav-telemetry"] = "mav-telemetry"
     rate_hz: float = Field(5.0, ge=1.0, le=50.0, description="§7.4: MAV state at 5 Hz")
     gps_sigma_m: float = Field(0.7, ge=0.0, le=10.0)
     gps_bias_m: float = Field(3.0, ge=0.0, le=20.0, description="1-sigma per axis")
@@ -106,6 +112,7 @@ class MavControlConfig(_M):
 
 
 class MavRegistrationConfig(_M):
+    kind: Literal["geolocation"] = "geolocation"
     hough: bool = True
     check_rotation: bool = False
     rotation_refine_deg: float = Field(0.75, ge=0.0, le=5.0, description="beyond the thesis: +- step of the "
@@ -132,11 +139,5 @@ class GeolocationMissionConfig(_M):
     experiment: Literal["figure_eight", "single_frame"] = "figure_eight"
     map: MavMapConfig = MavMapConfig()
     target: MavTargetConfig = MavTargetConfig()
-    airframe: MavAirframeConfig = MavAirframeConfig()
-    camera: MavCameraConfig = MavCameraConfig()
-    gimbal: MavGimbalConfig = MavGimbalConfig()
-    telemetry: MavTelemetryConfig = MavTelemetryConfig()
     control: MavControlConfig = MavControlConfig()
-    sensors: FixedWingSensorsConfig = FixedWingSensorsConfig()  # the autopilot's AHRS, gyros, accelerometers, pitot
-    registration: MavRegistrationConfig = MavRegistrationConfig()
     max_samples: int = Field(40, ge=1, le=100000, description="stop once this many samples are in")

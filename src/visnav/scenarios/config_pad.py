@@ -1,8 +1,9 @@
 """Config of the WITAS vision landing on the three-circle pad (seed 002 ch. 6): ``mission.type = "pad-landing"``.
 
-Everything specific to it nests in the mission: the pad, the camera on its pan-tilt unit and
-spring platform, the IMU rates, the filter and the options (black-out, shadow, lighting), so
-``--set mission.blackout_height_m=5`` works. Dimensions and their reasons: docs/pad.md.
+The mission holds the pad and the options (black-out, shadow, lighting: ``--set mission.blackout_height_m=5``);
+the camera on its pan-tilt unit and spring platform is ``[sensors.camera] kind = "pantilt-camera"``
+(``sensors.camera.pantilt.*``, ``sensors.camera.platform.*``), the filter with its IMU rates ``[navigation] kind =
+"pad"``. Dimensions and their reasons: docs/pad.md.
 """
 
 from __future__ import annotations
@@ -35,19 +36,6 @@ class PadGeometryConfig(_M):
         return self
 
 
-class PadCameraConfig(_M):
-    width: int = Field(640, ge=160, le=2048)
-    height: int = Field(480, ge=120, le=2048)
-    focal_px: float = Field(640.0, gt=50, le=10000)
-    rate_hz: float = Field(20.0, ge=1, le=60, description="frames processed per second (§6.2: 20 Hz)")
-    noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
-    latency_s: float = Field(0.05, ge=0, le=1.0, description="exposure to pose (stamped correctly)")
-    lever_arm_m: list[float] = Field(default_factory=lambda: [0.3, 0.0, -0.45],
-                                     description="pan-tilt axes from the skid reference point, body FRD")
-    head_offset_m: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.05],
-                                       description="camera centre from the pan-tilt axes, camera frame")
-
-
 class PanTiltConfig(_M):
     pan_limits_deg: list[float] = Field(default_factory=lambda: [-170.0, 170.0])
     tilt_limits_deg: list[float] = Field(default_factory=lambda: [10.0, 125.0])
@@ -64,7 +52,24 @@ class PlatformConfig(_M):
     damping: float = Field(0.2, gt=0, le=2)
 
 
+class PadCameraConfig(_M):
+    kind: Literal["pantilt-camera"] = "pantilt-camera"
+    width: int = Field(640, ge=160, le=2048)
+    height: int = Field(480, ge=120, le=2048)
+    focal_px: float = Field(640.0, gt=50, le=10000)
+    rate_hz: float = Field(20.0, ge=1, le=60, description="frames processed per second (§6.2: 20 Hz)")
+    noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
+    latency_s: float = Field(0.05, ge=0, le=1.0, description="exposure to pose (stamped correctly)")
+    lever_arm_m: list[float] = Field(default_factory=lambda: [0.3, 0.0, -0.45],
+                                     description="pan-tilt axes from the skid reference point, body FRD")
+    head_offset_m: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.05],
+                                       description="camera centre from the pan-tilt axes, camera frame")
+    pantilt: PanTiltConfig = PanTiltConfig()
+    platform: PlatformConfig = PlatformConfig()
+
+
 class PadFilterConfig(_M):
+    kind: Literal["pad"] = "pad"
     gyro_hz: float = Field(200.0, ge=20, le=1000)
     accel_hz: float = Field(66.0, ge=10, le=1000)
     output_hz: float = Field(50.0, ge=1, le=1000)
@@ -110,7 +115,3 @@ class PadMissionConfig(_M):
     blackout_s: float = Field(3.0, ge=0, le=60)
     timeout_s: float = Field(150.0, gt=0, le=3600)
     pad: PadGeometryConfig = PadGeometryConfig()
-    camera: PadCameraConfig = PadCameraConfig()
-    pantilt: PanTiltConfig = PanTiltConfig()
-    platform: PlatformConfig = PlatformConfig()
-    filter: PadFilterConfig = PadFilterConfig()

@@ -1,8 +1,9 @@
 """Config of the WITAS GPS-denied homing mission (seed 002 ch. 5): ``mission.type = "witas-homing"``.
 
-Everything specific to it lives here, nested in the mission: the loop, the downward camera, the
-barometer and compass, the world and reference maps, and the vision navigator (odometry, point-mass
-filter, registration, Kalman filter), so ``--set mission.filter.pmf_size_m=200`` works.
+The mission holds the loop and the world and reference maps; the vision navigator (odometry, point-mass
+filter, registration, Kalman filter) is ``[navigation] kind = "witas"`` (``--set navigation.pmf_size_m=200``);
+its downward camera, barometer and optional compass are ``[sensors.camera] kind = "camera"``,
+``[sensors.baro] kind = "baro"`` and ``[sensors.compass] kind = "compass"`` (``config_sensors.py``).
 """
 
 from __future__ import annotations
@@ -28,32 +29,6 @@ class WitasPathConfig(_M):
     direction: Literal["cw", "ccw"] = "cw"
 
 
-class WitasCameraConfig(_M):
-    """Downward CCD camera, ~45 deg horizontal view, half resolution 384x288 (§5.9)."""
-
-    width: int = Field(384, ge=64, le=2048)
-    height: int = Field(288, ge=48, le=2048)
-    focal_px: float = Field(463.0, gt=50, le=10000)
-    depression_deg: float = Field(90.0, ge=60, le=90)
-    lever_arm_m: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.5])
-    noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
-    latency_s: float = Field(0.04, ge=0, le=1.0)
-
-
-class BaroConfig(_M):
-    rate_hz: float = Field(20.0, ge=1, le=200)
-    sigma_m: float = Field(0.3, ge=0, le=10)
-    bias_sigma_m: float = Field(0.5, ge=0, le=20)
-    bias_tau_s: float = Field(300.0, gt=0, le=1e5)
-
-
-class CompassConfig(_M):
-    enabled: bool = False
-    rate_hz: float = Field(10.0, ge=1, le=100)
-    sigma_deg: float = Field(1.0, ge=0, le=20)
-    bias_deg: float = Field(0.5, ge=0, le=20)
-
-
 class WitasMapConfig(_M):
     """World map (procedural rural, or ``file``: any geo-referenced image) and the navigator's
     reference map derived from it (coarser, other brightness and contrast, blurred)."""
@@ -70,6 +45,8 @@ class WitasMapConfig(_M):
 
 class WitasFilterConfig(_M):
     """The vision navigator (Fig. 5.3): odometry + registration -> PMF -> Kalman filter."""
+
+    kind: Literal["witas"] = "witas"
 
     backend: Literal["eskf", "ahrs"] = Field("eskf", description="eskf: 12-state INS error filter; "
                                              "ahrs: position filter on the autopilot's attitude")
@@ -107,11 +84,7 @@ class WitasFilterConfig(_M):
 class WitasMissionConfig(_M):
     type: Literal["witas-homing"] = "witas-homing"
     path: WitasPathConfig = WitasPathConfig()
-    camera: WitasCameraConfig = WitasCameraConfig()
-    baro: BaroConfig = BaroConfig()
-    compass: CompassConfig = CompassConfig()
     map: WitasMapConfig = WitasMapConfig()
-    filter: WitasFilterConfig = WitasFilterConfig()
     gps_loss_s: float = Field(8.0, ge=0, le=3600, description="GPS lost from this time on")
     settle_s: float = Field(10.0, ge=0, le=120)
     hold_s: float = Field(3.0, ge=0, le=600)

@@ -1,8 +1,13 @@
 """Scenario files: TOML validated by pydantic models.
 
-A scenario has the sections ``[run] [world] [vehicle] [sensors.*] [navigation] [mission]``.
-Unknown keys are errors (``extra="forbid"``); every number has its allowed range, so a bad
-value is reported with its dotted key, the value and the range, in one line.
+A scenario has the sections ``[run] [world] [vehicle] [sensors.<name>] [navigation] [mission]``, keyed by
+role: ``[vehicle] kind``, ``[sensors.<name>] kind``, ``[navigation] kind`` and ``[mission] type`` pick one config
+class each (pydantic unions on the tag); the mission type's suite (``scenarios/roles.SUITES``) gives the kinds
+and the system's default values, so a file names only what it changes. Unknown keys are errors
+(``extra="forbid"``), so is a key of a section the scenario's system does not fly (a sensor it has not, a kind
+its builder does not take); every number has its allowed range, so a bad value is reported with its dotted key,
+the value and the range, in one line. Files and ``--set`` keys of the mission-keyed layout before issue #13
+(``mission.camera.*``, ``mission.filter.*``, ...) are translated (``roles.LEGACY``).
 """
 
 from __future__ import annotations
@@ -12,19 +17,25 @@ import sys
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
-from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, Field, RootModel, ValidationError, field_validator, model_validator
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-from visnav.scenarios.config_deck import DeckMissionConfig
+from visnav.scenarios import roles
 from visnav.scenarios.base import ScenarioError, _M  # noqa: F401  (re-exported: one base for every config)
-from visnav.scenarios.config_witas import WitasMissionConfig
-from visnav.scenarios.config_condor import CondorMissionConfig
-from visnav.scenarios.config_geolocation import GeolocationMissionConfig
-from visnav.scenarios.config_pad import PadMissionConfig
+from visnav.scenarios.config_condor import (AirframeConfig, CondorCameraConfig, CondorMissionConfig,
+                                            CondorNavigationConfig, GimbalConfig, LinkConfig)
+from visnav.scenarios.config_deck import (DeckCameraConfig, DeckFilterConfig, DeckImuConfig, DeckMissionConfig,
+                                          MultirotorConfig)
+from visnav.scenarios.config_fixedwing import AhrsConfig, MemsImuConfig, PitotConfig
+from visnav.scenarios.config_geolocation import (GeolocationMissionConfig, MavAirframeConfig, MavCameraConfig,
+                                                 MavGimbalConfig, MavRegistrationConfig, MavTelemetryConfig)
+from visnav.scenarios.config_pad import PadCameraConfig, PadFilterConfig, PadMissionConfig
+from visnav.scenarios.config_sensors import BaroConfig, CompassConfig, GpsConfig
+from visnav.scenarios.config_witas import WitasFilterConfig, WitasMissionConfig
 from visnav.scenarios.config_integrity import FaultConfig, PalaceIntegrityConfig, check_faults_apply
 
 BUILTIN_DIR = Path(__file__).resolve().parent
@@ -50,11 +61,16 @@ class WorldConfig(_M):
 
 
 class VehicleConfig(_M):
-    model: Literal["rmax"] = "rmax"
+    """The Yamaha R-MAX (``vehicles/rmax.py``, seed 002 eq. 3.4 / 3.9)."""
+
+    kind: Literal["rmax"] = "rmax"
     yaw_deg: float = Field(0.0, ge=-360, le=360)
 
 
 class ImuConfig(_M):
+    """The R-MAX flight computer's IMU and its attitude solution (``sensors/imu.Imu``), with an unknown delay."""
+
+    kind: Literal["rmax-imu"] = "rmax-imu"
     rate_hz: float = Field(100.0, ge=10, le=1000)
     accel_noise: float = Field(0.02, ge=0, le=5, description="m/s^2 per sample, 1 sigma")
     gyro_noise: float = Field(0.002, ge=0, le=1, description="rad/s per sample")
@@ -65,16 +81,8 @@ class ImuConfig(_M):
     delay_s: float = Field(0.0, ge=0, le=1.0, description="UNKNOWN delay: data stamped delay_s too late")
 
 
-class GpsConfig(_M):
-    rate_hz: float = Field(10.0, ge=1, le=50)
-    sigma_m: float = Field(0.02, ge=0, le=20)
-    velocity_sigma_mps: float = Field(0.02, ge=0, le=5)
-    latency_s: float = Field(0.05, ge=0, le=1.0)
-    jam_start_s: Optional[float] = Field(None, ge=0)
-    jam_end_s: Optional[float] = Field(None, ge=0)
-
-
 class LaserConfig(_M):
+    kind: Literal["laser"] = "laser"
     rate_hz: float = Field(10.0, ge=1, le=100)
     sigma0_m: float = Field(0.01, ge=0, le=1)
     sigma_per_m: float = Field(0.002, ge=0, le=0.1, description="sigma grows with range (seed 000 Fig. 3.4)")
@@ -87,6 +95,7 @@ class LaserConfig(_M):
 
 
 class SonarConfig(_M):
+    kind: Literal["sonar"] = "sonar"
     rate_hz: float = Field(20.0, ge=1, le=100)
     sigma_m: float = Field(0.01, ge=0, le=1)
     max_range_m: float = Field(5.0, ge=0.5, le=20)
@@ -94,6 +103,10 @@ class SonarConfig(_M):
 
 
 class CameraConfig(_M):
+    """A camera rendering the textured ground on a fixed mount (``sensors/camera.Camera``): the R-MAX's (PALACE)
+    and WITAS' downward one."""
+
+    kind: Literal["camera"] = "camera"
     width: int = Field(640, ge=64, le=4096)
     height: int = Field(480, ge=48, le=4096)
     focal_px: float = Field(1073.0, gt=10, le=20000)
@@ -103,14 +116,6 @@ class CameraConfig(_M):
     noise_sigma: float = Field(2.0, ge=0, le=50, description="grey levels")
     latency_s: float = Field(0.03, ge=0, le=1.0, description="exposure to memory (stamped correctly)")
     delay_s: float = Field(0.0, ge=0, le=1.0, description="UNKNOWN delay: image stamped delay_s too late")
-
-
-class SensorsConfig(_M):
-    imu: ImuConfig = ImuConfig()
-    gps: GpsConfig = GpsConfig()
-    laser: LaserConfig = LaserConfig()
-    sonar: SonarConfig = SonarConfig()
-    camera: CameraConfig = CameraConfig()
 
 
 class TrackerConfig(_M):
@@ -136,6 +141,9 @@ class MpeConfig(_M):
 
 
 class NavigationConfig(_M):
+    """The PALACE navigator (``navigation/palace.py``): tracker, MPE, position filter."""
+
+    kind: Literal["palace"] = "palace"
     tracker: TrackerConfig = TrackerConfig()
     mpe: MpeConfig = MpeConfig()
     accel_noise: float = Field(0.3, ge=0, le=10, description="process noise of the position filter, m/s^2")
@@ -294,67 +302,98 @@ MissionConfig = (
 MISSION_TYPES = {m.model_fields["type"].default: m for m in MISSION_CONFIGS}
 
 
+def _union(classes: tuple[type[BaseModel], ...], tag: str):
+    return Annotated[Union[classes], Field(discriminator=tag)]  # type: ignore[valid-type]
+
+
+#: one config class per kind and role (a system's suite, roles.SUITES, names the kinds it flies)
+VEHICLE_KINDS: tuple[type[BaseModel], ...] = (VehicleConfig, MultirotorConfig, AirframeConfig, MavAirframeConfig)
+SENSOR_KINDS: tuple[type[BaseModel], ...] = (
+    ImuConfig, DeckImuConfig, MemsImuConfig, GpsConfig, LaserConfig, SonarConfig, BaroConfig, CompassConfig,
+    AhrsConfig, PitotConfig, CameraConfig, DeckCameraConfig, PadCameraConfig, CondorCameraConfig, MavCameraConfig,
+    GimbalConfig, MavGimbalConfig, MavTelemetryConfig, LinkConfig)
+NAVIGATION_KINDS: tuple[type[BaseModel], ...] = (NavigationConfig, WitasFilterConfig, PadFilterConfig, DeckFilterConfig,
+                                                 CondorNavigationConfig, MavRegistrationConfig)
+KINDS = {role: {c.model_fields["kind"].default: c for c in classes}
+         for role, classes in (("vehicle", VEHICLE_KINDS), ("sensors", SENSOR_KINDS), ("navigation", NAVIGATION_KINDS))}
+SensorConfig = _union(SENSOR_KINDS, "kind")
+
+
+class SensorsConfig(RootModel[dict[str, SensorConfig]]):  # type: ignore[valid-type]
+    """The scenario's sensors by name (``[sensors.<name>] kind = ...``); ``sensors.imu`` reads ``sensors["imu"]``."""
+
+    root: dict[str, SensorConfig] = Field(default_factory=dict)  # type: ignore[valid-type]
+
+    def __getattr__(self, name: str):
+        root = self.__dict__.get("root", {})
+        if name in root:
+            return root[name]
+        raise AttributeError(f"the scenario has no sensor {name!r} (its sensors: {', '.join(root) or 'none'})")
+
+    def __getitem__(self, name: str):
+        return self.root[name]
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.root
+
+    def __iter__(self):
+        return iter(self.root)
+
+    def items(self):
+        return self.root.items()
+
+
 class Scenario(_M):
     run: RunConfig = RunConfig()
     world: WorldConfig = WorldConfig()
-    vehicle: VehicleConfig = VehicleConfig()
+    vehicle: _union(VEHICLE_KINDS, "kind") = VehicleConfig()  # type: ignore[valid-type]
     sensors: SensorsConfig = SensorsConfig()
-    navigation: NavigationConfig = NavigationConfig()
+    navigation: _union(NAVIGATION_KINDS, "kind") = NavigationConfig()  # type: ignore[valid-type]
     mission: MissionConfig = PalaceMissionConfig()
     faults: list[FaultConfig] = Field(default_factory=list, description="injected faults (sensors/faults.py)")
 
     @model_validator(mode="before")
     @classmethod
-    def _default_mission_type(cls, data):
-        if isinstance(data, dict) and isinstance(data.get("mission"), dict):
-            data["mission"].setdefault("type", "palace")
+    def _suite(cls, data):
+        """The roles the mission type's system flies, its kinds and default values (roles.SUITES)."""
+        if isinstance(data, dict):
+            return roles.fill_suite(data)
         return data
+
+    @model_validator(mode="after")
+    def _deck_filter_sea_state(self):
+        nav, m = self.navigation, self.mission
+        if isinstance(nav, DeckFilterConfig) and nav.sea_state is None and isinstance(m, DeckMissionConfig):
+            # the nominal sea state of the deck the scenario names (the filter never sees motion_scale)
+            nav.sea_state = m.deck.sea_state if m.deck.motion == "moving" else "calm"
+        return self
 
 
 # ---------------------------------------------------------------------------------------------
-#: Keys of the R-MAX sections that a mission's simulation never reads (grep of ``sc.world / sc.vehicle /
-#: sc.sensors / sc.navigation`` in sim/ and of what its builder replaces): mission.type -> [(key prefix,
-#: keys under it that do apply, where the mission takes that instead)]. Setting one of them to anything but
-#: its default is an error (a resolved scenario.toml, which holds every key at its default, still loads).
+#: Keys of a system's sections that its simulation never reads although the section is its own (the world is
+#: shared; a few keys of a shared kind): mission.type -> [(key prefix, keys under it that do apply, where the
+#: mission takes that instead)]. Setting one of them to anything but its default is an error (a resolved
+#: scenario.toml, which holds every key at its default, still loads). Whole sections a system does not fly are
+#: not in its suite (roles.SUITES) and fail there.
 _WIND = ("wind_speed_mps", "wind_from_deg", "turbulence")
 
 
 def _fixed_wing(world: str) -> list[tuple[str, tuple[str, ...], str]]:
-    return [("world", _WIND, f"its world is the wind (world.{', world.'.join(_WIND)}) and {world}"),
-            ("vehicle", (), "its aircraft is mission.airframe.*"),
-            ("sensors", (), "its sensors are mission.camera.*, mission.gimbal.* and its telemetry link"),
-            ("navigation", (), "its estimation is configured under mission.*")]
+    return [("world", _WIND, f"its world is the wind (world.{', world.'.join(_WIND)}) and {world}")]
 
 
 _NO_FAULTS = "its simulation injects no faults (issue #18: the R-MAX, deck and CONDOR missions do)"
 NOT_APPLICABLE: dict[str, list[tuple[str, tuple[str, ...], str]]] = {
-    "deck": [
-        ("world", (), "its world is the ship deck, mission.deck.*"),
-        ("vehicle", (), "its vehicle is mission.vehicle.*"),
-        ("sensors.imu", (), "its IMU is mission.imu.*"),
-        ("sensors.camera", (), "its camera is mission.camera.*"),
-        ("sensors", (), "its sensors are mission.imu.* and mission.camera.*"),
-        ("navigation", (), "its filter is mission.filter.*"),
-    ],
+    "deck": [("world", (), "its world is the ship deck, mission.deck.*")],
     "condor": _fixed_wing("mission.target.*"),
     "mav-geolocation": _fixed_wing("mission.map.* and mission.target.*") + [("faults", (), _NO_FAULTS)],
-    "witas-homing": [
-        ("navigation", (), "its navigator is configured by mission.filter.*"),
-        ("sensors.camera", (), "its camera is mission.camera.*"),
-        ("sensors.laser", (), "its navigator takes no range measurement"),
-        ("sensors.sonar", (), "its navigator takes no range measurement"),
-    ],
-    "pad-landing": [
-        ("navigation", (), "its navigator is configured by mission.filter.*"),
-        ("sensors.camera", (), "its camera is mission.camera.* on mission.pantilt.*"),
-        ("sensors.imu.rate_hz", (), "its IMU rates are mission.filter.gyro_hz and mission.filter.accel_hz"),
-        ("sensors.gps", (), "it flies GPS-free"),
-        ("sensors.laser", (), "its navigator takes no range measurement"),
-        ("sensors.sonar", (), "its navigator takes no range measurement"),
-    ],
+    "witas-homing": [("sensors.baro.t_measured_c", (), "its navigator makes no eq. 2.1 temperature correction")],
+    "pad-landing": [("sensors.imu.rate_hz", (), "its IMU rates are navigation.gyro_hz and navigation.accel_hz")],
     "pfcm": [
         ("navigation.tracker", (), "it flies on GPS: no camera, no tracker"),
         ("navigation.mpe", (), "it flies on GPS: no camera, no MPE"),
+        ("sensors.camera", ("depression_deg", "lever_arm_m"), "it flies on GPS: the camera's mount carries the "
+         "laser, no frame is taken"),
     ],
 }
 
@@ -390,23 +429,46 @@ def _check_applicable(data: dict, sc: Scenario) -> None:
             continue
         value, ref = sc, default
         for p in path:
-            value, ref = getattr(value, p, None), getattr(ref, p, None)
+            value, ref = _child(value, p), _child(ref, p)
         if value != ref:
             raise ScenarioError(f"{key} does not apply to mission.type {kind!r} ({hint})")
 
 
+def _child(model: Any, name: str) -> Any:
+    if isinstance(model, SensorsConfig):
+        return model.root.get(name)
+    return getattr(model, name, None)
+
+
+_ROLE_TAGS = {"mission": MISSION_TYPES, "vehicle": KINDS["vehicle"], "navigation": KINDS["navigation"]}
+
+
 def _clean_loc(loc: list[str]) -> list[str]:
-    """Drop the discriminator tag pydantic puts in the path of a union member (mission.palace.x)."""
-    if len(loc) > 1 and loc[0] == "mission" and loc[1] in MISSION_TYPES:
+    """Drop the tag pydantic puts in the path of a union member (mission.palace.x, sensors.imu.rmax-imu.x)."""
+    if len(loc) > 1 and loc[0] in _ROLE_TAGS and loc[1] in _ROLE_TAGS[loc[0]]:
         return [loc[0]] + loc[2:]
+    if len(loc) > 2 and loc[0] == "sensors" and loc[2] in KINDS["sensors"]:
+        return loc[:2] + loc[3:]
     return loc
 
 
-def _model_at(path: list[str], mission_type: str = "palace") -> type[BaseModel] | None:
+def _model_at(path: list[str], kinds: dict[str, str] | str | None = None) -> type[BaseModel] | None:
+    """The config class at the dotted ``path``; ``kinds``: the scenario's role tags ({"mission": type,
+    "vehicle": kind, "navigation": kind, "sensors.<name>": kind}; a string: the mission type)."""
+    if not isinstance(kinds, dict):
+        kinds = {"mission": kinds or "palace"}
     model: Any = Scenario
+    path = list(path)
+    if path[:1] == ["sensors"]:
+        if len(path) < 2:
+            return None
+        model = KINDS["sensors"].get(kinds.get("sensors." + path[1], ""))
+        path = path[2:]
     for p in path:
-        if model is Scenario and p == "mission":
-            model = MISSION_TYPES.get(mission_type)
+        if model is Scenario and p in ("mission", "vehicle", "navigation"):
+            default = roles.SUITES.get(kinds.get("mission", "palace"), roles.SUITES["palace"])
+            tag = kinds.get(p) or (kinds.get("mission", "palace") if p == "mission" else default[p]["kind"])
+            model = _ROLE_TAGS[p].get(tag)
             continue
         if not (isinstance(model, type) and issubclass(model, BaseModel)) or p not in model.model_fields:
             return None
@@ -414,11 +476,11 @@ def _model_at(path: list[str], mission_type: str = "palace") -> type[BaseModel] 
     return model if isinstance(model, type) and issubclass(model, BaseModel) else None
 
 
-def _describe_field(loc: list[str], mission_type: str = "palace") -> str:
-    parent = _model_at(loc[:-1], mission_type)
-    if parent is None or loc[-1] not in parent.model_fields:
+def describe_field(parent: type[BaseModel] | None, name: str) -> str:
+    """``allowed: ...`` of field ``name`` of ``parent`` (its bounds or its literals)."""
+    if parent is None or name not in parent.model_fields:
         return ""
-    f = parent.model_fields[loc[-1]]
+    f = parent.model_fields[name]
     bounds = []
     for m in f.metadata:
         for attr, sym in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
@@ -432,21 +494,49 @@ def _describe_field(loc: list[str], mission_type: str = "palace") -> str:
     return ("allowed: " + " and ".join(bounds)) if bounds else ""
 
 
+def _describe_field(loc: list[str], kinds: dict[str, str] | str | None = None) -> str:
+    return describe_field(_model_at(loc[:-1], kinds), loc[-1])
+
+
+def _kinds(data: dict) -> dict[str, str]:
+    """The role tags of a (suite-filled) scenario dict."""
+    out = {"mission": roles.mission_type_of(data)}
+    for role in ("vehicle", "navigation"):
+        k = roles._kind_of(data.get(role))
+        if isinstance(k, str):
+            out[role] = k
+    sensors = data.get("sensors")
+    sensors = getattr(sensors, "root", sensors)
+    if isinstance(sensors, dict):
+        for name, v in sensors.items():
+            k = roles._kind_of(v)
+            if isinstance(k, str):
+                out["sensors." + name] = k
+    return out
+
+
 def _format_error(err: ValidationError, data: dict) -> str:
     e = err.errors()[0]
     raw = [str(x) for x in e["loc"]]
-    mission_type = raw[1] if len(raw) > 1 and raw[0] == "mission" and raw[1] in MISSION_TYPES else "palace"
+    kinds = _kinds(data)
     loc = _clean_loc(raw)
     key = ".".join(loc)
     if e["type"] == "union_tag_invalid":
-        return f"invalid value for '{key}.type': {e.get('input', {}).get('type')!r}; allowed: " + ", ".join(
-            repr(k) for k in MISSION_TYPES)
+        tag = "type" if loc and loc[0] == "mission" else "kind"
+        allowed = (MISSION_TYPES if loc[0] == "mission" else KINDS.get(loc[0], {}))
+        return f"invalid value for '{key}.{tag}': {e.get('input', {}).get(tag)!r}; allowed: " + ", ".join(
+            repr(k) for k in allowed)
     if e["type"] == "extra_forbidden":
-        parent = _model_at(loc[:-1], mission_type)
-        allowed = ", ".join(parent.model_fields) if parent else ""
-        return f"unknown scenario key '{key}'; allowed keys here: {allowed}"
+        parent = _model_at(loc[:-1], kinds)
+        allowed = ", ".join(k for k in parent.model_fields if k != "kind") if parent else ""
+        name = (data.get("run") or {}).get("name") if isinstance(data.get("run"), dict) else None
+        where = [f"scenario {name!r}"] if name else []
+        if parent is not None and "kind" in parent.model_fields:
+            where.append(f"{'.'.join(loc[:-1])} is kind {parent.model_fields['kind'].default!r}")
+        return f"unknown scenario key '{key}'" + (f" ({'; '.join(where)})" if where else "") + \
+            f"; allowed keys here: {allowed}"
     value = e.get("input")
-    desc = _describe_field(loc, mission_type)
+    desc = _describe_field(loc, kinds)
     msg = f"invalid value for '{key}': {value!r} ({e['msg']})"
     return msg + (f"; {desc}" if desc else "")
 
@@ -478,7 +568,18 @@ def apply_overrides(data: dict, overrides: list[str]) -> dict:
     return data
 
 
+#: the R-MAX sections' defaults in the old layout (what every old resolved scenario.toml holds)
+_RMAX_OLD_DEFAULTS = {".".join(p): v for p, v in roles._leaves({
+    "vehicle": {"model": "rmax", **VehicleConfig().model_dump(exclude={"kind"})},
+    "sensors": {n: c().model_dump(exclude={"kind"}) for n, c in (("imu", ImuConfig), ("gps", GpsConfig),
+                ("laser", LaserConfig), ("sonar", SonarConfig), ("camera", CameraConfig))},
+    "navigation": NavigationConfig().model_dump(exclude={"kind"})})}
+
+
 def validate(data: dict) -> Scenario:
+    if roles.is_legacy(data):
+        data = roles.migrate(data, _RMAX_OLD_DEFAULTS)
+    data = roles.fill_suite(data)
     try:
         sc = Scenario.model_validate(data)
     except ValidationError as err:

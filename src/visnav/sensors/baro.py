@@ -50,6 +50,12 @@ class Baro:
         return BaroSample(t=t, altitude=float(self.raw(-s.position[2]) + self.bias + self.sigma * self.rng.standard_normal()))
 
 
+def baro_sensor(cfg, rng: np.random.Generator) -> Baro:
+    """The ``Baro`` of a scenario's ``[sensors.baro]`` (``scenarios/config_sensors.BaroConfig``)."""
+    return Baro(rng, cfg.rate_hz, cfg.sigma_m, cfg.bias_sigma_m, cfg.bias_tau_s, t_outside_c=cfg.t_outside_c,
+                c0=cfg.c0, c1=cfg.c1)
+
+
 class Compass:
     def __init__(self, rng: np.random.Generator, rate_hz: float = 10.0, sigma_deg: float = 1.0,
                  bias_deg: float = 0.5, latency_s: float = 0.0):

@@ -39,18 +39,19 @@ def ground_test_rows(tables: str) -> list[tuple[str, float, tuple]]:
     return out
 
 
-def run_ground_test(cfg, rng: np.random.Generator, record) -> dict:
-    """Fly nothing: evaluate every row; log stream ``ground_test``; returns summary numbers."""
-    c = cfg.camera
+def run_ground_test(sc, rng: np.random.Generator, record) -> dict:
+    """Fly nothing: evaluate every row of scenario ``sc``; log stream ``ground_test``; returns summary numbers."""
+    cfg = sc.mission
+    c = sc.sensors.camera
     cam = condor_camera(c.width_px, c.height_px, c.hfov_deg, c.k1, c.k2, c.crop_dx_px, c.crop_dy_px)
     hfov = math.radians(c.hfov_deg)
-    v = cfg.vision
+    v = sc.navigation.vision
     pipes = {
         "thesis": VisionRange(cam, hfov, "thesis", "thesis", v.board_distance_m, v.board_spacing_m),
         "ours": VisionRange(cam, hfov, "exact", "full", v.board_distance_m, v.board_spacing_m),
         "configured": VisionRange(cam, hfov, v.method, v.lut, v.board_distance_m, v.board_spacing_m),
     }
-    g, gt = cfg.gimbal, cfg.ground_test
+    g, gt = sc.sensors.gimbal, cfg.ground_test
     errs: dict[str, list] = {k: [] for k in pipes}
     for i, (table, h, (tilt_d, X, Y, roll_d, _, pub_err)) in enumerate(ground_test_rows(gt.tables)):
         tilt, roll = math.radians(tilt_d), math.radians(roll_d)

@@ -24,7 +24,7 @@ from visnav.measurements import Frame, NavInit, OperatorClick
 from visnav.mission.condor import CondorMission, GroundTestMission
 from visnav.navigation.condor import CondorNavigator, RadiusFilter
 from visnav.scenarios.config_fixedwing import build_autopilot_sensors
-from visnav.sensors.baro import Baro, Compass
+from visnav.sensors.baro import Compass, baro_sensor
 from visnav.sensors.condor_camera import GimbalCamera, TargetCamera, condor_camera, target_outline
 from visnav.sensors.gimbal import CameraAhrs, Gimbal, PanPotentiometer
 from visnav.sensors.gps import Gps
@@ -47,14 +47,16 @@ class CondorWorld(AircraftAir):
         self.wind = wind  # the scenario's wind (a wind_gust fault wraps it after the build)
 
 
-def build_navigator(cfg, camera) -> CondorNavigator:
-    """The navigator of the scenario's ``mission`` block (its own tuning, ``mission.navigation``)."""
-    c, v, a, n = cfg.camera, cfg.vision, cfg.altimeter, cfg.navigation
+def build_navigator(sc, camera) -> CondorNavigator:
+    """The navigator of the scenario ``sc`` (its own tuning, ``navigation``; what it assumes of the camera,
+    the altimeter's eq. 2.1 correction and the GPS)."""
+    c, a, n = sc.sensors.camera, sc.sensors.baro, sc.navigation
+    v = n.vision
     vision = VisionRange(camera, math.radians(c.hfov_deg), v.method, v.lut, v.board_distance_m, v.board_spacing_m)
     return CondorNavigator(vision, camera, (a.t_measured_c, a.c0, a.c1),
                            radius_filter=RadiusFilter(n.radius_alpha, n.radius_beta, n.radius_stale_s),
                            gps_gain=n.gps_gain, radius_sigma_pct=n.radius_sigma_pct,
-                           heading_sigma_deg=n.heading_sigma_deg, gps_sigma_m=cfg.gps_noise_m,
+                           heading_sigma_deg=n.heading_sigma_deg, gps_sigma_m=sc.sensors.gps.sigma_m,
                            carry_sigma_mps=n.carry_sigma_mps, gps_accel_mps2=n.gps_accel_mps2)
 
 
@@ -62,8 +64,8 @@ class Operator:
     """The ground station's operator and its log: the vision result beside truth after each frame; the
     tent re-centred with the gimbal from the tracked pixel (§2.4); the first click on the tent (the start)."""
 
-    def __init__(self, cfg, nav, camera, renderer, gimbal, vehicle, truth, target, mission, record) -> None:
-        self.cfg, self.nav, self.camera, self.renderer, self.gimbal = cfg, nav, camera, renderer, gimbal
+    def __init__(self, sensors, nav, camera, renderer, gimbal, vehicle, truth, target, mission, record) -> None:
+        self.sensors, self.nav, self.camera, self.renderer, self.gimbal = cfg, nav, camera, renderer, gimbal
         self.vehicle, self.truth, self.target, self.mission, self.record = vehicle, truth, target, mission, record
 
     def start(self, t: float) -> None:
@@ -87,7 +89,7 @@ class Operator:
                     roll_error=rec["roll"] - roll, cam_roll=roll, cam_tilt=tilt, pan_pot=rec["pan_pot"],
                     pan=self.gimbal.pan, bearing=rec["bearing"], reason=rec["reason"])
         if rec["tracked"]:
-            k = self.cfg.gimbal.operator_gain_per_s / self.cfg.camera.frame_hz
+            k = self.sensors.gimbal.operator_gain_per_s / self.sensors.camera.frame_hz
             self.gimbal.command(self.gimbal.pan + k * math.atan(rec["X"] / cam.fx),
                                 self.gimbal.tilt + k * math.atan(rec["Y"] / cam.fy))
 
@@ -138,15 +140,16 @@ def build(ctx) -> MissionParts:
         mission = GroundTestMission()
 
         def evaluate(progress=None) -> None:
-            run_ground_test(cfg, rng[6], ctx.record)
+            run_ground_test(sc, rng[6], ctx.record)
             mission.finish(0.0)
 
         return MissionParts(world=None, sensors={}, navigator=None, mission=mission, controller=None,
                             metrics=condor_metrics, evaluate=evaluate, streams=CONDOR_GROUND_STREAMS)
     dt = sc.run.dt_s
-    s = cfg.airframe.mass_kg / 13.5  # Aerosonde inertias scaled with the mass (vehicles/fixedwing.py)
-    params = FixedWingParams(mass=cfg.airframe.mass_kg, Jx=0.8244 * s, Jy=1.135 * s, Jz=1.759 * s, Jxz=0.1204 * s)
-    va = cfg.airframe.airspeed_mps
+    sn = sc.sensors
+    s = sc.vehicle.mass_kg / 13.5  # Aerosonde inertias scaled with the mass (vehicles/fixedwing.py)
+    params = FixedWingParams(mass=sc.vehicle.mass_kg, Jx=0.8244 * s, Jy=1.135 * s, Jz=1.759 * s, Jxz=0.1204 * s)
+    va = sc.vehicle.airspeed_mps
     o = cfg.control.orbit
     trim_level = trim(params, va)
     target = np.array([cfg.target.north_m, cfg.target.east_m, 0.0])
@@ -155,39 +158,38 @@ def build(ctx) -> MissionParts:
     pos = target + np.array([o.loiter_radius_m * math.cos(a0), o.loiter_radius_m * math.sin(a0), -h])
     wind = scenario_wind(sc.world, rng[0], h, va)
     vehicle = trimmed_aircraft(params, va, pos, a0 + math.pi / 2, wind, o.loiter_radius_m)
-    c = cfg.camera
+    c = sn.camera
     camera = condor_camera(c.width_px, c.height_px, c.hfov_deg, c.k1, c.k2, c.crop_dx_px, c.crop_dy_px)
     renderer = TargetCamera(camera, rng[1], c.noise_sigma)
     outline = target_outline(target[:2], cfg.target.length_m, cfg.target.width_m, math.radians(cfg.target.heading_deg))
-    g = cfg.gimbal
+    g = sn.gimbal
     gimbal = Gimbal(math.pi / 2, -math.atan2(h, o.loiter_radius_m), math.radians(g.pan_rate_deg_s),
                     math.radians(g.tilt_rate_deg_s), g.roll_leak, math.radians(g.roll_bias_deg))
     world = CondorWorld(gimbal, outline, vehicle, wind)
-    a, sn = cfg.altimeter, cfg.sensors
     # order matters at equal time stamps: the camera's AHRS, pot and baro reach the ground station before the frame
     ap = build_autopilot_sensors(sn, rng[8:11])
     sensors = dict(zip(("ahrs", "imu", "pitot"), ap))  # (the names [[faults]] target: imu)
     sensors.update({
-        "baro": Baro(rng[4], a.rate_hz, a.noise_m, 0.0, t_outside_c=a.t_outside_c, c0=a.c0, c1=a.c1),
+        "baro": baro_sensor(sn.baro, rng[4]),
         "compass": Compass(rng[11], sn.compass.rate_hz, sn.compass.noise_deg, sn.compass.bias_deg),
-        "gps": Gps(rng[12], sn.gps.rate_hz, cfg.gps_noise_m, sn.gps.velocity_noise_mps, sn.gps.latency_s),
+        "gps": Gps(rng[12], **sn.gps.model_dump(exclude={"kind"})),
         "camera_ahrs": CameraAhrs(rng[2], math.radians(g.ahrs_noise_deg), math.radians(g.ahrs_bias_tilt_deg),
                                   math.radians(g.ahrs_bias_roll_deg), g.ahrs_accel_gain, g.ahrs_tau_s,
                                   g.ahrs_noise_tau_s, g.ahrs_lag_s, rate_hz=g.ahrs_rate_hz),
         "pan_pot": PanPotentiometer(rng[3], math.radians(g.pot_noise_deg), rate_hz=c.frame_hz),
         "camera": GimbalCamera(renderer, c.frame_hz),
     })
-    lk = cfg.link
+    lk = sn.link
     link = Link(rng[5], lk.latency_s, lk.drop_prob, lk.outage_rate_hz, lk.outage_s)
-    nav = build_navigator(cfg, camera)
+    nav = build_navigator(sc, camera)
     if ctx.navigator_wrapper is not None:
         nav = ctx.navigator_wrapper(nav)
     ctl = cfg.control
     gains = InnerGains(kp_phi=ctl.kp_phi, kd_phi=ctl.kd_phi, kp_psi=ctl.kp_psi, bank_limit=math.radians(ctl.bank_limit_deg))
     autopilot = FixedWingAutopilot(gains, trim_level.controls, rate_hz=50.0)
-    mission = CondorMission(cfg, nav, recorder=record)
+    mission = CondorMission(cfg, nav, airspeed_mps=va, recorder=record)
     truth = CurrentTruth(vehicle)
-    operator = Operator(cfg, nav, camera, renderer, gimbal, vehicle, truth, target, mission, record)
+    operator = Operator(sn, nav, camera, renderer, gimbal, vehicle, truth, target, mission, record)
     environment = WindEnvironment(lambda: world.wind, dt, lambda: max(-vehicle.x[2], 1.0),
                                   lambda: max(vehicle.air["Va"], 1.0), initial=wind.velocity_ned(0.0, 0.0))
     return MissionParts(

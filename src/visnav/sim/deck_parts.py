@@ -129,13 +129,13 @@ def build(ctx) -> MissionParts:
     cfg = sc.mission
     dt = sc.run.dt_s
     rng = ctx.rng  # 8 generators of the run's seed (as the R-MAX loop's)
-    d, c = cfg.deck, cfg.camera
+    d, c = cfg.deck, sc.sensors.camera
     motion = (DeckMotion.static() if d.motion == "static"
               else DeckMotion.from_sea_state(d.sea_state, rng[0], d.sinusoids, d.motion_scale))
     world = DeckWorld(motion, d.lights_m, d.size_m, c.extra_blobs_deck_m, c.hide_light, c.hide_after_s)
     world.wind = Wind(SteadyWind(0.0, 0.0))  # still air (a wind_gust fault adds its gust)
 
-    v = cfg.vehicle
+    v = sc.vehicle
     params = MultirotorParams(mass=v.mass_kg, thrust_to_weight=v.thrust_to_weight,
                               attitude_omega=v.attitude_bandwidth_rad_s, attitude_zeta=v.attitude_damping,
                               thrust_tau=v.thrust_time_constant_s, drag=v.drag_per_s, gear_offset=v.gear_offset_m)
@@ -153,7 +153,7 @@ def build(ctx) -> MissionParts:
     truth.advance(0.0)
 
     # sensors, in the order they are sampled at one instant (attitude before the IMU sample it rotates)
-    imu = cfg.imu
+    imu = sc.sensors.imu
     sensors = {"ahrs": RollPitchAhrs(rng[5], imu.attitude_noise_deg, rate_hz=imu.rate_hz),
                "imu": AccelGyro(rng[4], imu.accel_noise_mps2, imu.gyro_noise_rad_s, rate_hz=imu.rate_hz),
                "camera": LedCamera(c.pinhole(), c.rotation(), np.asarray(c.position_m, float), rng[2],
@@ -161,13 +161,13 @@ def build(ctx) -> MissionParts:
                                    rate_hz=c.rate_hz)}
     frame_steps = rate_divisor(c.rate_hz, dt)
     mocap = None
-    if cfg.filter.init == "truth":  # the thesis' Vicon (start and restarts)
+    if sc.navigation.init == "truth":  # the thesis' Vicon (start and restarts)
         mocap = sensors["mocap"] = RelativeStateSensor(rng[3], VICON_SIGMA, CONTROL_HZ, source="mocap")
     if st.pilot == "truth":  # the safety pilot before the hand-over
         sensors["pilot"] = RelativeStateSensor(rng[7], np.r_[[st.pilot_position_noise_m] * 3, np.zeros(9)], CONTROL_HZ,
                                                source="pilot")
 
-    nav = wrap(DeckNavigator(DeckNavConfig.from_mission(cfg, frame_steps * dt), recorder=record))
+    nav = wrap(DeckNavigator(DeckNavConfig.from_mission(sc, frame_steps * dt), recorder=record))
     # the navigator's start (it logs it, nav_init, as it logs its restarts): the Vicon's view, or eq. 5.12-5.17
     if mocap is not None:
         seen = mocap.sample(0.0, truth, world)
@@ -175,7 +175,7 @@ def build(ctx) -> MissionParts:
     else:
         nav.initialize(NavInit(t=0.0, source="static"))
     d_ctrl = rate_divisor(CONTROL_HZ, dt)
-    mission = DeckMission(cfg, nav, hold_point=rel, gear_offset=params.gear_offset, period_s=d_ctrl * dt,
+    mission = DeckMission(cfg, nav, filter_cfg=sc.navigation, hold_point=rel, gear_offset=params.gear_offset, period_s=d_ctrl * dt,
                           recorder=record)
     hov = params.hover_throttle
     controller = DeckController(cfg.guidance, v.max_tilt_deg, params.gear_offset, cfg.guidance.overshoot_moving_m,

@@ -72,10 +72,10 @@ def mission_reference(cfg, geo: GeoImage, seed: int) -> GeoImage:
     return degrade_reference(day, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
 
 
-def build_navigator(cfg, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
-    """The navigator of the scenario's ``mission`` block (``mission.registration``, the camera's processing size):
-    used by the loop and by the navigator registry (``io/navigators.py``: replay)."""
-    r, c = cfg.registration, cfg.camera
+def build_navigator(sc, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
+    """The navigator of the scenario ``sc`` (``navigation``, the camera's processing size): used by the loop and
+    by the navigator registry (``io/navigators.py``: replay)."""
+    r, c = sc.navigation, sc.sensors.camera
     return GeolocationNavigator(reference, camera, hough=r.hough, median_px=r.median_px,
                                 search_radius_m=r.search_radius_m, min_quality=r.min_quality,
                                 registration_sigma_m=r.sigma_m, map_sigma_m=r.map_sigma_m,
@@ -158,9 +158,9 @@ class GroundStation:
     heading-rate reference); and the reference the autopilot flies (``step(t, estimate, health)``: the loop's
     mission at the autopilot's rate)."""
 
-    def __init__(self, telemetry, nav, mission, truth, cfg, record) -> None:
+    def __init__(self, telemetry, nav, mission, truth, cfg, airspeed_mps, record) -> None:
         self.telemetry, self.nav, self.geo_mission, self.truth, self.record = telemetry, nav, mission, truth, record
-        self.ref = (0.0, cfg.control.altitude_m, cfg.airframe.airspeed_mps)
+        self.ref = (0.0, cfg.control.altitude_m, airspeed_mps)
 
     @property
     def mode(self) -> str:
@@ -234,8 +234,8 @@ def build(ctx) -> MissionParts:
                          f"({n1 - n0:.0f} x {e1 - e0:.0f} m)")
     frames_map = paste_truck(geo, target, t.length_m, t.width_m, math.radians(t.heading_deg))
     reference = mission_reference(cfg, geo, sc.run.seed)
-    c, ctl = cfg.camera, cfg.control
-    va = cfg.airframe.airspeed_mps
+    c, ctl = sc.sensors.camera, cfg.control
+    va = sc.vehicle.airspeed_mps
     wind = scenario_wind(sc.world, rng[0], ctl.altitude_m, va)
     scene = World(ground=frames_map, surface="map", wind=wind)
     camera = mav_camera(c)
@@ -243,32 +243,32 @@ def build(ctx) -> MissionParts:
     axis = ctl.axis_deg if ctl.axis_deg is not None else (0.0 if (n1 - n0) >= (e1 - e0) else 90.0)
     centre = target + rng[2].normal(0.0, 5.0, 2)  # where the operator believes the target is
     path = FigureEight(centre, ctl.half_length_m, math.radians(axis), ctl.l1_m)
-    g = cfg.gimbal
+    g = sc.sensors.gimbal
     b = rng[3].normal(0.0, math.radians(g.bias_deg), 2)
     ab = rng[7].normal(0.0, math.radians(g.ahrs_bias_deg), 2)
     gimbal = PitchRollGimbal(rng[3], g.lag_s, g.leak, b[0], b[1], math.radians(g.jitter_deg),
                              ahrs_turn_gain=g.ahrs_turn_gain, ahrs_tau_s=g.ahrs_tau_s,
                              ahrs_bias_roll=ab[0], ahrs_bias_pitch=ab[1],
                              deadband=math.radians(g.deadband_deg), limit=math.radians(g.travel_deg))
-    tl = cfg.telemetry
+    tl = sc.sensors.telemetry
     telemetry = AutopilotTelemetry(rng[4], tl.rate_hz, tl.gps_sigma_m, tl.gps_bias_m, 600.0, tl.gps_delay_s,
                                    tl.vel_sigma_mps, tl.baro_bias_m, tl.baro_noise_m, tl.extra_heading_deg,
                                    gps_rate_hz=tl.gps_rate_hz, link_delay_s=tl.link_delay_s)
-    nav = build_navigator(cfg, reference, camera)
+    nav = build_navigator(sc, reference, camera)
     if ctx.navigator_wrapper is not None:
         nav = ctx.navigator_wrapper(nav)
-    mission = GeolocationMission(cfg, path, recorder=record)
-    params = micro_params(cfg.airframe.mass_kg, cfg.airframe.span_m)
+    mission = GeolocationMission(cfg, path, airspeed_mps=va, recorder=record)
+    params = micro_params(sc.vehicle.mass_kg, sc.vehicle.span_m)
     start, heading = path.start_pose()
     vehicle = trimmed_aircraft(params, va, np.array([start[0], start[1], -ctl.altitude_m]), heading, wind)
     gains = InnerGains(bank_limit=math.radians(ctl.bank_limit_deg))
     autopilot = FixedWingAutopilot(gains, trim(params, va).controls, rate_hz=50.0)
     # the autopilot flies on its own sensors (AHRS, gyros, accelerometers, pitot) and its telemetry's baro height
-    ap_sensors = build_autopilot_sensors(cfg.sensors, rng[8:11])
+    ap_sensors = build_autopilot_sensors(sc.sensors, rng[8:11])
     ap_nav = AutopilotNavigator()
     truth = VehicleTruth(vehicle, dt, 2.0 + tl.gps_delay_s + tl.link_delay_s)
     truth.advance(0.0)
-    station = GroundStation(telemetry, nav, mission, truth, cfg, record)
+    station = GroundStation(telemetry, nav, mission, truth, cfg, va, record)
     # in this order at one step: telemetry, frame (with the operator's click), the autopilot's sensors
     sensors = {"telemetry": TelemetrySensor(telemetry),
                "camera": NadirCamera(camera, renderer, gimbal, target, c.frame_hz, t.click_sigma_px, rng[5], record, dt)}

@@ -98,9 +98,12 @@ class BuildContext:
         sc, rng = self.scenario, self.rng
         s = sc.sensors
         model, mount = self.camera_geometry()
-        out = {"imu": Imu(rng[1], **s.imu.model_dump()), "gps": Gps(rng[2], **s.gps.model_dump()),
-               "laser": LaserRangeFinder(rng[3], mount, surface=sc.world.surface, **s.laser.model_dump()),
-               "sonar": Sonar(rng[4], **s.sonar.model_dump())}
+        out = {"imu": Imu(rng[1], **s.imu.model_dump(exclude={"kind"})),
+               "gps": Gps(rng[2], **s.gps.model_dump(exclude={"kind"}))}
+        if "laser" in s:  # the laser shares the camera's mount
+            out["laser"] = LaserRangeFinder(rng[3], mount, surface=sc.world.surface, **s.laser.model_dump(exclude={"kind"}))
+        if "sonar" in s:
+            out["sonar"] = Sonar(rng[4], **s.sonar.model_dump(exclude={"kind"}))
         if camera:
             c = s.camera
             out["camera"] = Camera(model, mount, rng[5], capture_hz=c.capture_hz, process_hz=sc.navigation.mpe.rate_hz,

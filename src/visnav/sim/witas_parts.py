@@ -28,7 +28,7 @@ def build(ctx):
     from visnav.io.navigators import NAVIGATORS
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
     from visnav.scenarios.schema import PfcmMissionConfig
-    from visnav.sensors.baro import Baro, Compass
+    from visnav.sensors.baro import Compass, baro_sensor
     from visnav.sensors.camera import Camera
     from visnav.sensors.faults import map_faults
     from visnav.sim.parts import MissionParts
@@ -36,9 +36,9 @@ def build(ctx):
 
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
-    pc, cc, mc = cfg.path, cfg.camera, cfg.map
+    pc, cc, mc = cfg.path, sc.sensors.camera, cfg.map
     rng = mission_rngs(sc.run.seed)
-    ground, (sn, se, r, centre) = make_ground(cfg, sc.run.seed)
+    ground, (sn, se, r, centre) = make_ground(cfg, sc.run.seed, cc)
     ground = map_faults(ground, sc.faults, "world")  # [[faults]] feature_poor (issue #18)
     world = World(ground=ground, surface="grass", wind=ctx.scenario_wind(), detail=None)
     reference = map_faults(reference_map(cfg, ground), sc.faults, "reference")  # map_offset
@@ -55,17 +55,18 @@ def build(ctx):
         record("note", 0.0, message=note)
     record("witas_setup", 0.0, waypoints=P, loop_length=path.length, home=P[0], map_extent=np.array(
         ground.extent_ned()), reference_resolution=reference.resolution_m)
-    # IMU and GPS (lost at gps_loss_s) of the [sensors] section; the mission's camera, barometer, compass
+    # IMU and GPS (lost at gps_loss_s), camera, barometer and (when the file names it) compass of [sensors]
     std = ctx.rmax_sensors(camera=False)
     gps = std["gps"]
     gps.jam_start_s, gps.jam_end_s = cfg.gps_loss_s, None
     model, mount = NAVIGATORS["witas"].camera(sc)
     sensors = {"imu": std["imu"], "gps": gps,
-               "camera": Camera(model, mount, rng[1], capture_hz=25.0, process_hz=cfg.filter.odometry_hz,
-                                noise_sigma=cc.noise_sigma, latency_s=cc.latency_s),
-               "baro": Baro(rng[2], cfg.baro.rate_hz, cfg.baro.sigma_m, cfg.baro.bias_sigma_m, cfg.baro.bias_tau_s)}
-    if cfg.compass.enabled:
-        sensors["compass"] = Compass(rng[3], cfg.compass.rate_hz, cfg.compass.sigma_deg, cfg.compass.bias_deg)
+               "camera": Camera(model, mount, rng[1], capture_hz=cc.capture_hz, process_hz=sc.navigation.odometry_hz,
+                                noise_sigma=cc.noise_sigma, latency_s=cc.latency_s, delay_s=cc.delay_s),
+               "baro": baro_sensor(sc.sensors.baro, rng[2])}
+    if "compass" in sc.sensors:
+        c = sc.sensors.compass
+        sensors["compass"] = Compass(rng[3], c.rate_hz, c.noise_deg, c.bias_deg)
     nav = ctx.navigator("witas", camera=model, mount=mount, reference=reference)
     # the eq. 4.25 gains without the eq. 4.26 inner roll loop: with it (stiffer lateral loop) seeds 1-8 gave
     # odometry drift median 0.88 % (max 1.92) against 0.67 % (1.35) and PMF max 2.98 m (4.53) against

@@ -11,13 +11,14 @@ import numpy as np
 from visnav.mission.witas import fit_loop
 
 
-def make_ground(cfg, seed: int):
-    """The world raster of a ``WitasMissionConfig`` and the loop fitted on it (sizes, radius, centre).
+def make_ground(cfg, seed: int, camera):
+    """The world raster of a ``WitasMissionConfig`` and the loop fitted on it (sizes, radius, centre); ``camera``:
+    the scenario's ``sensors.camera`` (its footprint keeps the loop's view on the map).
     Deterministic in ``seed`` (the report rebuilds it to draw the tracks on the map)."""
     from visnav.world.maps import GeoImage
     from visnav.world.rural import rural_map
 
-    pc, cc, mc = cfg.path, cfg.camera, cfg.map
+    pc, cc, mc = cfg.path, camera, cfg.map
     footprint = cc.height * pc.altitude_m / cc.focal_px
     if mc.file:
         ground = GeoImage.load(mc.file)
