@@ -8,7 +8,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from visnav.scenarios.schema import Scenario, _describe_field, not_applicable
+from visnav.scenarios.schema import Scenario, SensorsConfig, describe_field, not_applicable
 
 # field-name suffix -> unit (longest first: ``_deg_s`` before ``_s``)
 _SUFFIX_UNITS = (
@@ -38,7 +38,8 @@ def _plain(v: Any) -> Any:
 def settable_keys(sc: Scenario) -> list[dict]:
     """One dict per leaf key of ``sc`` that its mission reads (dotted ``key``, this scenario's ``value``, the
     schema's ``default``, ``unit``, ``allowed``, ``description``), in schema order; keys its simulation
-    ignores (``schema.NOT_APPLICABLE``) are left out."""
+    ignores (``schema.NOT_APPLICABLE``) and the role tags (``kind``, fixed by the mission type's suite) are left
+    out."""
     mission_type = getattr(sc.mission, "type", "palace")
     rows: list[dict] = []
 
@@ -46,6 +47,12 @@ def settable_keys(sc: Scenario) -> list[dict]:
         for name, f in type(model).model_fields.items():
             value = getattr(model, name)
             loc = path + [name]
+            if name == "kind" and len(path) <= 2 and path[:1] in (["vehicle"], ["navigation"], ["sensors"]):
+                continue
+            if isinstance(value, SensorsConfig):
+                for sname, sensor in value.items():
+                    walk(sensor, loc + [sname])
+                continue
             if isinstance(value, BaseModel):
                 walk(value, loc)
                 continue
@@ -58,7 +65,7 @@ def settable_keys(sc: Scenario) -> list[dict]:
                 except TypeError:  # factories that take the validated data
                     default = None
             desc = f.description or ""
-            allowed = _describe_field(loc, mission_type).removeprefix("allowed: ")
+            allowed = describe_field(type(model), name).removeprefix("allowed: ")
             rows.append({"key": ".".join(loc), "value": _plain(value), "default": _plain(default),
                          "unit": unit_of(name, desc), "allowed": allowed, "description": desc})
 

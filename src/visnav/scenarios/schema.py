@@ -529,8 +529,7 @@ def _format_error(err: ValidationError, data: dict) -> str:
     if e["type"] == "extra_forbidden":
         parent = _model_at(loc[:-1], kinds)
         allowed = ", ".join(k for k in parent.model_fields if k != "kind") if parent else ""
-        name = (data.get("run") or {}).get("name") if isinstance(data.get("run"), dict) else None
-        where = [f"scenario {name!r}"] if name else []
+        where = []
         if parent is not None and "kind" in parent.model_fields:
             where.append(f"{'.'.join(loc[:-1])} is kind {parent.model_fields['kind'].default!r}")
         return f"unknown scenario key '{key}'" + (f" ({'; '.join(where)})" if where else "") + \
@@ -627,7 +626,10 @@ def load_scenario(name_or_path: str, overrides: list[str] | None = None, seed: i
     data = apply_overrides(data, list(overrides or []))
     if seed is not None:
         data.setdefault("run", {})["seed"] = int(seed)
-    return validate(data)
+    try:
+        return validate(data)
+    except ScenarioError as err:  # one line that names the scenario
+        raise ScenarioError(f"scenario {path.stem}: {err}") from None
 
 
 def to_toml(sc: Scenario) -> str:

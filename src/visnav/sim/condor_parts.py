@@ -65,7 +65,7 @@ class Operator:
     tent re-centred with the gimbal from the tracked pixel (§2.4); the first click on the tent (the start)."""
 
     def __init__(self, sensors, nav, camera, renderer, gimbal, vehicle, truth, target, mission, record) -> None:
-        self.sensors, self.nav, self.camera, self.renderer, self.gimbal = cfg, nav, camera, renderer, gimbal
+        self.sensors, self.nav, self.camera, self.renderer, self.gimbal = sensors, nav, camera, renderer, gimbal
         self.vehicle, self.truth, self.target, self.mission, self.record = vehicle, truth, target, mission, record
 
     def start(self, t: float) -> None:
