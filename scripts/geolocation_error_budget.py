@@ -30,7 +30,7 @@ def budget(run_dir: Path) -> dict:
 
     log = FlightLog.from_hdf5(run_dir / "log.h5")
     sc = load_scenario(str(run_dir / "scenario.toml"))
-    cam = mav_camera(sc.mission.camera)
+    cam = mav_camera(sc.sensors.camera)
     s, f = log.get("sample"), log.get("frame")
     target = np.asarray(log.get("target")["position"])[0]
     ft = np.asarray(f["t"])

@@ -96,8 +96,8 @@ def test_old_resolved_file_loads(tmp_path):
 
 
 @pytest.mark.parametrize("name, override, message", [
-    ("deck-static", "sensors.imu.delay_s=0.1", "scenario deck-static: unknown scenario key 'sensors.imu.delay_s' "
-     "(sensors.imu is kind 'multirotor-imu')"),
+    ("deck-static", "sensors.imu.delay_s=0.1", "scenario deck-static: sensors.imu.delay_s does not apply to "
+     "mission.type 'deck' (sensors.imu is kind 'multirotor-imu'"),
     ("deck-static", "sensors.sonar.rate_hz=5", "scenario deck-static: sensors.sonar does not apply to mission.type "
      "'deck' (its sensors: imu, camera)"),
     ("deck-static", "vehicle.kind=rmax", "vehicle.kind 'rmax' does not fit mission.type 'deck'"),

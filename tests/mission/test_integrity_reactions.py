@@ -34,10 +34,11 @@ def _est():
 def _deck_in_approach():
     from visnav.mission.deck import DeckMission
 
-    cfg = load_scenario("deck-moving").mission
+    sc = load_scenario("deck-moving")
+    cfg = sc.mission
     log = FlightLog()
     m = DeckMission(cfg, _StubNav(), hold_point=[-1.0, 0.0, -1.5], gear_offset=0.17, period_s=0.02,
-                    recorder=log.record)
+                    recorder=log.record, filter_cfg=sc.navigation)
     g = cfg.guidance
     t = cfg.start.manual_s
     m.step(t, _est(), DeckHealth(converged=True, integrity="ok"))
@@ -94,11 +95,12 @@ def _fw():
 def test_condor_falls_back_to_the_gps_loiter_and_returns_after_ok():
     from visnav.mission.condor import CondorMission
 
-    cfg = load_scenario("condor-orbit").mission
+    sc = load_scenario("condor-orbit")
+    cfg = sc.mission
     o = cfg.control.orbit
     log = FlightLog()
     nav = _StubNav()
-    m = CondorMission(cfg, nav, recorder=log.record)
+    m = CondorMission(cfg, nav, airspeed_mps=sc.vehicle.airspeed_mps, recorder=log.record)
     t = o.switch_time_s
     h = lambda s: Health(source="vision", tracking=True, integrity=s, integrity_reason=f"test {s}")
     m.step(t, _fw(), h("ok"))

@@ -66,7 +66,7 @@ def test_plain_list_gives_the_closed_loop_estimate():
     assert any(e[0] == "command" and e[1].name == "set_source" for e in ev)
     assert any(e[0] == "update" and isinstance(e[1], TargetRangeSample) for e in ev)
     # a fresh navigator, no simulation: the same messages in the same order give the same estimates
-    nav = build_navigator(sc.mission, sim.camera_model)
+    nav = build_navigator(sc, sim.camera_model)
     assert isinstance(nav, Navigator)
     n = 0
     for e in ev:

@@ -122,7 +122,7 @@ def test_filter_tuning_comes_from_the_filter_config_not_the_world():
     """The mismatch campaigns: deck.motion_scale moves the world only; filter.motion_scale / sea_state tune Q."""
     def ship(*sets):
         sc = load_scenario("deck-moving", list(sets))
-        return DeckNavConfig.from_mission(sc.mission, 0.03).ship_cov
+        return DeckNavConfig.from_mission(sc, 0.03).ship_cov
 
     nominal = ship()
     for ms in ("1.3", "1.5"):
@@ -130,13 +130,13 @@ def test_filter_tuning_comes_from_the_filter_config_not_the_world():
     # eq. 3.7 closed form of the stewart preset, 1.5x amplitudes: (1.5 A + 3 1.5 sA) (w + 3 sW)^2, over w dt
     A, W, sA, sW = dm.SEA_STATES["stewart"]
     bound = (1.5 * A + 4.5 * sA) * (W + 3 * sW) ** 2
-    np.testing.assert_allclose(np.diag(ship("mission.filter.motion_scale=1.5")), bound**2 / W / 0.01, rtol=1e-12)
+    np.testing.assert_allclose(np.diag(ship("navigation.motion_scale=1.5")), bound**2 / W / 0.01, rtol=1e-12)
     # the default is the sea state the scenario names; a static deck is tuned for calm (the 1e-4 floor)
-    assert load_scenario("deck-moving").mission.filter.sea_state == "stewart"
-    assert load_scenario("deck-moving", ["mission.deck.sea_state=ship_ss4"]).mission.filter.sea_state == "ship_ss4"
+    assert load_scenario("deck-moving").navigation.sea_state == "stewart"
+    assert load_scenario("deck-moving", ["mission.deck.sea_state=ship_ss4"]).navigation.sea_state == "ship_ss4"
     sc = load_scenario("deck-static")
-    assert sc.mission.filter.sea_state == "calm"
-    np.testing.assert_array_equal(np.diag(DeckNavConfig.from_mission(sc.mission, 0.03).ship_cov), 1e-4)
+    assert sc.navigation.sea_state == "calm"
+    np.testing.assert_array_equal(np.diag(DeckNavConfig.from_mission(sc, 0.03).ship_cov), 1e-4)
 
 
 def _run_frames(late: bool, mid: bool = False):
@@ -253,7 +253,7 @@ def test_a_repeated_image_is_a_frozen_link_not_a_view():
 
 
 def test_the_mission_config_turns_the_frozen_link_check_on():
-    cfg = load_scenario("deck-moving").mission
+    cfg = load_scenario("deck-moving")
     assert DeckNavConfig.from_mission(cfg, 1 / 30).reject_repeated_frames
-    off = load_scenario("deck-moving", ["mission.filter.reject_repeated_frames=false"]).mission
+    off = load_scenario("deck-moving", ["navigation.reject_repeated_frames=false"])
     assert not DeckNavConfig.from_mission(off, 1 / 30).reject_repeated_frames

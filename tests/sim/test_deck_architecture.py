@@ -60,7 +60,7 @@ def test_navigator_from_a_list_of_measurements_gives_the_closed_loop_estimate(na
     assert {k for k, _ in calls} == {"initialize", "update", "command", "estimate", "health"}
     assert any(k == "command" and c.name == "track" for k, c in calls)
     # a fresh navigator fed the same messages (no simulation object anywhere)
-    nav = DeckNavigator(DeckNavConfig.from_mission(sc.mission, sim.info["frame_steps"] * sc.run.dt_s))
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc, sim.info["frame_steps"] * sc.run.dt_s))
     n_est = 0
     for kind, item in calls:
         if kind in ("update", "initialize", "command"):
@@ -126,11 +126,13 @@ def _est(x):
 def test_mission_hands_over_or_restarts_from_health_alone():
     from visnav.mission.deck import DeckMission
 
-    cfg = load_scenario("deck-static").mission
+    sc = load_scenario("deck-static")
+    cfg, f = sc.mission, sc.navigation
     x = np.r_[1.0, 0.0, 1.0, np.zeros(9)]
     log = FlightLog()
     nav = _StubNav()
-    m = DeckMission(cfg, nav, hold_point=[-1.0, 0.0, -1.0], gear_offset=0.17, period_s=0.02, recorder=log.record)
+    m = DeckMission(cfg, nav, hold_point=[-1.0, 0.0, -1.0], gear_offset=0.17, period_s=0.02, recorder=log.record,
+                    filter_cfg=f)
     ref, mode = m.step(0.0, _est(x), DeckHealth())
     assert (ref.kind, mode) == ("level", "manual")  # the IMU pilot before the hand-over
     t = cfg.start.manual_s
@@ -142,7 +144,7 @@ def test_mission_hands_over_or_restarts_from_health_alone():
     assert isinstance(ref, DeckReference) and ref.kind == "follow" and np.all(np.isfinite(ref.position))
     assert list(log.get("mode")["mode"]) == ["manual", "manual", "approach"]
     # every hypothesis spent: the run stops with one line
-    m2 = DeckMission(cfg.model_copy(update={"filter": cfg.filter.model_copy(update={"yaw_hypotheses_deg": []})}),
-                     _StubNav(), hold_point=[-1.0, 0.0, -1.0], gear_offset=0.17, period_s=0.02)
+    m2 = DeckMission(cfg, _StubNav(), hold_point=[-1.0, 0.0, -1.0], gear_offset=0.17, period_s=0.02,
+                     filter_cfg=f.model_copy(update={"yaw_hypotheses_deg": []}))
     with pytest.raises(RuntimeError, match="did not converge"):
         m2.step(t, _est(x), DeckHealth(converged=False))

@@ -163,7 +163,7 @@ def test_thesis_camera_loses_every_light_over_the_deck_origin():
     """
     sim = make_simulation(load_scenario("deck-static", seed=1))
     cam, lights, go = sim.camera, sim.world.lights, sim.info["params"].gear_offset
-    assert np.max(lights[:, 0]) < sim.sc.mission.camera.position_m[0]
+    assert np.max(lights[:, 0]) < sim.sc.sensors.camera.position_m[0]
     np.testing.assert_array_equal(sim.info["landing_point"], 0.0)
     land = make_simulation(load_scenario("deck-moving", seed=1)).info["landing_point"]
     np.testing.assert_allclose(land, [-0.2, 0.0, 0.0])

@@ -529,11 +529,13 @@ def _format_error(err: ValidationError, data: dict) -> str:
     if e["type"] == "extra_forbidden":
         parent = _model_at(loc[:-1], kinds)
         allowed = ", ".join(k for k in parent.model_fields if k != "kind") if parent else ""
-        where = []
-        if parent is not None and "kind" in parent.model_fields:
-            where.append(f"{'.'.join(loc[:-1])} is kind {parent.model_fields['kind'].default!r}")
-        return f"unknown scenario key '{key}'" + (f" ({'; '.join(where)})" if where else "") + \
-            f"; allowed keys here: {allowed}"
+        if parent is not None and "kind" in parent.model_fields and loc[0] in ("vehicle", "sensors", "navigation"):
+            section = ".".join(loc[:2] if loc[0] == "sensors" else loc[:1])
+            what = f"({section} is kind {kinds.get(section)!r}; allowed keys here: {allowed})"
+            if any(loc[-1] in c.model_fields for c in KINDS[loc[0]].values()):  # a key of another kind
+                return f"{key} does not apply to mission.type {kinds['mission']!r} {what}"
+            return f"unknown scenario key '{key}' {what}"
+        return f"unknown scenario key '{key}'; allowed keys here: {allowed}"
     value = e.get("input")
     desc = _describe_field(loc, kinds)
     msg = f"invalid value for '{key}': {value!r} ({e['msg']})"
