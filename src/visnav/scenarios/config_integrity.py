@@ -1,8 +1,8 @@
 """Integrity-monitor blocks of the navigators and the ``[[faults]]`` list of a scenario (issue #18).
 
 ``IntegrityBlock``: the settings of ``estimation/integrity.IntegrityMonitor`` a navigator reads from its own
-configuration (``navigation.integrity`` for PALACE, ``mission.filter.integrity`` for WITAS and the pad
-landing); the defaults differ per navigator (alert limit, stale time) and are set by the subclasses.
+configuration (``navigation.integrity`` of the PALACE, WITAS and pad
+navigators); the defaults differ per navigator (alert limit, stale time) and are set by the subclasses.
 
 ``FaultConfig``: one injected fault (``sensors/faults.py`` documents every kind and its parameters)::
 
