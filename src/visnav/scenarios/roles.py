@@ -174,7 +174,7 @@ def is_legacy(data: dict) -> bool:
     return any(legacy_key(".".join(p), mtype) is not None for p, _ in _leaves(data) if p[0] in ("mission", "vehicle"))
 
 
-def _fixed_wing(world: str) -> list[tuple[str, str]]:
+def _fixed_wing() -> list[tuple[str, str]]:
     return [("vehicle", "its aircraft is vehicle.*, kind 'fixedwing' or 'mav'"),
             ("sensors", "its sensors are sensors.* of its own kinds (visnav keys SCENARIO)"),
             ("navigation", "its navigator is navigation.*, of its own kind")]
@@ -188,8 +188,8 @@ LEGACY_NOT_APPLICABLE: dict[str, list[tuple[str, str]]] = {
              ("sensors.camera", "its camera is sensors.camera.*, kind 'led-camera'"),
              ("sensors", "its sensors are sensors.imu.* and sensors.camera.*"),
              ("navigation", "its filter is navigation.*, kind 'deck'")],
-    "condor": _fixed_wing("mission.target.*"),
-    "mav-geolocation": _fixed_wing("mission.map.* and mission.target.*"),
+    "condor": _fixed_wing(),
+    "mav-geolocation": _fixed_wing(),
     "witas-homing": [("navigation", "its navigator is navigation.*, kind 'witas'"),
                      ("sensors.camera", "its camera is sensors.camera.* (the mission.camera.* of the old layout)"),
                      ("sensors.laser", "its navigator takes no range measurement"),

@@ -357,6 +357,8 @@ class Scenario(_M):
     def _suite(cls, data):
         """The roles the mission type's system flies, its kinds and default values (roles.SUITES)."""
         if isinstance(data, dict):
+            if roles.is_legacy(data):  # the mission-keyed layout before issue #13
+                data = roles.migrate(data, _RMAX_OLD_DEFAULTS)
             return roles.fill_suite(data)
         return data
 
