@@ -76,8 +76,9 @@ def test_one_light_leaving_the_view():
 def test_layout_with_fewer_than_three_lights_is_refused():
     with pytest.raises(ScenarioError, match="at least 3"):
         load_scenario("deck-static", ["mission.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
-    with pytest.raises(ScenarioError, match="mission.filter.gate"):
-        load_scenario("deck-static", ["mission.filter.gate=-1"])
+    for key in ("navigation.gate", "mission.filter.gate"):  # the old layout's key: the error names the new one
+        with pytest.raises(ScenarioError, match=r"invalid value for 'navigation\.gate': -1"):
+            load_scenario("deck-static", [f"{key}=-1"])
 
 
 def test_filter_restarts_when_it_locks_on_a_wrong_yaw():
