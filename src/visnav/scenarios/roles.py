@@ -149,6 +149,15 @@ LEGACY["condor"] += [("vehicle.model", "")]
 LEGACY["mav-geolocation"] += [("vehicle.model", "")]
 
 
+#: keys the old layout accepted and the system never read: dropped at these (their old defaults), one line
+#: otherwise (the geo-location MAV's autopilot GPS and compass: its telemetry carries the GPS)
+LEGACY_UNREAD: dict[str, dict[str, Any]] = {
+    "mav-geolocation": {"mission.sensors.gps.rate_hz": 5.0, "mission.sensors.gps.latency_s": 0.1,
+                        "mission.sensors.gps.velocity_noise_mps": 0.1, "mission.sensors.compass.rate_hz": 10.0,
+                        "mission.sensors.compass.noise_deg": 1.0, "mission.sensors.compass.bias_deg": 2.0},
+}
+
+
 def _leaves(data: Any, path: tuple[str, ...] = ()):
     if isinstance(data, dict) and data:
         for k, v in data.items():
@@ -232,6 +241,12 @@ def migrate(data: dict, rmax_defaults: dict[str, Any]) -> dict:
         if key == "mission.compass.enabled" and mtype == "witas-homing":
             compass_on = bool(value)
             continue
+        unread = LEGACY_UNREAD.get(mtype, {})
+        if key in unread:
+            if unread[key] == value:
+                continue
+            raise ScenarioError(f"{key} does not apply to mission.type {mtype!r} (its simulation never read it: "
+                                f"its sensors are {', '.join(SUITES[mtype]['sensors'])})")
         new = legacy_key(key, mtype)
         if new == "":
             continue

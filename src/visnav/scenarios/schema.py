@@ -633,7 +633,7 @@ def load_scenario(name_or_path: str, overrides: list[str] | None = None, seed: i
     try:
         return validate(data)
     except ScenarioError as err:  # one line that names the scenario
-        raise ScenarioError(f"scenario {path.stem}: {err}") from None
+        raise ScenarioError(f"scenario {name_or_path}: {err}") from None
 
 
 def to_toml(sc: Scenario) -> str:
