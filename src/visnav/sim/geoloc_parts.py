@@ -83,7 +83,8 @@ def build_navigator(cfg, reference: GeoImage, camera: PinholeCamera) -> Geolocat
                                 check_rotation=r.check_rotation, scale_search=r.scale_search,
                                 rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
                                 rotation_search_deg=r.rotation_search_deg,
-                                rotation_search_step_deg=r.rotation_search_step_deg)
+                                rotation_search_step_deg=r.rotation_search_step_deg,
+                                telemetry_sync=r.telemetry_sync)
 
 
 def log_samples(record, nav) -> None:
