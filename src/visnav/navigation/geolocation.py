@@ -87,7 +87,7 @@ class GeolocationNavigator:
     def _telemetry_at(self, t: float) -> TelemetrySample | None:
         tel = list(self.telemetry)
         if self.sync == "hold":  # the sample the ground station had at the frame's time (zero-order hold)
-            before = [a for a in tel if a.t <= t]
+            before = [a for a in tel if a.t <= t + 1e-9]  # a sample arriving with the frame counts as had
             return before[-1] if before and tel[-1].t >= t else None
         for a, b in zip(tel[:-1], tel[1:]):
             if a.t <= t <= b.t:

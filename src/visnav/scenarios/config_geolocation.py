@@ -60,6 +60,9 @@ class MavCameraConfig(_M):
     k1: float = Field(-0.22, ge=-0.6, le=0.3)
     k2: float = Field(0.06, ge=-0.3, le=0.3)
     frame_hz: float = Field(5.0, ge=0.5, le=25.0, description="frames with the target saved at about 5 Hz")
+    frame_phase_s: Optional[float] = Field(None, ge=0.0, le=2.0, description="first frame's instant (modulo the "
+                                           "frame period); none: drawn per flight (the grabber and the autopilot "
+                                           "run on independent clocks); 0.1: rounds 1-3")
     noise_sigma: float = Field(4.0, ge=0.0, le=40.0, description="analogue video link noise")
 
 
