@@ -56,3 +56,15 @@ def _hold_east(ref):
 def test_unknown_sync_is_one_clear_error(ref):
     with pytest.raises(ValueError, match="telemetry_sync"):
         _nav(ref, "nearest")
+
+
+def test_frame_phase_is_a_step_within_one_frame_period():
+    from visnav.sim.geoloc_parts import frame_phase
+
+    rng = np.random.default_rng(4)
+    ph = [frame_phase(None, 5.0, 0.01, rng) for _ in range(400)]
+    k = np.round(np.array(ph) / 0.01)
+    np.testing.assert_allclose(np.array(ph), k * 0.01, atol=1e-12)
+    assert set(k.astype(int)) == set(range(20))  # every step of the 0.2 s period is drawn
+    assert frame_phase(0.1, 5.0, 0.01, rng) == pytest.approx(0.1)  # rounds 1-3
+    assert frame_phase(0.33, 5.0, 0.01, rng) == pytest.approx(0.13)  # modulo the period
