@@ -2,7 +2,16 @@
 classes below), and the failure rate of full-pipeline registrations per score quantile.
 
     VISNAV_SHARED_DATA=/path/to/shared/data PYTHONPATH=src nice -n 10 python scripts/geolocation_registrability.py \
-        --out runs/geoloc-registrability.json [--n 200] [--keep 1,0.7,0.5]
+        --out runs/geoloc-registrability.json [--n 200] [--models same,day] [--maps rural,column,strip]
+    PYTHONPATH=src python scripts/geolocation_registrability.py --stats runs/geoloc-registrability.json [...]
+
+``--chunked N``: registrations only (no land-cover table), another day, ``N`` per map taken in rounds of
+``--chunk`` frames that go round the maps (each round a fresh seed: new places, headings and draw of the
+change), the output rewritten after each round, so a run cut short leaves equal counts on every map.
+
+``--stats``: from the frames of earlier outputs, the failure rate of the registrations started in the
+lowest-scoring quarter against the rest, the odds ratio (conditional maximum likelihood) with its exact
+95 % interval and the two-sided Fisher exact test (scipy.stats).
 
 Land cover: polygons drawn by eye on the maps (x = column, y = row, in pixels of the map reduced by
 ``scale``: 0.5 for satellite_column, 0.4 for satellite_strip); the road class is the cells within 8 m
@@ -20,6 +29,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 from pathlib import Path
 
 import cv2
@@ -91,26 +101,99 @@ def by_class(reg, geo, cl) -> dict:
     return out
 
 
-def main() -> None:
-    from visnav.analysis.registrability import registrability_map, validate
+def low_quarter_stats(scores, failed) -> dict:
+    """Failures of the lowest-scoring quarter against the other three quarters: counts, rates, the odds ratio
+    (conditional MLE) with its exact 95 % confidence interval and the two-sided Fisher exact p."""
+    from scipy.stats import fisher_exact
+    from scipy.stats.contingency import odds_ratio
+
+    s, f = np.asarray(scores, float), np.asarray(failed, bool)
+    low = s <= np.nanquantile(s, 0.25)
+    a, b = int(f[low].sum()), int((~f[low]).sum())  # low quarter: failed, registered
+    c, d = int(f[~low].sum()), int((~f[~low]).sum())  # the rest
+    res = odds_ratio([[a, b], [c, d]])
+    ci = res.confidence_interval(0.95)
+    return {"n_low": a + b, "fail_low": a, "n_rest": c + d, "fail_rest": c, "rate_low": a / max(a + b, 1),
+            "rate_rest": c / max(c + d, 1), "odds_ratio": float(res.statistic), "ci95": [float(ci.low), float(ci.high)],
+            "p_fisher": float(fisher_exact([[a, b], [c, d]], alternative="two-sided").pvalue)}
+
+
+def print_stats(paths) -> None:
+    for p in paths:
+        for row in json.loads(Path(p).read_text()):
+            if "frames" not in row:
+                continue
+            st = low_quarter_stats(row["frames"]["score"], row["frames"]["failed"])
+            print(f"{row['map']:7s} {row['model']:5s} n={row['n']:5d}  low quarter {st['fail_low']:4d}/{st['n_low']:<4d} "
+                  f"({st['rate_low']:.3f})  rest {st['fail_rest']:4d}/{st['n_rest']:<4d} ({st['rate_rest']:.3f})  "
+                  f"OR {st['odds_ratio']:.2f} [{st['ci95'][0]:.2f}, {st['ci95'][1]:.2f}]  p = {st['p_fisher']:.2g}")
+
+
+def load_map(name: str):
     from visnav.world.maps import GeoImage
     from visnav.world.rural import rural_map
 
+    if name == "rural":
+        return rural_map(400.0, 0.25, np.random.default_rng(11))
+    if (DATA / f"satellite_{name}.png").exists():
+        return GeoImage.load(DATA / f"satellite_{name}.png")
+    print(f"{name}: {DATA} not found, skipped")
+    return None
+
+
+def chunked(out: str, maps, n: int, chunk: int, heading_error_deg: float, first_seed: int = 1000) -> None:
+    """``n`` full-pipeline registrations per map (another day), in rounds of ``chunk`` going round the maps."""
+    from visnav.analysis.registrability import registrability_map, validate
+
+    regs = {}
+    for name in maps:
+        geo = load_map(name)
+        if geo is not None:
+            regs[name] = (geo, registrability_map(geo, 70.0))
+            print(f"{name}: registrability map done", flush=True)
+    rows = {k: {"map": k, "model": "day", "n": 0, "seeds": [], "frames": {"north": [], "east": [], "score": [],
+                                                                       "failed": [], "error_m": []}} for k in regs}
+    for r in range(-(-n // chunk)):
+        for name, (geo, reg) in regs.items():
+            v = validate(reg, geo, n=chunk, heading_error_deg=heading_error_deg, seed=first_seed + r,
+                         rotation_search_deg=45.0, rotation_search_step_deg=7.5)
+            row, fr = rows[name], rows[name]["frames"]
+            fr["north"] += v["positions"][:, 0].tolist()
+            fr["east"] += v["positions"][:, 1].tolist()
+            fr["score"] += v["scores"].tolist()
+            fr["failed"] += v["failed"].tolist()
+            fr["error_m"] += [float(e) if np.isfinite(e) else None for e in v["error_m"]]
+            row["n"] += chunk
+            row["seeds"].append(first_seed + r)
+            row["low_quarter"] = low_quarter_stats(fr["score"], fr["failed"])
+            Path(out).write_text(json.dumps(list(rows.values()), indent=1))
+            st = row["low_quarter"]
+            print(f"round {r + 1} {name}: n {row['n']}, low quarter {st['fail_low']}/{st['n_low']}, "
+                  f"rest {st['fail_rest']}/{st['n_rest']}, p {st['p_fisher']:.2g}", flush=True)
+
+
+def main() -> None:
+    from visnav.analysis.registrability import registrability_map, validate
+
+    if "--stats" in sys.argv:
+        print_stats(sys.argv[sys.argv.index("--stats") + 1:])
+        return
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", required=True)
     ap.add_argument("--n", type=int, default=200)
     ap.add_argument("--models", default="same,day")
     ap.add_argument("--maps", default="rural,column,strip")
     ap.add_argument("--heading-error-deg", type=float, default=15.0)
+    ap.add_argument("--chunked", type=int, default=0)
+    ap.add_argument("--chunk", type=int, default=50)
     a = ap.parse_args()
+    if a.chunked:
+        chunked(a.out, a.maps.split(","), a.chunked, a.chunk, a.heading_error_deg)
+        return
     rows = []
     for name in a.maps.split(","):
-        if name == "rural":
-            geo = rural_map(400.0, 0.25, np.random.default_rng(11))
-        elif (DATA / f"satellite_{name}.png").exists():
-            geo = GeoImage.load(DATA / f"satellite_{name}.png")
-        else:
-            print(f"{name}: {DATA} not found, skipped")
+        geo = load_map(name)
+        if geo is None:
             continue
         for model in a.models.split(","):
             kw = MODELS[model]
@@ -125,7 +208,8 @@ def main() -> None:
                            fail_rate_high=v["fail_rate_high"], frames={
                                "north": v["positions"][:, 0].tolist(), "east": v["positions"][:, 1].tolist(),
                                "score": v["scores"].tolist(), "failed": v["failed"].tolist(),
-                               "error_m": [float(e) if np.isfinite(e) else None for e in v["error_m"]]})
+                               "error_m": [float(e) if np.isfinite(e) else None for e in v["error_m"]]},
+                           low_quarter=low_quarter_stats(v["scores"], v["failed"]))
             rows.append(row)
             print(json.dumps(row), flush=True)
             Path(a.out).write_text(json.dumps(rows, indent=1))

@@ -111,3 +111,33 @@ def test_servo_dead_band_leaves_the_camera_half_the_band_behind_on_the_side_it_c
         g.step(0.01, np.array([phi, 0.0, 0.0]))
     assert g.residual(np.array([math.radians(5.0), 0.0, 0.0]))[0] == pytest.approx(-0.5 * db, abs=1e-12)
     assert g.residual(np.array([math.radians(5.0), 0.0, 0.0]))[1] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+@pytest.mark.parametrize("err_deg", [2.0, 7.5])
+def test_injected_attitude_error_gives_h_tan_e_in_the_map_based_method(axis, err_deg):
+    """The chain the map-based samples go through: the autopilot's attitude estimate off by e (roll or pitch), the
+    gimbal (no lag, leak, dead band, mount error) counters the estimate and leaves the camera tilted by e; the
+    ground station casts the tracked pixel from the exact position, height and yaw as a nadir view (Fig. 7.2):
+    a target under the aircraft is placed h tan(e) away, across the track for roll, along it for pitch."""
+    from visnav.sim.geoloc_parts import mav_camera
+    from visnav.scenarios.config_geolocation import MavCameraConfig
+    from visnav.vision.geolocation_registration import map_based_target
+
+    cam = mav_camera(MavCameraConfig())  # 720 x 576, 53 deg, k1 = -0.22, k2 = 0.06
+    e, h, yaw = math.radians(err_deg), 70.0, math.radians(30.0)
+    bias = [0.0, 0.0]
+    bias[axis] = e
+    g = PitchRollGimbal(np.random.default_rng(0), lag_s=0.0, leak=0.0, bias_roll=0.0, bias_pitch=0.0, jitter=0.0,
+                        ahrs_bias_roll=bias[0], ahrs_bias_pitch=bias[1])
+    euler = np.array([0.0, 0.0, yaw])  # level flight: the estimate reads e, the servo turns the camera by -e
+    g.step(0.02, euler)
+    pos = np.array([12.0, -7.0, -h])
+    target = pos[:2]  # straight below the aircraft
+    uv = cam.project(((np.array([*target, 0.0]) - pos) @ g.camera_dcm(euler)).reshape(1, 3))[0]
+    est = map_based_target(cam, uv, pos[:2], h, yaw)
+    err = est - target
+    assert np.linalg.norm(err) == pytest.approx(h * math.tan(e), abs=1e-6)
+    track = np.array([math.cos(yaw), math.sin(yaw)])
+    along = float(err @ track)
+    assert abs(along if axis == 0 else np.linalg.norm(err - along * track)) < 1e-6  # roll: across, pitch: along

@@ -3,7 +3,10 @@
 ``update(measurement)`` takes the typed measurements of ``visnav/measurements.py``:
 
 * ``TelemetrySample`` (5 Hz): kept in a short buffer; a frame is processed once the telemetry
-  sample after it has arrived, with position, heading and height interpolated to the frame's time;
+  sample after it has arrived, with the telemetry recorded with it (``telemetry_sync="hold"``: the last
+  sample that had arrived at the frame's time, as the thesis' ground station recorded "camera images and
+  corresponding telemetry" simultaneously, §7.4.3) or with position, heading and height interpolated to
+  the frame's time (``"interpolate"``: a better synchronisation than the thesis had);
 * ``OperatorClick``: the operator selected the target in the frame of that time; the template
   tracker starts on it (§7.3: "identified and the tracker initialized manually");
 * ``Frame``: tracked; when the target is found the frame is registered to the reference
@@ -41,7 +44,11 @@ class GeolocationNavigator:
                  gate_prob: float | None = 0.999, tracker_min_score: float = 0.75,
                  process_size=(360, 288), check_rotation: bool = False,
                  scale_search: float = 0.0, rotation_refine_deg: float = 0.0, quality_ref: float = 0.5,
-                 rotation_search_deg: float = 0.0, rotation_search_step_deg: float = 7.5) -> None:
+                 rotation_search_deg: float = 0.0, rotation_search_step_deg: float = 7.5,
+                 telemetry_sync: str = "interpolate") -> None:
+        if telemetry_sync not in ("hold", "interpolate"):
+            raise ValueError(f"telemetry_sync must be 'hold' or 'interpolate', not {telemetry_sync!r}")
+        self.sync = telemetry_sync
         self.camera = camera
         self.registration = GeoRegistration(reference, camera, process_size=process_size, median_px=median_px,
                                             search_radius_m=search_radius_m, hough=hough,
@@ -79,6 +86,9 @@ class GeolocationNavigator:
 
     def _telemetry_at(self, t: float) -> TelemetrySample | None:
         tel = list(self.telemetry)
+        if self.sync == "hold":  # the sample the ground station had at the frame's time (zero-order hold)
+            before = [a for a in tel if a.t <= t + 1e-9]  # a sample arriving with the frame counts as had
+            return before[-1] if before and tel[-1].t >= t else None
         for a, b in zip(tel[:-1], tel[1:]):
             if a.t <= t <= b.t:
                 w = 0.0 if b.t == a.t else (t - a.t) / (b.t - a.t)

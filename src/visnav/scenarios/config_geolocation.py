@@ -64,6 +64,9 @@ class MavCameraConfig(_M):
     k1: float = Field(-0.22, ge=-0.6, le=0.3)
     k2: float = Field(0.06, ge=-0.3, le=0.3)
     frame_hz: float = Field(5.0, ge=0.5, le=25.0, description="frames with the target saved at about 5 Hz")
+    frame_phase_s: Optional[float] = Field(None, ge=0.0, le=2.0, description="first frame's instant (modulo the "
+                                           "frame period); none: drawn per flight (the grabber and the autopilot "
+                                           "run on independent clocks); 0.1: rounds 1-3")
     noise_sigma: float = Field(4.0, ge=0.0, le=40.0, description="analogue video link noise")
 
 
@@ -131,6 +134,10 @@ class MavRegistrationConfig(_M):
     sigma_m: float = Field(1.5, ge=0.1, le=50.0)
     map_sigma_m: float = Field(10.0, ge=0.5, le=200.0)
     gate_prob: float = Field(0.999, ge=0.0, lt=1.0, description="chi-square gate (0: none, as the thesis)")
+    telemetry_sync: Literal["hold", "interpolate"] = Field(
+        "hold", description="the telemetry a frame is registered and ray-cast with: 'hold' the last sample that had "
+        "arrived when the frame was grabbed (§7.4.3: images and 'corresponding telemetry' recorded simultaneously); "
+        "'interpolate' the samples around the frame interpolated to its time (rounds 1-3)")
     false_match_m: float = Field(5.0, ge=1.0, le=50.0, description="a sample farther than this is a false match")
 
 

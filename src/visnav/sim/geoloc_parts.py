@@ -7,7 +7,7 @@ recursive least squares. The aircraft flies on its autopilot's ``AutopilotNaviga
 
 Rates (on the dynamics grid): dynamics ``run.dt_s`` (100 Hz), autopilot 50 Hz, telemetry ``telemetry.rate_hz``
 (5 Hz; the ground station's mission steps on each sample, ``GroundStation``), frames ``camera.frame_hz``
-(5 Hz, half a frame period out of phase), log 10 Hz. Truth reaches the sensors (renderer, gimbal,
+(5 Hz, first frame at a step drawn within one frame period per flight: `frame_phase`), log 10 Hz. Truth reaches the sensors (renderer, gimbal,
 telemetry), the operator's click and the log only.
 """
 
@@ -72,6 +72,15 @@ def mission_reference(cfg, geo: GeoImage, seed: int) -> GeoImage:
     return degrade_reference(day, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
 
 
+def frame_phase(phase_s: float | None, frame_hz: float, dt: float, rng: np.random.Generator) -> float:
+    """Instant of the first frame: ``phase_s`` rounded to the step, or (None) a step drawn uniformly within one
+    frame period: the grabber's clock runs independently of the autopilot's telemetry (§7.4, Fig. 7.5), so
+    the telemetry sample a frame is recorded with is between 0 and one telemetry period old."""
+    n = rate_divisor(frame_hz, dt)
+    k = int(rng.integers(0, n)) if phase_s is None else int(round(phase_s / dt)) % n
+    return k * dt
+
+
 def build_navigator(sc, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
     """The navigator of the scenario ``sc`` (``navigation``, the camera's processing size): used by the loop and
     by the navigator registry (``io/navigators.py``: replay)."""
@@ -83,7 +92,8 @@ def build_navigator(sc, reference: GeoImage, camera: PinholeCamera) -> Geolocati
                                 check_rotation=r.check_rotation, scale_search=r.scale_search,
                                 rotation_refine_deg=r.rotation_refine_deg, quality_ref=r.quality_ref,
                                 rotation_search_deg=r.rotation_search_deg,
-                                rotation_search_step_deg=r.rotation_search_step_deg)
+                                rotation_search_step_deg=r.rotation_search_step_deg,
+                                telemetry_sync=r.telemetry_sync)
 
 
 def log_samples(record, nav) -> None:
@@ -116,16 +126,17 @@ class TelemetrySensor:
 
 
 class NadirCamera:
-    """The gimbal camera's frames (half a frame period out of phase with the telemetry) and the operator, who
+    """The gimbal camera's frames (from ``phase_s`` on, default half a frame period) and the operator, who
     clicks the truck in the first frame showing it 40 px inside the image (the click, ``click_sigma_px`` of
     noise, goes with that frame). Logs each frame beside the true pixel (stream ``frame``)."""
 
     latency_s = 0.0
 
-    def __init__(self, camera, renderer, gimbal, target, frame_hz, click_sigma_px, rng, record, dt) -> None:
+    def __init__(self, camera, renderer, gimbal, target, frame_hz, click_sigma_px, rng, record, dt,
+                 phase_s: float | None = None) -> None:
         self.camera, self.renderer, self.gimbal, self.target = camera, renderer, gimbal, target
         self.rate_hz, self.click_sigma, self.rng, self.record = frame_hz, click_sigma_px, rng, record
-        self.phase_s = (rate_divisor(frame_hz, dt) // 2) * dt
+        self.phase_s = (rate_divisor(frame_hz, dt) // 2) * dt if phase_s is None else float(phase_s)
         self.clicked, self.frames = False, 0
 
     def _true_pixel(self, pos: np.ndarray, C_cn: np.ndarray) -> np.ndarray:
@@ -271,7 +282,8 @@ def build(ctx) -> MissionParts:
     station = GroundStation(telemetry, nav, mission, truth, cfg, va, record)
     # in this order at one step: telemetry, frame (with the operator's click), the autopilot's sensors
     sensors = {"telemetry": TelemetrySensor(telemetry),
-               "camera": NadirCamera(camera, renderer, gimbal, target, c.frame_hz, t.click_sigma_px, rng[5], record, dt)}
+               "camera": NadirCamera(camera, renderer, gimbal, target, c.frame_hz, t.click_sigma_px, rng[5], record, dt,
+                                     frame_phase(c.frame_phase_s, c.frame_hz, dt, rng[6]))}
     sensors.update({f"autopilot{i}": x for i, x in enumerate(ap_sensors)})
     logger = GeolocLogger(vehicle, station, autopilot, nav, target, record)
     environment = WindEnvironment(lambda: wind, dt, lambda: max(-vehicle.x[2], 1.0),
