@@ -75,3 +75,24 @@ def test_a_navigator_error_names_the_step_its_measurement_was_due_at(slow_render
     assert now.error is not None and "tracker fell over" in now.error
     assert late.error == now.error  # "RuntimeError at t=3.03s: ..." (the frame of t = 3.0 s, 30 ms latency)
     assert late.log.get("truth")["t"][-1] == now.log.get("truth")["t"][-1]
+
+
+def test_the_switch_interval_is_short_while_frames_render_and_restored_after(monkeypatch):
+    """The render worker takes the GIL back after each OpenCV call: during the run the interpreter hands it over
+    within ``RENDER_SWITCH_INTERVAL_S``; after the run (or an error) the process has its own setting back."""
+    import sys
+
+    from visnav.sim import loop
+
+    seen = []
+    render = CameraRenderer.render
+
+    def spy(self, *a):
+        seen.append(sys.getswitchinterval())
+        return render(self, *a)
+
+    monkeypatch.setattr(CameraRenderer, "render", spy)
+    before = sys.getswitchinterval()
+    res, _ = _run(["run.duration_s=1"], True)
+    assert res.error is None and seen and max(seen) <= loop.RENDER_SWITCH_INTERVAL_S < before
+    assert sys.getswitchinterval() == before

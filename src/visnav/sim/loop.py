@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import sys
 import time
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
@@ -36,6 +37,10 @@ from visnav.sim.parts import Step, VehicleTruth
 from visnav.sim.rmax_parts import fill_rmax_defaults
 from visnav.sim.streams import RMAX_STREAMS
 from visnav.vehicles.base import Environment
+
+
+#: the interpreter's switch interval while frames render on the worker thread [s] (``Simulation._fly``)
+RENDER_SWITCH_INTERVAL_S = 1e-4
 
 
 @dataclass
@@ -243,6 +248,11 @@ class Simulation:
         # frames render on a second thread while the loop steps through the camera latency
         if any(hasattr(s, "sample_async") and s.latency_s >= dt for s in self.sensors.values()):
             self._render_pool = ThreadPoolExecutor(1)
+            # the worker takes the GIL back after each OpenCV call; while the loop runs Python it would wait
+            # for the interpreter's switch interval (5 ms) each time, so a frame of ~3 ms CPU would take tens
+            # of ms: hand the GIL over within 0.1 ms during the run (restored at the end)
+            self._switch_interval = sys.getswitchinterval()
+            sys.setswitchinterval(min(self._switch_interval, RENDER_SWITCH_INTERVAL_S))
         own, grid = self._sensor_schedule()
         defer = self._can_defer()
         settle = self.settle
@@ -322,6 +332,7 @@ class Simulation:
         if self._render_pool is not None:
             self._render_pool.shutdown(wait=True, cancel_futures=True)
             self._render_pool = None
+            sys.setswitchinterval(self._switch_interval)
         if self.parts.finish is not None:
             self.parts.finish(self._t, completed)
 
