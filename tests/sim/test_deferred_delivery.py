@@ -96,3 +96,11 @@ def test_the_switch_interval_is_short_while_frames_render_and_restored_after(mon
     res, _ = _run(["run.duration_s=1"], True)
     assert res.error is None and seen and max(seen) <= loop.RENDER_SWITCH_INTERVAL_S < before
     assert sys.getswitchinterval() == before
+
+
+def test_a_wrapped_navigator_gets_each_measurement_at_its_step():
+    """``visnav record`` logs the loop step of each delivery and ``--sil`` forwards it in wall-clock time: with a
+    navigator wrapper the loop does not defer."""
+    sc = load_scenario("palace-landing", SHORT + ["run.duration_s=1"], seed=2)
+    assert Simulation(sc).defer_deliveries
+    assert not Simulation(sc, navigator_wrapper=lambda nav: nav).defer_deliveries

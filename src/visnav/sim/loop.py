@@ -100,8 +100,9 @@ class Simulation:
         #: what was due while a frame still rendered: (t due at, measurement), delivered in this order later
         self._backlog: deque = deque()
         #: deliveries may wait (in order) for a frame still rendering until something reads the navigator
-        #: (``settle``); off where the navigator answers another process in wall-clock time (``sim/sil.py``)
-        self.defer_deliveries = True
+        #: (``settle``); off for a wrapped navigator: ``visnav record`` logs the step each measurement is
+        #: delivered at, ``--sil`` forwards it to another process in wall-clock time
+        self.defer_deliveries = navigator_wrapper is None
 
     @property
     def flight_nav(self):

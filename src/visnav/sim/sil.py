@@ -299,7 +299,6 @@ def sil_simulation(sc):
     link = SilLink(free_port(), frames, LocalTangentPlane(*ORIGIN))
     sim = make_simulation(sc, navigator_wrapper=lambda nav: link)
     sim.sil_link = link
-    sim.defer_deliveries = False  # the bridge answers in wall-clock time: deliver each measurement when due
     return sim
 
 
