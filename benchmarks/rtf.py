@@ -1,6 +1,6 @@
 """Real-time factor of one closed-loop scenario; optionally dump its metrics and log for diffing.
 
-    PYTHONPATH=src python benchmarks/rtf.py SCENARIO [--seed N] [--dump FILE.npz] [--profile]
+    PYTHONPATH=src python benchmarks/rtf.py SCENARIO [--seed N] [--dump FILE.npz] [--profile] [--cv2-threads N]
 
 Prints one JSON line: simulated time, wall and CPU time of ``run()`` (process CPU, so the render
 thread counts), main-thread CPU and the real-time factors. Run it with another checkout's
@@ -72,5 +72,10 @@ if __name__ == "__main__":
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--dump")
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--cv2-threads", type=int, help="cv2.setNumThreads before the run (default: OpenCV's own)")
     a = ap.parse_args()
+    if a.cv2_threads is not None:
+        import cv2
+
+        cv2.setNumThreads(a.cv2_threads)
     print(json.dumps(run(a.scenario, a.seed, a.dump, a.profile)))
