@@ -1,6 +1,6 @@
 """Real-time factor of one closed-loop scenario; optionally dump its metrics and log for diffing.
 
-    PYTHONPATH=src python benchmarks/rtf.py SCENARIO [--seed N] [--dump FILE.npz] [--profile]
+    PYTHONPATH=src python benchmarks/rtf.py SCENARIO [--seed N] [--dump FILE.npz] [--profile] [--cv2-threads N]
 
 Prints one JSON line: simulated time, wall and CPU time of ``run()`` (process CPU, so the render
 thread counts), main-thread CPU and the real-time factors. Run it with another checkout's
@@ -29,10 +29,12 @@ def run(name: str, seed: int = 1, dump: str | None = None, profile: bool = False
     result = camera.PendingFrame.result
 
     def timed_result(self):  # what the loop still waits on the render thread
+        if self.future.done():
+            return result(self)
         w = time.perf_counter()
         out = result(self)
         waited[0] += time.perf_counter() - w
-        waited[1] += 1
+        waited[1] += 1  # frames not rendered yet when the loop took them
         return out
 
     camera.PendingFrame.result = timed_result
@@ -72,5 +74,10 @@ if __name__ == "__main__":
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--dump")
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--cv2-threads", type=int, help="cv2.setNumThreads before the run (default: OpenCV's own)")
     a = ap.parse_args()
+    if a.cv2_threads is not None:
+        import cv2
+
+        cv2.setNumThreads(a.cv2_threads)
     print(json.dumps(run(a.scenario, a.seed, a.dump, a.profile)))

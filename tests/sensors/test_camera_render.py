@@ -61,3 +61,22 @@ def test_sky_above_horizon_and_noise_statistics():
     assert abs(f[:200].mean() - world.sky_level) < 1.0
     assert abs(f[:200].std() - 3.0) < 0.3
     assert abs(f[300:].mean() - 60) < 2.0
+
+
+def test_noise_is_the_bank_added_with_saturation():
+    """The noise pass (two uint8 passes: + the bank's positive part, - its negative part) equals the int16 bank
+    added to the noise-free frame and saturated to [0, 255], pixel for pixel, where it clips at both ends."""
+    img = np.tile(np.linspace(0, 255, 1501).astype(np.uint8), (1501, 1))  # black to white: both ends clip
+    res = 0.02
+    world = World(ground=GeoImage(img, 750 * res, -750 * res, res), surface="concrete", wind=Wind(SteadyWind(0, 0)))
+    cam_pos, C_cn = FixedMount.depressed(90.0).camera_pose(np.array([0.0, 0.0, -12.0]), np.eye(3))
+    clean = CameraRenderer(CAM, noise_sigma=0.0, rng=np.random.default_rng(0)).render(cam_pos, C_cn, world)
+    r = CameraRenderer(CAM, noise_sigma=40.0, rng=np.random.default_rng(5))
+    draw = np.random.default_rng(0)
+    draw.bit_generator.state = r.rng.bit_generator.state  # the offsets render() will draw
+    noisy = r.render(cam_pos, C_cn, world)
+    k = int(draw.integers(0, r._noise.shape[0]))
+    dy, dx = (int(x) for x in draw.integers(0, r._pad, 2))
+    want = np.clip(clean.astype(int) + r._noise[k, dy:dy + 480, dx:dx + 640], 0, 255).astype(np.uint8)
+    assert noisy.dtype == np.uint8 and np.array_equal(noisy, want)
+    assert (noisy == 0).sum() > 100 and (noisy == 255).sum() > 100 and (r._noise < -50).any()

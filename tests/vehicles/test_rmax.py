@@ -273,3 +273,17 @@ def test_scalar_rk4_equals_the_numpy_derivative_bit_for_bit():
         np.testing.assert_array_equal(model._y, want)
         np.testing.assert_allclose(s.euler[:2], a1[:2], rtol=0, atol=1e-15)
         np.testing.assert_allclose(s.specific_force, model._deriv(want, a1, wind)[1], rtol=0, atol=1e-15)
+
+
+def test_the_discretisation_is_computed_once_per_step_size_and_shared_read_only():
+    """A campaign worker builds a model per run: the matrix exponentials are taken once per dt in the process,
+    equal to a fresh ``_block_diag_model`` (dt and dt / 2), and no model can change them."""
+    from visnav.vehicles.rmax import _block_diag_model
+
+    a, b = RmaxModel(dt=0.01), RmaxModel(dt=0.01)
+    ma, mb = a._matrices(0.01), b._matrices(0.01)
+    assert all(x is y for x, y in zip(ma, mb))
+    fresh = _block_diag_model(0.01) + _block_diag_model(0.005)[:2]
+    for x, y in zip(ma, fresh):
+        assert np.array_equal(x, y) and not x.flags.writeable
+    assert not np.array_equal(RmaxModel(dt=0.02)._matrices(0.02)[0], ma[0])

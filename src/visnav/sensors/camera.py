@@ -8,6 +8,8 @@ A frame is the plane-induced homography from map pixels to image pixels, applied
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
@@ -52,6 +54,13 @@ class CameraRenderer:
         if noise_sigma > 0:
             bank = rng.normal(0.0, noise_sigma, (4, camera.height + pad, camera.width + pad))
             self._noise = np.clip(np.round(bank), -127, 127).astype(np.int16)
+            # the bank split into its positive and negative parts (uint8): image + n saturated to [0, 255]
+            # is (image + max(n, 0) saturated) - max(-n, 0) saturated, exactly (one of the two is 0), in
+            # two uint8 passes instead of a mixed uint8 + int16 one
+            self._noise_pos = np.maximum(self._noise, 0).astype(np.uint8)
+            self._noise_neg = np.maximum(-self._noise, 0).astype(np.uint8)
+        w, h = self.size
+        self._corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], dtype=float)
         self._undistort_maps = None
         if camera.has_distortion:
             u, v = np.meshgrid(np.arange(camera.width, dtype=float), np.arange(camera.height, dtype=float))
@@ -61,6 +70,8 @@ class CameraRenderer:
             self._undistort_maps = (mx, my)
         self._tile_levels: dict[int, tuple[np.ndarray, int]] = {}
         self._blend_cache: dict[tuple, np.ndarray] = {}
+        self._affines: dict[tuple, np.ndarray] = {}
+        self._affines_of: dict[tuple, object] = {}
 
     # -- pieces ----------------------------------------------------------------------------
     def _sky_mask(self, C_cn: np.ndarray) -> np.ndarray | None:
@@ -68,8 +79,7 @@ class CameraRenderer:
         w, h = self.size
         # d_z(u, v) = row 2 of C_cn K^-1 [u v 1]^T is affine in (u, v)
         c = C_cn[2] @ self.Kinv
-        corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], dtype=float)
-        if np.all(corners @ c > 1e-6):
+        if (self._corners @ c > 1e-6).all():
             return None
         u, v = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
         return (c[0] * u + c[1] * v + c[2]) <= 1e-6
@@ -106,6 +116,16 @@ class CameraRenderer:
             borderValue=self._border_value(ground),
         )
 
+    def _affine(self, ground, L: int) -> np.ndarray:
+        """``ground.affine(L)``, cached (read-only)."""
+        key = (id(ground), L)
+        a = self._affines.get(key)
+        if a is None or self._affines_of.get(key) is not ground:
+            a = self._affines[key] = ground.affine(L)
+            a.setflags(write=False)
+            self._affines_of[key] = ground
+        return a
+
     def _blended_level(self, ground, L: int, q: int) -> np.ndarray:
         """Level ``L`` blended with level ``L + 1`` (upsampled) at weight q/8, cached."""
         if q == 0:
@@ -131,11 +151,12 @@ class CameraRenderer:
         # Nyquist. The blend weight is quantised to 1/8 and the blended levels are cached, so a
         # frame costs one warp.
         lf = float(np.log2(gsd * self.lod_bias / ground.resolution_m))
-        L0 = int(np.clip(np.floor(lf), 0, max(ground.max_level - 1, 0)))
-        q = int(round(8 * _clip(lf - L0, 0.0, 1.0))) if ground.max_level > 0 else 0
+        top = ground.max_level
+        L0 = min(max(math.floor(lf), 0), max(top - 1, 0))
+        q = int(round(8 * _clip(lf - L0, 0.0, 1.0))) if top > 0 else 0
         if q == 8:
-            L0, q = min(L0 + 1, ground.max_level), 0
-        img = self._warp(self._blended_level(ground, L0, q), ground.affine(L0), cam_pos, C_cn, ground)
+            L0, q = min(L0 + 1, top), 0
+        img = self._warp(self._blended_level(ground, L0, q), self._affine(ground, L0), cam_pos, C_cn, ground)
         if world.detail is not None and gsd < 0.03:
             tres = world.detail_resolution_m
             Lt = 0
@@ -164,7 +185,8 @@ class CameraRenderer:
         if self._noise is not None:
             k = int(self.rng.integers(0, self._noise.shape[0]))
             dy, dx = (int(x) for x in self.rng.integers(0, self._pad, 2))
-            img = cv2.add(img, self._noise[k, dy : dy + h, dx : dx + w], dtype=cv2.CV_8U)
+            img = cv2.add(img, self._noise_pos[k, dy : dy + h, dx : dx + w])
+            cv2.subtract(img, self._noise_neg[k, dy : dy + h, dx : dx + w], dst=img)
         return img
 
 
@@ -218,6 +240,10 @@ class PendingFrame:
         self.t = t
         self.future = future
         self.index = index
+
+    def done(self) -> bool:
+        """The image is rendered (``result()`` will not wait)."""
+        return self.future.done()
 
     def result(self) -> Frame:
         return Frame(t=self.t, image=self.future.result(), index=self.index)

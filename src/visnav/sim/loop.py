@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import sys
 import time
+from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
@@ -35,6 +37,10 @@ from visnav.sim.parts import Step, VehicleTruth
 from visnav.sim.rmax_parts import fill_rmax_defaults
 from visnav.sim.streams import RMAX_STREAMS
 from visnav.vehicles.base import Environment
+
+
+#: the interpreter's switch interval while frames render on the worker thread [s] (``Simulation._fly``)
+RENDER_SWITCH_INTERVAL_S = 1e-4
 
 
 @dataclass
@@ -91,6 +97,12 @@ class Simulation:
         self._queue: list = []
         self._render_pool: ThreadPoolExecutor | None = None
         self._seq = itertools.count()
+        #: what was due while a frame still rendered: (t due at, measurement), delivered in this order later
+        self._backlog: deque = deque()
+        #: deliveries may wait (in order) for a frame still rendering until something reads the navigator
+        #: (``settle``); off for a wrapped navigator: ``visnav record`` logs the step each measurement is
+        #: delivered at, ``--sil`` forwards it to another process in wall-clock time
+        self.defer_deliveries = navigator_wrapper is None
 
     @property
     def flight_nav(self):
@@ -124,13 +136,16 @@ class Simulation:
         own, grid = [], []
         for name, s in self.sensors.items():
             gate = self.parts.gates.get(name)
-            if self._render_pool is not None and hasattr(s, "sample_async") and s.latency_s >= self.dt:
+            rendered = self._render_pool is not None and hasattr(s, "sample_async") and s.latency_s >= self.dt
+            if rendered:
                 sample = lambda t, s=s: s.sample_async(t, h, w, self._render_pool)  # noqa: E731
             else:
                 sample = lambda t, s=s: s.sample(t, h, w)  # noqa: E731
-            if gate is not None:
-                def fn(t, s=s, gate=gate, sample=sample):
-                    if gate(t):
+            if gate is not None or rendered:  # a gate reads the mission, a frame's fault wrapper its sensor:
+                def fn(t, s=s, gate=gate, sample=sample):  # what was due before is delivered first
+                    if self._backlog:
+                        self.settle()
+                    if gate is None or gate(t):
                         self._emit(sample(t), s.latency_s)
             else:
                 fn = lambda t, s=s, sample=sample: self._emit(sample(t), s.latency_s)  # noqa: E731
@@ -151,6 +166,52 @@ class Simulation:
         self.log.record("nav_init", init.t, source=init.source, position=v(init.position), velocity=v(init.velocity),
                         attitude=v(init.attitude))
         self.nav.initialize(init)
+
+    def _can_defer(self) -> bool:
+        """Deliveries may wait for a frame only where the navigator alone takes them (no observer, no
+        operator after a delivery, no uplink, the navigator is the one flown on) and the loop renders."""
+        p = self.parts
+        return (self.defer_deliveries and self._render_pool is not None and not p.observers
+                and p.on_delivered is None and p.uplink is None and p.flight_navigator is None)
+
+    def _deliver_deferred(self, t: float) -> None:
+        """``_deliver`` for the navigator alone, without waiting on the render thread: a frame still
+        rendering when it is due, and everything due after it, wait in ``_backlog`` (in delivery order) and
+        go to the navigator once the frame is done or when something reads the navigator (``settle``).
+        The navigator gets the same measurements in the same order, and every reader sees it as the
+        undeferred loop would; only the wall-clock instant of ``update`` moves, later, while the loop
+        steps on the other core."""
+        q, backlog, nav = self._queue, self._backlog, self.nav
+        while q and q[0][0] <= t + 1e-9:
+            m = heapq.heappop(q)[2]
+            if backlog or (isinstance(m, PendingFrame) and not m.done()):
+                backlog.append((t, m))
+            else:
+                nav.update(m.result() if isinstance(m, PendingFrame) else m)
+        if backlog:
+            self._drain(wait=False)
+
+    def _drain(self, wait: bool) -> None:
+        """Deliver the backlog in order; a frame still rendering stops it unless ``wait``."""
+        backlog, nav, now = self._backlog, self.nav, self._t
+        while backlog:
+            t, m = backlog[0]
+            if isinstance(m, PendingFrame):
+                if not (wait or m.done()):
+                    break
+                self._t = t  # (an error names the step the measurement was due at, as without the wait)
+                m = m.result()
+            backlog.popleft()
+            self._t = t
+            nav.update(m)
+        self._t = now
+
+    def settle(self) -> None:
+        """Everything due so far delivered (waiting for the frames still rendering): the loop calls it before
+        anything reads the navigator or the mission; a part that reads the navigator outside the loop's
+        stages calls it first (``rmax_parts.Touchdown``)."""
+        if self._backlog:
+            self._drain(wait=True)
 
     def _deliver(self, t: float) -> None:
         """Everything due by ``t``: to an observer of its type (a mission's motion-capture view) or to the
@@ -188,7 +249,18 @@ class Simulation:
         # frames render on a second thread while the loop steps through the camera latency
         if any(hasattr(s, "sample_async") and s.latency_s >= dt for s in self.sensors.values()):
             self._render_pool = ThreadPoolExecutor(1)
+            # the worker takes the GIL back after each OpenCV call; while the loop runs Python it would wait
+            # for the interpreter's switch interval (5 ms) each time, so a frame of ~3 ms CPU would take tens
+            # of ms: hand the GIL over within 0.1 ms during the run (restored at the end)
+            self._switch_interval = sys.getswitchinterval()
+            sys.setswitchinterval(min(self._switch_interval, RENDER_SWITCH_INTERVAL_S))
         own, grid = self._sensor_schedule()
+        defer = self._can_defer()
+        settle = self.settle
+        # the parts that run every step settle first unless they say they settle themselves where they read
+        # the navigator (the R-MAX's touchdown)
+        every_step = [x for x in (p.contact, p.world_step, p.actuator, p.after_step)
+                      if x is not None and not getattr(x, "settles_itself", False)]
         truth, nav, mission, controller, vehicle, logger = (self.history, self.flight_nav, self.mission,
                                                             self.controller, self.vehicle, self.logger)
         environment, actuator, contact, after_step, world_step = (p.environment, p.actuator, p.contact, p.after_step,
@@ -215,12 +287,17 @@ class Simulation:
                     if k % d == off:
                         fn(t)
                 # deliveries -> navigator
-                if self._queue and self._queue[0][0] <= t + 1e-9:
+                if defer:
+                    if self._backlog or (self._queue and self._queue[0][0] <= t + 1e-9):
+                        self._deliver_deferred(t)
+                elif self._queue and self._queue[0][0] <= t + 1e-9:
                     self._deliver(t)
                     if mission.done:  # (a ground station's mission that finished on a delivery)
                         break
                 # mission manager and controller (their own rates)
-                mission_due, ctrl_due = k % d_mis == 0, k % d_ctrl == 0
+                mission_due, ctrl_due, log_due = k % d_mis == 0, k % d_ctrl == 0, k % d_log == 0
+                if self._backlog and (mission_due or ctrl_due or log_due or every_step):
+                    settle()
                 if mission_due or ctrl_due:
                     nav_est = nav.estimate(t)
                 if mission_due:
@@ -228,7 +305,7 @@ class Simulation:
                     ref, mode = mission.step(t, nav_est, health)
                 if ctrl_due:
                     cmd = controller.command(t, nav_est, ref)
-                if k % d_log == 0:
+                if log_due:
                     st.t, st.truth, st.estimate, st.health, st.reference, st.command, st.mode = (
                         t, truth.latest, nav_est, health, ref, cmd, mode)
                     logger(st)
@@ -247,11 +324,18 @@ class Simulation:
                     break
             completed = True
         finally:
-            if self._render_pool is not None:
-                self._render_pool.shutdown(wait=True, cancel_futures=True)
-                self._render_pool = None
-            if p.finish is not None:
-                p.finish(self._t, completed)
+            try:
+                settle()  # what was due by the last step (an error it raises came first)
+            finally:
+                self._finish(completed)
+
+    def _finish(self, completed: bool) -> None:
+        if self._render_pool is not None:
+            self._render_pool.shutdown(wait=True, cancel_futures=True)
+            self._render_pool = None
+            sys.setswitchinterval(self._switch_interval)
+        if self.parts.finish is not None:
+            self.parts.finish(self._t, completed)
 
 
 def run_scaffold(sim, fly, progress=None) -> RunResult:

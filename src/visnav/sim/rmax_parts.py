@@ -90,7 +90,10 @@ class Injection:
 
 class Touchdown:
     """The skids on the ground (after the first second): the mission is told, the touchdown and the step
-    logged, the run ends."""
+    logged, the run ends. It runs every step and reads the navigator only at the touchdown, so it settles
+    the loop's deliveries itself there (``settles_itself``: the loop need not settle before every step)."""
+
+    settles_itself = True
 
     def __init__(self, sim) -> None:
         self.sim = sim
@@ -100,6 +103,7 @@ class Touchdown:
         s = sim.vehicle.state
         if not (s.on_ground and t_prev > 1.0):
             return False
+        sim.settle()
         sim.mission.on_touchdown(t)
         sim.log.record("touchdown", t, position=s.position, speed=float(getattr(sim.vehicle, "touchdown_speed", np.nan)))
         st = sim.step_state

@@ -101,6 +101,25 @@ def _block_diag_model(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
     return Ad, Bd, C, CA
 
 
+_DISCRETISED: dict[float, tuple[np.ndarray, ...]] = {}
+
+
+def _discretised(dt: float) -> tuple[np.ndarray, ...]:
+    """(Ad, Bd, C, CA) at ``dt`` and (Ad, Bd) at ``dt / 2``, computed once per step size in the process
+    (a campaign worker builds a model per run) and shared read-only by every model."""
+    m = _DISCRETISED.get(dt)
+    if m is None:
+        Ad, Bd, C, CA = _block_diag_model(dt)
+        Ah, Bh, _, _ = _block_diag_model(dt / 2)
+        m = (Ad, Bd, C, CA, Ah, Bh)
+        for a in m:
+            a.setflags(write=False)
+        if len(_DISCRETISED) > 64:
+            _DISCRETISED.clear()
+        _DISCRETISED[dt] = m
+    return m
+
+
 @dataclass
 class RmaxParams:
     """Parameters of eq. 3.9-3.10. ``trim`` is the absolute YACS input at trim (ail, ele, rud, thr):
@@ -204,9 +223,7 @@ class RmaxModel:
     def _matrices(self, dt: float) -> tuple[np.ndarray, ...]:
         key = round(dt, 12)
         if key not in self._cache:
-            Ad, Bd, C, CA = _block_diag_model(dt)
-            Ah, Bh, _, _ = _block_diag_model(dt / 2)
-            self._cache[key] = (Ad, Bd, C, CA, Ah, Bh)
+            self._cache[key] = _discretised(dt)
         return self._cache[key]
 
     def _attitudes(self, *xs: np.ndarray) -> list[tuple]:

@@ -1,0 +1,106 @@
+"""The loop delivers a frame still rendering later (in order, before anything reads the navigator): the run is
+the run of a loop that waits for every frame when it is due, to the last bit (sim/loop.py, issue #19)."""
+
+import time
+
+import numpy as np
+import pytest
+
+from visnav.navigation.palace import PalaceNavigator
+from visnav.scenarios.schema import load_scenario
+from visnav.sensors.camera import CameraRenderer
+from visnav.sim.loop import Simulation
+
+SHORT = ["mission.start_height_m=14", "mission.settle_s=1"]
+
+
+@pytest.fixture
+def slow_render(monkeypatch):
+    """Every frame takes 15 ms more on the render thread: it is never done when it falls due."""
+    render = CameraRenderer.render
+
+    def slow(self, *a):
+        img = render(self, *a)
+        time.sleep(0.015)
+        return img
+
+    monkeypatch.setattr(CameraRenderer, "render", slow)
+
+
+def _run(sets, defer: bool, monkeypatch=None):
+    sim = Simulation(load_scenario("palace-landing", SHORT + sets, seed=2))
+    sim.defer_deliveries = defer
+    waited = []
+    if monkeypatch is not None:
+        drain = Simulation._drain
+
+        def counting(self, wait):
+            waited.append(len(self._backlog))
+            return drain(self, wait)
+
+        monkeypatch.setattr(Simulation, "_drain", counting)
+    return sim.run(), waited
+
+
+def test_deferred_deliveries_give_the_same_run(slow_render, monkeypatch):
+    # frames at 5 Hz: a frame's delivery waits past the next mission and controller step (10 Hz), which must
+    # see it delivered (at 10 Hz the next frame's sampling settles the backlog first)
+    sets = ["run.duration_s=8", "navigation.mpe.rate_hz=5"]
+    late, waited = _run(sets, True, monkeypatch)
+    monkeypatch.undo()
+    now, _ = _run(sets, False)
+    assert sum(1 for n in waited if n) >= 20  # the frames did wait in the backlog
+    assert late.error is None and now.error is None
+    assert late.log.streams() == now.log.streams()
+    for s in now.log.streams():
+        a, b = late.log.get(s), now.log.get(s)
+        assert a.keys() == b.keys(), s
+        for k in a:
+            same = list(a[k]) == list(b[k]) if b[k].dtype == object else np.array_equal(a[k], b[k], equal_nan=True)
+            assert same, f"{s}.{k}"
+    assert len(now.log.get("tracker")["t"]) >= 20  # frames were tracked
+
+
+def test_a_navigator_error_names_the_step_its_measurement_was_due_at(slow_render, monkeypatch):
+    update = PalaceNavigator.update
+
+    def failing(self, m):
+        if type(m).__name__ == "Frame" and m.t >= 3.0:
+            raise RuntimeError("tracker fell over")
+        return update(self, m)
+
+    monkeypatch.setattr(PalaceNavigator, "update", failing)
+    late, _ = _run(["run.duration_s=8"], True)
+    now, _ = _run(["run.duration_s=8"], False)
+    assert now.error is not None and "tracker fell over" in now.error
+    assert late.error == now.error  # "RuntimeError at t=3.03s: ..." (the frame of t = 3.0 s, 30 ms latency)
+    assert late.log.get("truth")["t"][-1] == now.log.get("truth")["t"][-1]
+
+
+def test_the_switch_interval_is_short_while_frames_render_and_restored_after(monkeypatch):
+    """The render worker takes the GIL back after each OpenCV call: during the run the interpreter hands it over
+    within ``RENDER_SWITCH_INTERVAL_S``; after the run (or an error) the process has its own setting back."""
+    import sys
+
+    from visnav.sim import loop
+
+    seen = []
+    render = CameraRenderer.render
+
+    def spy(self, *a):
+        seen.append(sys.getswitchinterval())
+        return render(self, *a)
+
+    monkeypatch.setattr(CameraRenderer, "render", spy)
+    before = sys.getswitchinterval()
+    res, _ = _run(["run.duration_s=1"], True)
+    assert res.error is None and seen and max(seen) <= loop.RENDER_SWITCH_INTERVAL_S < before
+    assert sys.getswitchinterval() == before
+
+
+def test_a_wrapped_navigator_gets_each_measurement_at_its_step():
+    """``visnav record`` logs the loop step of each delivery and ``--sil`` forwards it in wall-clock time: with a
+    navigator wrapper the loop does not defer."""
+    sc = load_scenario("palace-landing", SHORT + ["run.duration_s=1"], seed=2)
+    assert Simulation(sc).defer_deliveries
+    assert not Simulation(sc, navigator_wrapper=lambda nav: nav).defer_deliveries
