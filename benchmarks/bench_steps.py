@@ -1,4 +1,5 @@
-"""Per-step cost of the 100 Hz blocks: R-MAX model, fixed wing, ESKF predict, INS, position filter, Dryden
+"""Per-step cost of the 100 Hz blocks: R-MAX model, fixed wing, ESKF predict, INS (with and without Earth
+rate), ESKF baro update, PFCM's Hermite arc length, CONDOR's distortion look-up, position filter, Dryden
 gusts; the deck loop's per-step truth (deck motion, relative state, gear point), UKF prediction and LED frame.
 
     PYTHONPATH=src python benchmarks/bench_steps.py [--blocks 15]
@@ -70,6 +71,27 @@ def measure(blocks: int) -> dict:
         st[0] = ins.propagate(st[0], acc, gyr, 0.02)
 
     out["ins_propagate_us"] = _min_block(ins_step, 200, blocks)
+    flat = StrapdownINS(earth_rotation=False, gravity=9.81)  # witas-homing's INS-only twin
+    st2 = [s0]
+
+    def flat_step(i):
+        st2[0] = flat.propagate(st2[0], acc, gyr, 0.02)
+
+    out["ins_flat_propagate_us"] = _min_block(flat_step, 200, blocks)
+    out["eskf_update_baro_us"] = _min_block(lambda i: kf.update_baro(60.0 + 0.01 * (i % 7), 0.5), 200, blocks)
+    from visnav.guidance.hermite import HermiteSegment
+
+    seg = HermiteSegment(np.zeros(3), np.array([80.0, 40.0, -5.0]), np.array([100.0, 0.0, 0.0]),
+                         np.array([60.0, 80.0, 0.0]))
+    out["hermite_arc_length_us"] = _min_block(lambda i: seg.arc_length(0.001 + 0.004 * (i % 200)), 200, blocks)
+    from visnav.geometry.camera import PinholeCamera
+    from visnav.vision.distortion_lut import full_lut, synthetic_board
+    from visnav.vision.rectification import CameraGeometry
+
+    cam = PinholeCamera(640, 480, 640.0, 640.0, 333.5, 231.5, (-0.28, 0.08, 0, 0, 0, 0, 0, 0))
+    lut = full_lut(synthetic_board(cam, 2.0, 0.04), CameraGeometry.from_focal(640, 480, 640.0, 640.0))
+    xs = [(np.array([rng.uniform(-300, 300)]), np.array([rng.uniform(-220, 220)])) for _ in range(200)]
+    out["distortion_lut_correct_us"] = _min_block(lambda i: lut.correct(*xs[i % 200]), 200, blocks)
     pf = PositionFilter(position=np.zeros(3), velocity=np.zeros(3))
     pf.predict(0.0, acc)
     tt = [0.0]

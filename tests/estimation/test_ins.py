@@ -163,3 +163,31 @@ def test_quat_to_euler_scalar_path_matches_vectorised_dcm_to_euler():
     got = np.array([quat_to_euler(q) for q in qs])
     np.testing.assert_allclose(got, ref, atol=1e-12)
     assert got[-1, 2] == pytest.approx(np.pi)
+
+
+def test_flat_earth_path_equals_the_general_path_with_zero_rates():
+    """``earth_rotation=False`` skips the Earth-rate terms (attitude rate C^T w_in, Coriolis) and the ESKF
+    leaves their F blocks at the template's zeros: the same numbers as the general path fed zero rates,
+    state and covariance, bit for bit, over 200 noisy steps."""
+    from visnav.estimation.eskf import EskfConfig, ErrorStateKF
+    from visnav.estimation.ins import NavState, StrapdownINS, euler_to_quat
+
+    class ZeroRates(StrapdownINS):  # the general path (earth_rotation on) with both rates zero
+        def rates_at(self, position, velocity):
+            return np.zeros(3), np.zeros(3)
+
+    rng = np.random.default_rng(4)
+    s0 = NavState(0.0, np.array([3.0, -2.0, -60.0]), np.array([8.0, 3.0, 0.5]), euler_to_quat([0.05, -0.03, 1.0]))
+    cfg = EskfConfig(gravity_mps2=9.81, earth_rotation=False)
+    fast = ErrorStateKF(s0, np.linspace(0.1, 1.0, 12), cfg)
+    ref = ErrorStateKF(s0, np.linspace(0.1, 1.0, 12), cfg)
+    ref.ins = ZeroRates(cfg.lat0_deg, cfg.h0_m, True, 9.81)
+    for _ in range(200):
+        acc = np.array([0.3, -0.2, -9.7]) + 0.2 * rng.standard_normal(3)
+        gyr = np.array([0.01, -0.02, 0.03]) + 0.05 * rng.standard_normal(3)
+        fast.propagate(acc, gyr, 0.02)
+        ref.propagate(acc, gyr, 0.02)
+    for k in ("position", "velocity", "quat"):
+        assert np.array_equal(getattr(fast.x, k), getattr(ref.x, k)), k
+    assert np.array_equal(fast.P, ref.P)
+    assert not np.array_equal(fast.x.position, s0.position)  # it moved

@@ -132,3 +132,23 @@ def test_bad_segments_and_paths_are_named():
         HermitePath.from_segments([[0.0] * 11])
     with pytest.raises(ValueError, match="at least one segment"):
         HermitePath([])
+
+
+def test_arc_length_of_one_pair_equals_the_vector_path():
+    """The scalar ``arc_length(s, s0)`` (the guidance's per-step call) gives the same bits as the
+    vectorized Gauss-Legendre path on random segments, at the ends and in between; numpy floats too."""
+    rng = np.random.default_rng(0)
+    n = 0
+    for _ in range(60):
+        p0 = rng.normal(0, 50, 3)
+        try:
+            sg = HermiteSegment(p0, p0 + rng.normal(0, 80, 3), rng.normal(0, 60, 3), rng.normal(0, 60, 3))
+        except ValueError:  # a random cusp
+            continue
+        for s in [*rng.uniform(0, 1, 20).tolist(), 0.0, 1.0, np.float64(rng.uniform())]:
+            s0 = float(rng.uniform(0, s)) if rng.uniform() < 0.3 else 0.0
+            one = sg.arc_length(s, s0)
+            ref = sg.arc_length(np.array([s]), np.array([s0]))[0]
+            assert type(one) is float and one == ref
+            n += 1
+    assert n > 500

@@ -154,3 +154,26 @@ def test_a_gap_in_the_fixes_restarts_the_window_instead_of_testing_across_it():
     assert (0.5 / c.sigma) ** 2 > c.bound
     assert not c.gps(8.0, np.array([0.5, 0.0]))
     assert c.onset is None and len(c._fixes) == 1
+
+
+def test_same_image_is_array_equal():
+    """The frozen-link comparison (8-byte words for integer images) answers as ``np.array_equal``: a
+    copy is the same, one changed byte anywhere (first, middle, last) is not, other shapes, dtypes,
+    float images (NaN never equal) and a missing previous frame go through the reference."""
+    from visnav.navigation.integrity import same_image
+
+    rng = np.random.default_rng(5)
+    img = rng.integers(0, 256, (48, 64, 3), dtype=np.uint8)
+    assert same_image(img, img.copy()) and np.array_equal(img, img.copy())
+    for idx in ((0, 0, 0), (24, 31, 1), (47, 63, 2)):
+        b = img.copy()
+        b[idx] ^= 1
+        assert not same_image(img, b)
+    assert not same_image(img, None)
+    assert not same_image(img, img[:, :32])  # shapes differ
+    odd = rng.integers(0, 256, (5, 7), dtype=np.uint8)  # 35 bytes: not whole words
+    assert same_image(odd, odd.copy()) and not same_image(odd, odd + 1)
+    f = rng.normal(size=(4, 4))
+    f[0, 0] = np.nan
+    assert same_image(f, f.copy()) == np.array_equal(f, f.copy()) is False
+    assert same_image(img[:, ::2], img[:, ::2].copy())  # not contiguous: the reference path

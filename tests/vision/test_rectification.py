@@ -154,3 +154,24 @@ def test_lut_calibration_corrects_distortion():
     assert np.median(err_ours) < 0.3 and err_ours.max() < 3.0
     # the mirrored quadrant cannot see the crop offset: worse than ours, better than nothing at the edges
     assert np.median(err_th) > 5 * np.median(err_ours)
+
+
+def test_lut_one_point_path_equals_the_interpolator():
+    """``DistortionLUT.correct`` of one point (scalar bilinear, the per-frame call) gives the same bits as
+    the array path (scipy's ``RegularGridInterpolator``), inside the table, on its grid lines and
+    extrapolated beyond it, for both table kinds."""
+    cam = PinholeCamera(W, H, F, F, (W - 1) / 2 + 14.0, (H - 1) / 2 - 8.0, (-0.28, 0.08, 0, 0, 0, 0, 0, 0))
+    board = synthetic_board(cam, 2.0, 0.04)
+    rng = np.random.default_rng(3)
+    for lut in (full_lut(board, GEOM), thesis_lut(board, GEOM)):
+        assert lut._scalar_ok
+        on_grid = np.c_[rng.choice(lut.gx, 40) * W / 2, rng.choice(lut.gy, 40) * H / 2]
+        pts = np.r_[np.c_[rng.uniform(-1.3, 1.3, 400) * W / 2, rng.uniform(-1.3, 1.3, 400) * H / 2], on_grid]
+        xa, ya = lut.correct(pts[:, 0], pts[:, 1])  # array path
+        n_diff = 0
+        for (x, y), ex, ey in zip(pts, xa, ya):
+            x1, y1 = lut.correct(np.array([x]), np.array([y]))
+            assert x1.shape == (1,) and y1.shape == (1,)
+            n_diff += (x1[0] != ex) + (y1[0] != ey)
+        assert n_diff == 0
+    assert np.isnan(lut.correct(np.array([np.nan]), np.array([0.0]))[0][0])  # NaN stays NaN (array path)

@@ -179,23 +179,26 @@ class ErrorStateKF:
             G[BG_, 9:12] = np.eye(3)
         return F, G
 
-    def error_model(self, f_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Continuous F (eq. A.4 / 5.22) and G (eq. A.2) at the current nominal state."""
+    def error_model(self, f_n: np.ndarray, C: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Continuous F (eq. A.4 / 5.22) and G (eq. A.2) at the current nominal state (``C``: its
+        body -> NED DCM when the caller has it already)."""
         n, s = self.n, self.x
-        C = quat_to_dcm(s.quat)
-        w_ie, w_en = self.ins.rates_at(s.position, s.velocity)
-        w_in = w_ie + w_en
-        g = self.ins.gravity_at(s.position)[2]
-        lat, h = self.ins.lat_h(s.position)
-        rn, re = radii_of_curvature(lat)
+        if C is None:
+            C = quat_to_dcm(s.quat)
         F = self._F0.copy()
-        F[R_, R_] = -skew(w_en)
+        if self.ins.earth_rotation:  # (without it the rate blocks stay the template's zeros)
+            w_ie, w_en = self.ins.rates_at(s.position, s.velocity)
+            w_in = w_ie + w_en
+            F[R_, R_] = -skew(w_en)
+            F[V_, V_] = -skew(2.0 * w_ie + w_en)
+            F[E_, E_] = -skew(w_in)
         if self.cfg.gravity_mps2 is None:  # the nominal's gravity depends on height: model it
+            g = self.ins.gravity_at(s.position)[2]
+            lat, h = self.ins.lat_h(s.position)
+            rn, re = radii_of_curvature(lat)
             F[5, 2] = 2.0 * g / (math.sqrt(rn * re) + h)  # vertical gravity gradient (dg/dh)
-        F[V_, V_] = -skew(2.0 * w_ie + w_en)
         F[V_, E_] = -skew(f_n)
         F[V_, BA_] = -C
-        F[E_, E_] = -skew(w_in)
         G = self._G0.copy()
         G[V_, 0:3] = -C
         G[E_, 3:6] = -C
@@ -248,8 +251,9 @@ class ErrorStateKF:
         """Advance nominal state (eq. A.1) and covariance (eq. A.5-A.8) by ``dt`` with IMU
         readings held over the interval."""
         f_b = np.asarray(accel, dtype=float) - self.x.accel_bias
-        self._f_n = quat_to_dcm(self.x.quat) @ f_b
-        F, G = self.error_model(self._f_n)
+        C = quat_to_dcm(self.x.quat)
+        self._f_n = C @ f_b
+        F, G = self.error_model(self._f_n, C)
         Phi, Qk = self.discretize(F, G, dt)
         self.x = self.ins.propagate(self.x, accel, gyro, dt)
         P = Phi @ self.P @ Phi.T + Qk

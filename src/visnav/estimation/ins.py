@@ -244,6 +244,10 @@ class StrapdownINS:
         self.h0 = float(h0_m)
         self.earth_rotation = bool(earth_rotation)
         self.gravity = gravity
+        # constant gravity: the vector once (read-only: propagate only adds it)
+        self._g_const = None if gravity is None else np.array([0.0, 0.0, float(gravity)])
+        if self._g_const is not None:
+            self._g_const.flags.writeable = False
 
     # geodetic position of a local NED point
     def lat_h(self, position) -> tuple[float, float]:
@@ -272,18 +276,25 @@ class StrapdownINS:
             raise ValueError(f"IMU interval dt must be positive and finite, got {dt}")
         f = _check_finite(accel, "accel") - s.accel_bias
         w = _check_finite(gyro, "gyro") - s.gyro_bias
-        w_ie, w_en = self.rates_at(s.position, s.velocity)
-        w_in = w_ie + w_en
-        C = quat_to_dcm(s.quat)
-        # attitude: C' = C [W_ib x] - [w_in x] C, i.e. body increment w_ib - C^T w_in
-        w_nb = w - C.T @ w_in
+        if self.earth_rotation:
+            w_ie, w_en = self.rates_at(s.position, s.velocity)
+            w_in = w_ie + w_en
+            C = quat_to_dcm(s.quat)
+            # attitude: C' = C [W_ib x] - [w_in x] C, i.e. body increment w_ib - C^T w_in
+            w_nb = w - C.T @ w_in
+            coriolis = cross3(2.0 * w_ie + w_en, s.velocity)
+        else:  # flat non-rotating Earth: both rates are zero, nothing to subtract (the same numbers)
+            w_nb, coriolis = w, None
         dq = quat_from_rotvec(w_nb * dt)
         q_mid = quat_mult(s.quat, quat_from_rotvec(w_nb * (0.5 * dt)))
         q_new = quat_mult(s.quat, dq)
         q_new /= math.sqrt(q_new.dot(q_new))  # np.linalg.norm's own formula, without its overhead
         # velocity: specific force through the mid-interval attitude, Coriolis, gravity
-        g = self.gravity_at(s.position)
-        acc = quat_to_dcm(q_mid) @ f - cross3(2.0 * w_ie + w_en, s.velocity) + g
+        g = self._g_const if self._g_const is not None else self.gravity_at(s.position)
+        acc = quat_to_dcm(q_mid) @ f
+        if coriolis is not None:
+            acc = acc - coriolis
+        acc = acc + g
         v_new = s.velocity + acc * dt
         p_new = s.position + 0.5 * (s.velocity + v_new) * dt
         return NavState(s.t + dt, p_new, v_new, q_new, s.accel_bias.copy(), s.gyro_bias.copy())

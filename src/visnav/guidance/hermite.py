@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -26,6 +28,8 @@ HERMITE_BASIS = np.array([[2.0, -2.0, 1.0, 1.0], [-3.0, 3.0, -2.0, -1.0], [0.0, 
                           [1.0, 0.0, 0.0, 0.0]])
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 _GL_X, _GL_W = 0.5 * (_GL_X + 1.0), 0.5 * _GL_W  # nodes and weights on [0, 1]
+_GL_XW = tuple(zip(_GL_X.tolist(), _GL_W.tolist()))
+assert len(_GL_XW) == 16  # HermiteSegment._arc_length_1 sums in numpy's pairwise order for 16 terms
 
 
 def _vec(x: ArrayLike, name: str) -> np.ndarray:
@@ -112,12 +116,38 @@ class HermiteSegment:
 
     def arc_length(self, s: ArrayLike = 1.0, s0: ArrayLike = 0.0) -> np.ndarray | float:
         """Arc length from s0 to s [m] (16-point Gauss-Legendre per call, vectorized over s)."""
+        if isinstance(s, float) and isinstance(s0, (float, int)):  # one pair (the guidance's per-step call)
+            return self._arc_length_1(float(s), float(s0))
         s, s0 = np.asarray(s, float), np.asarray(s0, float)
         h = s - s0
         u = s0[..., None] + h[..., None] * _GL_X  # (..., 16)
         speed = np.linalg.norm(self.tangent(u), axis=-1)
         out = h * np.sum(speed * _GL_W, axis=-1)
         return float(out) if out.ndim == 0 else out
+
+    def _arc_length_1(self, s: float, s0: float) -> float:
+        """:meth:`arc_length` of one (s, s0) in scalar arithmetic: the same products, the norm summed
+        x, y, z left to right and the 16 weighted speeds in numpy's pairwise order (8 partial sums,
+        then a tree), so the same bits (tests/guidance/test_hermite.py)."""
+        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2), _ = self._coeff_rows
+        h = s - s0
+        r = []
+        for x, wt in _GL_XW:
+            u = s0 + h * x
+            t0, t1, t2 = (a0 * u + b0) * u + c0, (a1 * u + b1) * u + c1, (a2 * u + b2) * u + c2
+            r.append(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2) * wt)
+        p = [r[j] + r[j + 8] for j in range(8)]
+        return h * (((p[0] + p[1]) + (p[2] + p[3])) + ((p[4] + p[5]) + (p[6] + p[7])))
+
+    @property
+    def _coeff_rows(self) -> tuple:
+        """(3A, 2B, C, D) as tuples of floats (tangent = (3A u + 2B) u + C), built once."""
+        rows = self.__dict__.get("_rows")
+        if rows is None:
+            A, B, C, D = self.coeffs
+            rows = (tuple((3.0 * A).tolist()), tuple((2.0 * B).tolist()), tuple(C.tolist()), tuple(D.tolist()))
+            object.__setattr__(self, "_rows", rows)
+        return rows
 
     @property
     def length(self) -> float:

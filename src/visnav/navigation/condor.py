@@ -38,6 +38,7 @@ from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
 from visnav.measurements import (AttitudeSample, FixedWingEstimate, Frame, GpsSample, HeadingSample,
                                  Health, NavInit, OperatorClick, PanSample, TargetRangeSample)
 from visnav.navigation.fixedwing import AutopilotNavigator
+from visnav.navigation.integrity import same_image
 from visnav.vision.blob_tracker import BlobTracker
 
 
@@ -81,6 +82,11 @@ _NAN3 = np.full(3, np.nan)
 _NAN3.setflags(write=False)
 _NAN66 = np.full((6, 6), np.nan)
 _NAN66.setflags(write=False)
+_COV_POS3 = _NAN66.copy()  # the GPS covariance's template: NaN, zeros off the position block's diagonal
+_COV_POS3[:3, :3] = 0.0
+_COV_POS3.setflags(write=False)
+_EYE2 = np.eye(2)
+_EYE2.setflags(write=False)
 
 
 def centred(camera, u: float, v: float) -> tuple[float, float]:
@@ -185,7 +191,7 @@ class CondorNavigator(AutopilotNavigator):
             return
         # a live camera's noise never repeats an image bit for bit: a repeat is a frozen video link (issue #18),
         # no fix is made from it (the radius goes stale -> unusable -> the mission's GPS fallback)
-        same = self._last_image is not None and np.array_equal(f.image, self._last_image)
+        same = same_image(f.image, self._last_image)
         self._last_image = f.image
         if same and self.reject_repeated_frames:
             rec["reason"] = "frozen video (the image repeats the previous one)"
@@ -294,8 +300,8 @@ class CondorNavigator(AutopilotNavigator):
             tau = max(t - self.gps_t, 0.0)
             b = self.gps_accel * (self._gps_dt ** 2 / (2.0 * self.gps_gain) + 0.5 * tau * tau)
             var = self._gps_var + b * b
-            cov = np.full((6, 6), np.nan)
-            cov[:3, :3] = np.diag([var, var, var])
+            cov = _COV_POS3.copy()  # (np.full NaN with np.diag([var] * 3) in the position block)
+            cov[0, 0] = cov[1, 1] = cov[2, 2] = var
             return cov
         if self.fix is not None and self.target is not None and math.isfinite(self.fix[4]):
             tf, Rf, psi_vb, pan, head = self.fix
@@ -304,8 +310,8 @@ class CondorNavigator(AutopilotNavigator):
             c, s = math.cos(b), math.sin(b)
             Rot = np.array([[c, -s], [s, c]])
             P = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
-            P = P + (self.carry_sigma * max(t - tf, 0.0)) ** 2 * np.eye(2)
-            cov = np.full((6, 6), np.nan)
+            P = P + (self.carry_sigma * max(t - tf, 0.0)) ** 2 * _EYE2
+            cov = _NAN66.copy()
             cov[:2, :2] = P
             return cov
         return _NAN66

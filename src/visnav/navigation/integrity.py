@@ -220,3 +220,16 @@ class HandoverCheck:
             self.offset, self.t = np.mean(self.run, axis=0), float(t)
             return True
         return False
+
+
+def same_image(a, b) -> bool:
+    """``np.array_equal(a, b)`` of two frames (the frozen-video-link check, issue #18): contiguous
+    images of the same shape and dtype are compared as 8-byte words (the same answer for byte images;
+    ~2x faster per frame), anything else by ``np.array_equal``."""
+    if b is None:
+        return False
+    if (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.shape == b.shape and a.dtype == b.dtype
+            and a.dtype.kind in "ui" and a.nbytes % 8 == 0 and a.flags.c_contiguous and b.flags.c_contiguous):
+        return bool((a.reshape(-1).view(np.uint64) == b.reshape(-1).view(np.uint64)).all())
+    return bool(np.array_equal(a, b))
+

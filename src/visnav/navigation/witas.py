@@ -101,6 +101,10 @@ class _AhrsBackend:
     def state(self):
         return self.f.t, self.f.p.copy(), self.f.v.copy(), self.euler.copy(), self.f.covariance()
 
+    def covariance(self) -> np.ndarray:
+        """``state()[4]`` alone."""
+        return self.f.covariance()
+
 
 class _EskfBackend:
     """The 12-state error-state KF of appendix A (estimation/eskf.py)."""
@@ -141,6 +145,10 @@ class _EskfBackend:
     def state(self):
         x = self.kf.x
         return x.t, x.position.copy(), x.velocity.copy(), x.euler.copy(), self.kf.P[:6, :6].copy()
+
+    def covariance(self) -> np.ndarray:
+        """``state()[4]`` alone (without the attitude's Euler angles)."""
+        return self.kf.P[:6, :6].copy()
 
 
 class WitasNavigator(CommandDispatch):
@@ -203,7 +211,7 @@ class WitasNavigator(CommandDispatch):
         if isinstance(m, ImuSample):
             self._on_imu(m)
         elif isinstance(m, AttitudeSample):
-            if np.all(np.isfinite(m.euler)):
+            if all(map(math.isfinite, np.asarray(m.euler, float).ravel().tolist())):
                 self.att.push(m.t, m.euler)
             else:
                 self.h.rejected_samples += 1
@@ -230,7 +238,8 @@ class WitasNavigator(CommandDispatch):
         return self.att.newest()
 
     def _on_imu(self, m: ImuSample) -> None:
-        if not all(map(math.isfinite, np.concatenate((m.accel, m.gyro), axis=None).tolist())) or (
+        if not all(map(math.isfinite, [*np.asarray(m.accel, float).ravel().tolist(),
+                                       *np.asarray(m.gyro, float).ravel().tolist()])) or (
                 self._last_imu is not None and m.t <= self._last_imu.t):
             self.h.rejected_samples += 1
             return
@@ -442,7 +451,7 @@ class WitasNavigator(CommandDispatch):
         if t is not None:
             extra = 0.0
             if self.backend is not None:
-                P = self.backend.state()[4]
+                P = self.backend.covariance()
                 ic = getattr(self.cfg, "integrity", None)
                 if self.pmf is not None and ic is not None and ic.pmf_in_hpl:
                     extra = float(np.linalg.eigvalsh(self.pmf.estimate()[1]).max())

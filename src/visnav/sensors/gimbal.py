@@ -7,11 +7,16 @@ the optical axis, so that a camera roll is exactly a 2-D rotation of the image (
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import AttitudeSample, PanSample
 from visnav.scalar import clip as _clip
+
+_G_NED = np.array([0.0, 0.0, 9.81])  # what a resting accelerometer's NED specific force lacks
+_G_NED.setflags(write=False)
 
 #: OpenCV camera axes (x right, y down, z optical axis) from camera-body axes (x fwd, y right, z down)
 C_CV_CB = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
@@ -104,12 +109,14 @@ class CameraAhrs:
             if self.lagged is None:
                 self.lagged = true
             self.lagged = self.lagged + (true - self.lagged) * min(1.0, dt / self.lag_s)
-        a = np.asarray(accel_unexplained_ned, float)
-        c, s = np.cos(cam_pan), np.sin(cam_pan)
-        fwd, right = a[0] * c + a[1] * s, -a[0] * s + a[1] * c
+        a0, a1 = float(accel_unexplained_ned[0]), float(accel_unexplained_ned[1])
+        c, s = math.cos(cam_pan), math.sin(cam_pan)
+        fwd, right = a0 * c + a1 * s, -a0 * s + a1 * c
         # a forward acceleration looks like a nose-up vertical: the camera seems tilted down less
-        target = self.accel_gain * np.array([np.arctan2(fwd, 9.81), -np.arctan2(right, 9.81)])
-        self.err += (target - self.err) * min(1.0, dt / self.tau_s)
+        g, k = self.accel_gain, min(1.0, dt / self.tau_s)
+        e0, e1 = self.err.tolist()
+        self.err[0] = e0 + (g * math.atan2(fwd, 9.81) - e0) * k
+        self.err[1] = e1 + (g * -math.atan2(right, 9.81) - e1) * k
         if self.noise > 0 and self.noise_tau > 0:
             a = np.exp(-dt / self.noise_tau)
             self.gm = a * self.gm + self.noise * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
@@ -122,12 +129,12 @@ class CameraAhrs:
         s = truth_at(t)
         pan, tilt, roll = world.gimbal.camera_attitude(s.euler)
         if self._t is not None and t > self._t:
-            phi, th, psi = s.euler
-            a_ned = euler_to_dcm(s.euler) @ s.specific_force + np.array([0.0, 0.0, 9.81])
-            _, q, r = s.body_rates
-            psidot = (q * np.sin(phi) + r * np.cos(phi)) / np.cos(th)
-            comp = psidot * world.airspeed(t) * np.array([-np.sin(psi), np.cos(psi), 0.0])
-            self.step(t - self._t, a_ned - comp, pan, tilt, roll)
+            phi, th, psi = s.euler.tolist()
+            an, ae, _ = (euler_to_dcm(s.euler) @ s.specific_force + _G_NED).tolist()
+            _, q, r = s.body_rates.tolist()
+            psidot = (q * math.sin(phi) + r * math.cos(phi)) / math.cos(th)
+            k = psidot * world.airspeed(t)  # centripetal compensation across the track (N, E; D unused)
+            self.step(t - self._t, (an - k * -math.sin(psi), ae - k * math.cos(psi)), pan, tilt, roll)
         self._t = t
         tm, rm = self.read(tilt, roll)
         return AttitudeSample(t=t, euler=np.array([rm, tm, np.nan]), sensor="camera")

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from visnav.geometry.rotations import euler_to_dcm
 from visnav.vehicles.base import Environment
 from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
@@ -317,8 +318,6 @@ class FixedWingModel:
 
 
 def _dcm(e) -> np.ndarray:
-    from visnav.geometry.rotations import euler_to_dcm
-
     return euler_to_dcm(np.asarray(e, float))
 
 
