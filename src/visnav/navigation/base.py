@@ -56,3 +56,19 @@ def propagate(position, velocity, accel, dt: float) -> tuple[np.ndarray, np.ndar
         return p.copy(), v.copy()
     a = np.asarray(accel, float)
     return p + v * dt + 0.5 * a * (dt * dt), v + a * dt
+
+
+class FrozenFrameCheck:
+    """A live camera's noise never repeats an image bit for bit: a frame identical to the previous one is a
+    frozen video link (issue #18), not a view. ``repeated(image)`` says so and remembers the image; the
+    navigators (deck, CONDOR, WITAS) fuse nothing from a repeated frame."""
+
+    def __init__(self) -> None:
+        self._last: np.ndarray | None = None
+        self.count = 0  # repeated frames seen
+
+    def repeated(self, image: np.ndarray) -> bool:
+        same = self._last is not None and np.array_equal(image, self._last)
+        self._last = image
+        self.count += int(same)
+        return same
