@@ -235,18 +235,21 @@ class GyroAttitudeCheck:
     with, ``dR_g = prod exp([w dt]x)``, against the rotation between the autopilot's attitudes at both
     ends, ``dR_a = C_a(t0)^T C_a(t1)`` (``C``: body -> NED). ``d = log(dR_a^T dR_g)`` [rad] is zero within
     ``sigma^2 = 2 att_sigma^2 + gyro_noise^2 dt T + (gyro_bias T)^2`` per axis (the attitude noise at both
-    ends, the gyro's white noise and turn-on bias over T) and ``|d|^2 / sigma^2`` is chi-square(3). Above
+    ends, the gyro's white noise and turn-on bias over T) + ``(att_bias |log dR_a|)^2`` (a roll / pitch bias of
+    the attitude solution is not a constant rotation: it shows in proportion to how much the vehicle turned)
+    and ``|d|^2 / sigma^2`` is chi-square(3). Above
     the ``1 - alpha`` quantile the gyros are not to be trusted (a bias step): ``rate`` = ``|d| / T`` is
     what they are off by, ``t0`` the start of the window that flagged it (the fault began after).
-    A constant offset between the two attitudes (an initial attitude error) cancels: only rotations over
-    the window are compared.
+    A heading offset between the two attitudes cancels: only rotations over the window are compared.
     """
 
     def __init__(self, alpha: float = 1e-7, window_s: float = 1.0, att_sigma_rad: float = math.radians(0.05),
-                 gyro_noise: float = 2e-3, gyro_bias: float = 1e-3, dt: float = 0.02):
+                 gyro_noise: float = 2e-3, gyro_bias: float = 1e-3, dt: float = 0.02,
+                 att_bias_rad: float = math.radians(0.2)):
         self.bound = chi2_bound(alpha, 3)
         self.window_s = float(window_s)
         self.sigma2 = 2 * att_sigma_rad**2 + gyro_noise**2 * dt * window_s + (gyro_bias * window_s) ** 2
+        self.att_bias = float(att_bias_rad)
         self._R = np.eye(3)
         self._q: deque = deque()  # (t, cumulative gyro rotation at t)
         self.last_stat = 0.0
@@ -282,7 +285,8 @@ class GyroAttitudeCheck:
             return False
         dRa = euler_to_dcm(e0).T @ euler_to_dcm(e1)
         d = Rotation.from_matrix(dRa.T @ (R0.T @ R1)).as_rotvec()
-        self.last_stat = float(d @ d) / self.sigma2
+        turned = float(np.linalg.norm(Rotation.from_matrix(dRa).as_rotvec()))
+        self.last_stat = float(d @ d) / (self.sigma2 + (self.att_bias * turned) ** 2)
         if self.last_stat > self.bound:
             self.detected_t, self.t0, self.d = float(t1), float(t0), d
             self.rate = float(np.linalg.norm(d)) / (t1 - t0)

@@ -235,6 +235,8 @@ class WitasNavigator(CommandDispatch):
             if self._frozen.repeated(m.image):
                 self.integrity.suspect("frozen", f"frozen camera ({self._frozen.count} frames repeated the "
                                        "previous one: not fused)", lambda _t: 0.0)
+                if self.backend is not None:
+                    self._process_frames()  # the live frames before it
                 return
             self.integrity.clear("frozen")
             if self.backend is not None:
@@ -349,8 +351,9 @@ class WitasNavigator(CommandDispatch):
                                     sigma_v=sv)
         self.backend.offset = off
         self.gyro_check = None
-        why = (f"gyros {math.degrees(g.rate):.2f} deg/s off the autopilot's attitude (chi2(3) {g.last_stat:.0f} > "
-               f"{g.bound:.0f} by {g.detected_t:.1f} s): gyros excluded, navigating on the autopilot's attitude")
+        why = (f"gyros turned {math.degrees(float(np.linalg.norm(g.d))):.2f} deg more than the autopilot's attitude "
+               f"over {T:.1f} s (chi2(3) {g.last_stat:.0f} > {g.bound:.0f} at {g.detected_t:.1f} s): gyros excluded, "
+               "navigating on the autopilot's attitude")
         self.integrity.suspect("gyro", why, lambda _t, dp=dp: dp)
         self._note(f"{t:.1f}s {why}")
 
