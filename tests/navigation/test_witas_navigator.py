@@ -65,7 +65,9 @@ def test_frozen_frame_is_dropped_and_degrades_until_a_live_frame():
     for k in range(3):
         nav.update(Frame(3.2 + 0.2 * k, img.copy()))  # the same bits: dropped, never reaches the odometry
         _hover(nav, 3.2 + 0.2 * k, 3.4 + 0.2 * k, gps=False)
-    assert nav.n_frames == 1 and nav._frozen.count == 3
+    assert nav.n_frames == 3 and nav._frozen.count == 3  # counted as frames (the last one queued), measured nothing
+    assert nav.skipped_odometry >= 3 and nav.registrations == 0
+    assert "frozen camera (frame repeated)" in " ".join(nav.h.notes)
     h = nav.health(3.8)
     assert h.integrity != "ok" and "frozen camera (3 frames" in h.integrity_reason
     live = img.copy()
@@ -73,7 +75,7 @@ def test_frozen_frame_is_dropped_and_degrades_until_a_live_frame():
     nav.update(Frame(3.8, live))
     _hover(nav, 3.8, 4.0, gps=False)
     nav.update(Frame(4.0, img))
-    assert nav.n_frames == 2
+    assert nav.n_frames == 5
     assert "frozen" not in nav.health(4.0).integrity_reason
 
 

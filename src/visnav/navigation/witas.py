@@ -170,7 +170,7 @@ class WitasNavigator(CommandDispatch):
         self.odo_track: np.ndarray | None = None
         self.last_gps: GpsSample | None = None
         self.baro: BaroSample | None = None
-        self.frames: deque[Frame] = deque(maxlen=8)
+        self.frames: deque[tuple[Frame, bool]] = deque(maxlen=8)  # (frame, frozen)
         self.n_frames = 0
         self.t_vision: float | None = None
         self.h = Health(source="gps")
@@ -232,15 +232,14 @@ class WitasNavigator(CommandDispatch):
             # a frame bit-identical to the previous one is a frozen video link (issue #18): not a view of
             # no motion. It is a camera gap (no odometry, no registration, the filter runs on INS + baro and
             # its HPL grows) and the state is degraded until a live frame comes
-            if self._frozen.repeated(m.image):
+            frozen = self._frozen.repeated(m.image)
+            if frozen:
                 self.integrity.suspect("frozen", f"frozen camera ({self._frozen.count} frames repeated the "
                                        "previous one: not fused)", lambda _t: 0.0)
-                if self.backend is not None:
-                    self._process_frames()  # the live frames before it
-                return
-            self.integrity.clear("frozen")
+            else:
+                self.integrity.clear("frozen")
             if self.backend is not None:
-                self.frames.append(m)
+                self.frames.append((m, frozen))
                 self._process_frames()
 
     def _ahrs(self):
@@ -385,13 +384,16 @@ class WitasNavigator(CommandDispatch):
     # ------------------------------------------------------------------ vision
     def _process_frames(self) -> None:
         while self.frames:
-            f = self.frames[0]
+            f, frozen = self.frames[0]
             if self.hist.k == 0 or self.hist.newest_t < f.t:
                 return  # the filter has not reached the frame's instant yet
             self.frames.popleft()
-            self._vision(f)
+            self._vision(f, frozen)
 
-    def _vision(self, f: Frame) -> None:
+    def _vision(self, f: Frame, frozen: bool = False) -> None:
+        """One frame; a ``frozen`` one (a repeat of the previous image) is a camera gap: no odometry and no
+        registration, the PMF carried on by the filter's own displacement (so that it follows the vehicle),
+        the odometry restarted on the next live frame."""
         c = self.cfg
         look = self.hist.at(f.t)
         if look is None:
@@ -401,7 +403,11 @@ class WitasNavigator(CommandDispatch):
         cam, C_cn = self.mount.camera_pose(p, C_bn)
         height = -float(cam[2])
         self.n_frames += 1
-        step = self.vo.step(f.t, f.image, C_cn, height)
+        if frozen:
+            self.vo.restart()
+            step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "frozen camera (frame repeated)")
+        else:
+            step = self.vo.step(f.t, f.image, C_cn, height)
         if step is None:  # the tracker (re)started on this frame: no displacement measured
             step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "tracker restarted (no features before)")
         look0 = self.hist.at(f.t - 1.0 / c.odometry_hz)
@@ -432,7 +438,7 @@ class WitasNavigator(CommandDispatch):
                       n_outliers=step.n_outliers, displacement=np.nan_to_num(step.displacement[:2]),
                       position=self.odo_track.copy(), height=height)
         registered, peak, window = False, float("nan"), float("nan")
-        if self.n_frames % c.registration_every == 0:
+        if self.n_frames % c.registration_every == 0 and not frozen:
             mean, P = self.pmf.estimate()
             sig = math.sqrt(max(np.linalg.eigvalsh(P).max(), 0.0))
             window = float(np.clip(c.window_sigmas * sig + 2.0, c.window_min_m, c.window_max_m))
