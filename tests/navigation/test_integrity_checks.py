@@ -177,3 +177,44 @@ def test_same_image_is_array_equal():
     f[0, 0] = np.nan
     assert same_image(f, f.copy()) == np.array_equal(f, f.copy()) is False
     assert same_image(img[:, ::2], img[:, ::2].copy())  # not contiguous: the reference path
+def _rotate(check, bias, t_end=20.0, t_fault=10.0, offset=(0.0, 0.0, 0.0), seed=0, att_deg=0.03):
+    """A vehicle turning (yaw 0.27 rad/s) and rocking; the autopilot's attitude at 50 Hz with ``att_deg`` noise
+    (and a constant ``offset``); the gyros at 50 Hz with 2e-3 rad/s noise and ``bias`` from ``t_fault``.
+    Returns (detection time or None, test statistics before it)."""
+    from scipy.spatial.transform import Rotation
+
+    from visnav.geometry.rotations import dcm_to_euler, euler_to_dcm
+
+    rng = np.random.default_rng(seed)
+    C, att, t, dt, stats = euler_to_dcm([0.1, -0.05, 1.0]), {}, 0.0, 0.02, []
+    for k in range(int(t_end / dt)):
+        w = np.array([0.2 * math.sin(0.5 * t), 0.1 * math.cos(0.3 * t), 0.27])
+        t = round(t + dt, 6)
+        C = C @ Rotation.from_rotvec(w * dt).as_matrix()
+        att[t] = dcm_to_euler(C) + np.asarray(offset) + math.radians(att_deg) * rng.standard_normal(3)
+        check.gyro(t, w + 2e-3 * rng.standard_normal(3) + (bias if t > t_fault else 0.0), dt)
+        if k % 5 == 0:
+            if check.check(lambda ti: att.get(round(ti, 6))):
+                return t, np.array(stats)
+            stats.append(check.last_stat)
+    return None, np.array(stats)
+
+
+def test_gyro_attitude_check_against_chi2_and_a_bias_step():
+    from visnav.navigation.integrity import GyroAttitudeCheck
+
+    g = GyroAttitudeCheck(alpha=1e-7, window_s=1.0, att_sigma_rad=math.radians(0.03), gyro_noise=2e-3,
+                          gyro_bias=0.0, dt=0.02, att_bias_rad=0.0)
+    assert g.bound == pytest.approx(chi2.ppf(1 - 1e-7, 3), rel=1e-12)
+    det, stats = _rotate(g, np.zeros(3), t_end=120.0, offset=(0.0, 0.0, 0.3))  # a heading offset cancels
+    assert det is None
+    # with the model's own sigmas the statistic is chi-square(3): mean 3, 95 % quantile 7.81
+    assert np.mean(stats) == pytest.approx(3.0, rel=0.15)
+    assert np.mean(stats > chi2.ppf(0.95, 3)) == pytest.approx(0.05, abs=0.025)
+    det, _ = _rotate(GyroAttitudeCheck(), np.radians([0.5, 0.5, 0.5]))
+    assert det is not None and 10.0 < det <= 11.0
+    det, _ = _rotate(GyroAttitudeCheck(), np.radians([0.05, 0.0, 0.0]))  # inside the turn-on bias: not a fault
+    assert det is None
+    # a roll / pitch bias of the attitude solution (0.15 deg) over the turns: inside the att_bias term
+    det, _ = _rotate(GyroAttitudeCheck(), np.zeros(3), t_end=60.0, offset=(0.0026, -0.0026, 0.0))
+    assert det is None

@@ -56,3 +56,31 @@ def propagate(position, velocity, accel, dt: float) -> tuple[np.ndarray, np.ndar
         return p.copy(), v.copy()
     a = np.asarray(accel, float)
     return p + v * dt + 0.5 * a * (dt * dt), v + a * dt
+
+
+def same_image(a, b) -> bool:
+    """``np.array_equal(a, b)`` of two frames (the frozen-video-link check, issue #18): contiguous
+    images of the same shape and dtype are compared as 8-byte words (the same answer for byte images;
+    ~2x faster per frame), anything else by ``np.array_equal``."""
+    if b is None:
+        return False
+    if (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.shape == b.shape and a.dtype == b.dtype
+            and a.dtype.kind in "ui" and a.nbytes % 8 == 0 and a.flags.c_contiguous and b.flags.c_contiguous):
+        return bool((a.reshape(-1).view(np.uint64) == b.reshape(-1).view(np.uint64)).all())
+    return bool(np.array_equal(a, b))
+
+
+class FrozenFrameCheck:
+    """A live camera's noise never repeats an image bit for bit: a frame identical to the previous one is a
+    frozen video link (issue #18), not a view. ``repeated(image)`` says so and remembers the image; the
+    navigators (deck, CONDOR, WITAS) fuse nothing from a repeated frame."""
+
+    def __init__(self) -> None:
+        self._last: np.ndarray | None = None
+        self.count = 0  # repeated frames seen
+
+    def repeated(self, image: np.ndarray) -> bool:
+        same = same_image(image, self._last)
+        self._last = image
+        self.count += int(same)
+        return same

@@ -37,8 +37,8 @@ import numpy as np
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
 from visnav.measurements import (AttitudeSample, FixedWingEstimate, Frame, GpsSample, HeadingSample,
                                  Health, NavInit, OperatorClick, PanSample, TargetRangeSample)
+from visnav.navigation.base import FrozenFrameCheck
 from visnav.navigation.fixedwing import AutopilotNavigator
-from visnav.navigation.integrity import same_image
 from visnav.vision.blob_tracker import BlobTracker
 
 
@@ -129,7 +129,7 @@ class CondorNavigator(AutopilotNavigator):
         self.pan: PanSample | None = None
         self.uplink: list[TargetRangeSample] = []
         self.last_vision: dict | None = None
-        self._last_image: np.ndarray | None = None  # the previous frame's image (the frozen-link check)
+        self._frozen = FrozenFrameCheck()  # the previous frame's image (the frozen-link check)
         self.reject_repeated_frames = bool(reject_repeated_frames)
         # on board
         self.gps_pos: np.ndarray | None = None
@@ -191,8 +191,7 @@ class CondorNavigator(AutopilotNavigator):
             return
         # a live camera's noise never repeats an image bit for bit: a repeat is a frozen video link (issue #18),
         # no fix is made from it (the radius goes stale -> unusable -> the mission's GPS fallback)
-        same = same_image(f.image, self._last_image)
-        self._last_image = f.image
+        same = self._frozen.repeated(f.image)
         if same and self.reject_repeated_frames:
             rec["reason"] = "frozen video (the image repeats the previous one)"
             return

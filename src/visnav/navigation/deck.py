@@ -43,7 +43,7 @@ from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
 from visnav.estimation.ukf import UnscentedKalmanFilter
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavInit
-from visnav.navigation.base import CommandDispatch
+from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
 
 G = 9.81
@@ -165,7 +165,7 @@ class DeckNavigator(CommandDispatch):
         self.recorder = recorder
         self.stats = DeckNavStats()
         self.integrity = IntegrityMonitor(config.integrity)
-        self._last_image: np.ndarray | None = None  # the previous frame's image (the frozen-link check)
+        self._frozen = FrozenFrameCheck()  # the previous frame's image (the frozen-link check)
         self.ukf: UnscentedKalmanFilter | None = None
         self.bearing_var, self.rate_var = (s**2 for s in config.acquisition_sigmas)
         self._t: float | None = None  # time of the filter's state
@@ -331,9 +331,7 @@ class DeckNavigator(CommandDispatch):
         t = float(f.t)
         # a live camera's noise never repeats an image bit for bit: a repeat is a frozen link, not a view
         # (issue #18); nothing is fused, so the navigator goes stale -> unusable as with no frame at all
-        same = (self.cfg.reject_repeated_frames and self._last_image is not None
-                and np.array_equal(f.image, self._last_image))
-        self._last_image = f.image
+        same = self._frozen.repeated(f.image) and self.cfg.reject_repeated_frames
         if same:
             self.stats.frames_frozen += 1
             self.integrity.record(t, "bearing", float("nan"), 0, False)

@@ -15,11 +15,14 @@ from dataclasses import replace
 from typing import Callable
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 from visnav.estimation.integrity import IntegrityMonitor
+from visnav.geometry.rotations import euler_to_dcm
 from visnav.log_schema import register_stream
 from visnav.measurements import Health
+from visnav.navigation.base import same_image  # noqa: F401  (the frozen-link check; re-exported)
 
 #: integrity state -> the code logged in ``status.integrity`` and ``integrity_event.state``
 STATE_CODES = {"ok": 0, "degraded": 1, "unusable": 2}
@@ -48,6 +51,10 @@ class NavIntegrity:
         ``reason`` and the HPL grows by ``extra_hpl_m(t)`` [m] (the largest of the suspicions' terms: they
         bound the same position error). Latched for the rest of the flight."""
         self._suspect[name] = (reason, extra_hpl_m)
+
+    def clear(self, name: str) -> None:
+        """A transient fault is over (a frozen camera that runs again): its suspicion no longer holds."""
+        self._suspect.pop(name, None)
 
     @property
     def suspicions(self) -> dict[str, str]:
@@ -222,14 +229,73 @@ class HandoverCheck:
         return False
 
 
-def same_image(a, b) -> bool:
-    """``np.array_equal(a, b)`` of two frames (the frozen-video-link check, issue #18): contiguous
-    images of the same shape and dtype are compared as 8-byte words (the same answer for byte images;
-    ~2x faster per frame), anything else by ``np.array_equal``."""
-    if b is None:
-        return False
-    if (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.shape == b.shape and a.dtype == b.dtype
-            and a.dtype.kind in "ui" and a.nbytes % 8 == 0 and a.flags.c_contiguous and b.flags.c_contiguous):
-        return bool((a.reshape(-1).view(np.uint64) == b.reshape(-1).view(np.uint64)).all())
-    return bool(np.array_equal(a, b))
 
+class GyroAttitudeCheck:
+    """Do the navigation gyros agree with the autopilot's attitude solution? (issue #18)
+
+    Over the last ``window_s`` the body rotation integrated from the gyro rates the filter propagates
+    with, ``dR_g = prod exp([w dt]x)``, against the rotation between the autopilot's attitudes at both
+    ends, ``dR_a = C_a(t0)^T C_a(t1)`` (``C``: body -> NED). ``d = log(dR_a^T dR_g)`` [rad] is zero within
+    ``sigma^2 = 2 att_sigma^2 + gyro_noise^2 dt T + (gyro_bias T)^2`` per axis (the attitude noise at both
+    ends, the gyro's white noise and turn-on bias over T) + ``(att_bias |log dR_a|)^2`` (a roll / pitch bias of
+    the attitude solution is not a constant rotation: it shows in proportion to how much the vehicle turned)
+    and ``|d|^2 / sigma^2`` is chi-square(3). Above
+    the ``1 - alpha`` quantile the gyros are not to be trusted (a bias step): ``rate`` = ``|d| / T`` is
+    what they are off by, ``t0`` the start of the window that flagged it (the fault began after).
+    A heading offset between the two attitudes cancels: only rotations over the window are compared.
+    """
+
+    def __init__(self, alpha: float = 1e-7, window_s: float = 1.0, att_sigma_rad: float = math.radians(0.05),
+                 gyro_noise: float = 2e-3, gyro_bias: float = 1e-3, dt: float = 0.02,
+                 att_bias_rad: float = math.radians(0.2)):
+        self.bound = chi2_bound(alpha, 3)
+        self.window_s = float(window_s)
+        self.sigma2 = 2 * att_sigma_rad**2 + gyro_noise**2 * dt * window_s + (gyro_bias * window_s) ** 2
+        self.att_bias = float(att_bias_rad)
+        self._R = np.eye(3)
+        self._q: deque = deque()  # (t, cumulative gyro rotation at t)
+        self.last_stat = 0.0
+        self.detected_t: float | None = None
+        self.t0: float | None = None
+        self.rate = 0.0
+        self.d = np.zeros(3)
+
+    def gyro(self, t: float, w, dt: float) -> None:
+        """One propagation step of the filter: body rates ``w`` [rad/s] held over ``dt`` ending at ``t``."""
+        self._R = self._R @ Rotation.from_rotvec(np.asarray(w, float) * dt).as_matrix()
+        self._q.append((float(t), self._R.copy()))
+        while len(self._q) > 2 and self._q[1][0] <= t - 2.0 * self.window_s:
+            self._q.popleft()
+
+    def check(self, attitude_at: Callable[[float], np.ndarray | None]) -> bool:
+        """The test on the newest window the attitude solution covers (``attitude_at(t)``: Euler angles
+        [rad] or None); True when it fails."""
+        q = self._q
+        for k in range(len(q) - 1, 0, -1):
+            t1, R1 = q[k]
+            e1 = attitude_at(t1)
+            if e1 is not None:
+                break
+        else:
+            return False
+        j = next((i for i in range(k) if q[i][0] >= t1 - self.window_s - 1e-9), None)
+        if j is None or t1 - q[j][0] < 0.9 * self.window_s:
+            return False
+        t0, R0 = q[j]
+        e0 = attitude_at(t0)
+        if e0 is None:
+            return False
+        dRa = euler_to_dcm(e0).T @ euler_to_dcm(e1)
+        d = Rotation.from_matrix(dRa.T @ (R0.T @ R1)).as_rotvec()
+        turned = float(np.linalg.norm(Rotation.from_matrix(dRa).as_rotvec()))
+        self.last_stat = float(d @ d) / (self.sigma2 + (self.att_bias * turned) ** 2)
+        if self.last_stat > self.bound:
+            self.detected_t, self.t0, self.d = float(t1), float(t0), d
+            self.rate = float(np.linalg.norm(d)) / (t1 - t0)
+            return True
+        return False
+
+
+register_stream("gyro_check", stat=("1", "", "gyro / autopilot-attitude rotation test |d|^2 / sigma^2 over the "
+                                                "window (chi-square(3) when fault-free; "
+                                                "navigation/integrity.GyroAttitudeCheck)"))

@@ -36,8 +36,9 @@ from visnav.estimation.position_filter import PositionFilter, accel_ned
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
                                  NavEstimate, NavInit)
-from visnav.navigation.base import CommandDispatch, propagate
-from visnav.navigation.integrity import HandoverCheck, NavIntegrity, gps_check_from, watch_gps
+from visnav.navigation.base import CommandDispatch, FrozenFrameCheck, propagate
+from visnav.navigation.integrity import (GyroAttitudeCheck, HandoverCheck, NavIntegrity, gps_check_from,
+                                        watch_gps)
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
 from visnav.log_schema import register_stream
@@ -177,7 +178,7 @@ class WitasNavigator(CommandDispatch):
         self.odo_track: np.ndarray | None = None
         self.last_gps: GpsSample | None = None
         self.baro: BaroSample | None = None
-        self.frames: deque[Frame] = deque(maxlen=8)
+        self.frames: deque[tuple[Frame, bool]] = deque(maxlen=8)  # (frame, frozen)
         self.n_frames = 0
         self.t_vision: float | None = None
         self.h = Health(source="gps")
@@ -196,6 +197,12 @@ class WitasNavigator(CommandDispatch):
         self.handover = (HandoverCheck(ic.handover_alpha, ic.handover_updates)
                          if ic is not None and getattr(ic, "handover_check", False) else None)
         self._odo_var = 0.0  # variance [m^2] per axis of the odometry track from the hand-over
+        self._frozen = FrozenFrameCheck()  # frames repeating the previous one (a frozen link): dropped
+        # the ESKF's gyros against the autopilot's attitude solution (a gyro bias step): None when off
+        self.gyro_check = (GyroAttitudeCheck(ic.gyro_check_alpha, ic.gyro_check_window_s,
+                                             math.radians(ic.gyro_check_attitude_sigma_deg))
+                           if ic is not None and getattr(ic, "gyro_check", False) else None)
+        self._gyro_steps = 0
 
     def initialize(self, init: NavInit) -> None:
         """Start the GPS-phase filter at an explicit pose (otherwise it starts at the first GPS fix)."""
@@ -230,8 +237,17 @@ class WitasNavigator(CommandDispatch):
                 self.backend.update_heading(m.heading, math.radians(self.cfg.compass_sigma_deg))
                 self.integrity.record(m.t, "heading", *self.backend.last)
         elif isinstance(m, Frame):
+            # a frame bit-identical to the previous one is a frozen video link (issue #18): not a view of
+            # no motion. It is a camera gap (no odometry, no registration, the filter runs on INS + baro and
+            # its HPL grows) and the state is degraded until a live frame comes
+            frozen = self._frozen.repeated(m.image)
+            if frozen:
+                self.integrity.suspect("frozen", f"frozen camera ({self._frozen.count} frames repeated the "
+                                       "previous one: not fused)", lambda _t: 0.0)
+            else:
+                self.integrity.clear("frozen")
             if self.backend is not None:
-                self.frames.append(m)
+                self.frames.append((m, frozen))
                 self._process_frames()
 
     def _ahrs(self):
@@ -261,6 +277,8 @@ class WitasNavigator(CommandDispatch):
             self.backend.propagate(m.t, acc, gyr, dt, e)
             t, p, v, eul, _ = self.backend.state()
             self.hist.push(t, np.concatenate((p, eul)))
+            if self.gyro_check is not None and isinstance(self.backend, _EskfBackend):
+                self._check_gyro(m.t, gyr, dt)
             self._ins_only_step(m.t, acc, gyr, dt, e)
         elif self.gps_filter.initialized and e is not None:
             self.gps_filter.predict(m.t, a_ned := accel_ned(euler_to_dcm(e), m.accel))
@@ -311,6 +329,42 @@ class WitasNavigator(CommandDispatch):
         self.integrity.start(t)
         self.recorder("vision_engaged", t, position=f.p.copy(), velocity=f.v.copy(), euler=e + err)
 
+    def _check_gyro(self, t: float, gyr, dt: float) -> None:
+        """The gyro / autopilot-attitude test (10 Hz); on a failure the gyros are excluded: the navigator goes
+        on with the position filter on the autopilot's attitude (the ``ahrs`` backend), from the ESKF's
+        position and velocity, its attitude offset to the autopilot's kept from before the window."""
+        g = self.gyro_check
+        g.gyro(t, gyr, dt)
+        self._gyro_steps += 1
+        if self._gyro_steps % max(1, round(self.cfg.ins_rate_hz / 10.0)):
+            return
+        newest = self.att.newest_t if self.att.k else -math.inf
+        failed = g.check(lambda ti: self.att.at(ti) if ti <= newest + 1e-9 else None)
+        self.recorder("gyro_check", t, stat=g.last_stat)
+        if not failed:
+            return
+        tb, p, v, eul, P = self.backend.state()
+        look, a0 = self.hist.at(g.t0), self.att.at(g.t0)
+        off = np.zeros(3)
+        if look is not None and a0 is not None:
+            off = look[3:] - a0
+            off[2] = (off[2] + math.pi) % (2 * math.pi) - math.pi
+        T = g.detected_t - g.t0
+        # the tilt error grew ~linearly over the window: velocity error g rate T^2 / 2, position g rate T^3 / 6
+        dv, dp = 9.81 * g.rate * T * T / 2, 9.81 * g.rate * T**3 / 6
+        sp = math.sqrt(float(np.max(np.diag(P)[:3]))) + dp
+        sv = math.sqrt(float(np.max(np.diag(P)[3:6]))) + dv
+        ahrs = self._ahrs()
+        self.backend = _AhrsBackend(tb, p, v, (ahrs if ahrs is not None else eul - off) + off, sigma_p=sp,
+                                    sigma_v=sv)
+        self.backend.offset = off
+        self.gyro_check = None
+        why = (f"gyros turned {math.degrees(float(np.linalg.norm(g.d))):.2f} deg more than the autopilot's attitude "
+               f"over {T:.1f} s (chi2(3) {g.last_stat:.0f} > {g.bound:.0f} at {g.detected_t:.1f} s): gyros excluded, "
+               "navigating on the autopilot's attitude")
+        self.integrity.suspect("gyro", why, lambda _t, dp=dp: dp)
+        self._note(f"{t:.1f}s {why}")
+
     # ------------------------------------------------------------------ INS-only comparison track
     def _init_ins_only(self, t, p, v, e) -> None:
         try:
@@ -339,13 +393,16 @@ class WitasNavigator(CommandDispatch):
     # ------------------------------------------------------------------ vision
     def _process_frames(self) -> None:
         while self.frames:
-            f = self.frames[0]
+            f, frozen = self.frames[0]
             if self.hist.k == 0 or self.hist.newest_t < f.t:
                 return  # the filter has not reached the frame's instant yet
             self.frames.popleft()
-            self._vision(f)
+            self._vision(f, frozen)
 
-    def _vision(self, f: Frame) -> None:
+    def _vision(self, f: Frame, frozen: bool = False) -> None:
+        """One frame; a ``frozen`` one (a repeat of the previous image) is a camera gap: no odometry and no
+        registration, the PMF carried on by the filter's own displacement (so that it follows the vehicle),
+        the odometry restarted on the next live frame."""
         c = self.cfg
         look = self.hist.at(f.t)
         if look is None:
@@ -355,7 +412,11 @@ class WitasNavigator(CommandDispatch):
         cam, C_cn = self.mount.camera_pose(p, C_bn)
         height = -float(cam[2])
         self.n_frames += 1
-        step = self.vo.step(f.t, f.image, C_cn, height)
+        if frozen:
+            self.vo.restart()
+            step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "frozen camera (frame repeated)")
+        else:
+            step = self.vo.step(f.t, f.image, C_cn, height)
         if step is None:  # the tracker (re)started on this frame: no displacement measured
             step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "tracker restarted (no features before)")
         look0 = self.hist.at(f.t - 1.0 / c.odometry_hz)
@@ -386,7 +447,7 @@ class WitasNavigator(CommandDispatch):
                       n_outliers=step.n_outliers, displacement=np.nan_to_num(step.displacement[:2]),
                       position=self.odo_track.copy(), height=height)
         registered, peak, window = False, float("nan"), float("nan")
-        if self.n_frames % c.registration_every == 0:
+        if self.n_frames % c.registration_every == 0 and not frozen:
             mean, P = self.pmf.estimate()
             sig = math.sqrt(max(np.linalg.eigvalsh(P).max(), 0.0))
             window = float(np.clip(c.window_sigmas * sig + 2.0, c.window_min_m, c.window_max_m))

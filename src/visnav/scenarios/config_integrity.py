@@ -77,6 +77,14 @@ class WitasIntegrityConfig(GpsCheckBlock):
                                  "the Kalman filter kept in the hand-over frame (navigation/integrity.HandoverCheck)")
     handover_alpha: float = Field(1e-4, gt=0, lt=0.5, description="level of the hand-over test (chi-square(2))")
     handover_updates: int = Field(3, ge=1, le=100, description="registrations in a row above the bound to latch")
+    gyro_check: bool = Field(True, description="ESKF backend: test the gyros against the autopilot's attitude "
+                             "solution; on a failure (a gyro bias step) exclude them and go on with the position "
+                             "filter on the autopilot's attitude (navigation/integrity.GyroAttitudeCheck)")
+    gyro_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="level of the gyro test (chi-square(3))")
+    gyro_check_window_s: float = Field(1.0, gt=0, le=30, description="the gyro test's window: the rotation "
+                                       "integrated from the gyros vs the autopilot's over this long")
+    gyro_check_attitude_sigma_deg: float = Field(0.05, gt=0, le=10, description="1-sigma noise of the "
+                                                 "autopilot's attitude per axis (the simulated one: 0.03 deg)")
 
 
 class PadIntegrityConfig(IntegrityBlock):

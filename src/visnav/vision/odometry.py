@@ -81,6 +81,10 @@ class VisualOdometry:
         self.scale = scale
         self._prev: tuple[float, np.ndarray, float] | None = None  # t, C_cn, height of the last frame
 
+    def restart(self) -> None:
+        """Forget the previous frame (a camera gap): the next ``step`` measures nothing and starts again."""
+        self._prev = None
+
     def step(self, t: float, image: np.ndarray, C_cn: np.ndarray, height: float) -> OdometryStep | None:
         pairs = self.klt.track(image)
         prev, self._prev = self._prev, (t, np.asarray(C_cn, float), float(height))
