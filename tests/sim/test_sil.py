@@ -98,10 +98,15 @@ def test_sil_without_a_bridge_says_so(tmp_path):
 
 @pytest.mark.slow
 def test_palace_landing_over_sil_lands_like_in_process():
+    """The whole landing (~75 s wall): the in-process outcome of seed 1 is `safe` (0.28 m, 0.49 m/s); flown on
+    the held ODOMETRY (before the autopilot side fused it at its instant and carried it with the IMU) it landed
+    at 0.87-1.06 m/s, `unsafe`. (On a machine too loaded to fly it in real time the run says so.)"""
     r = run_sil(load_scenario("palace-landing"))
-    assert r.error is None and r.metrics["landed"] and not r.metrics["aborted"]
-    assert r.metrics["touchdown_error_m"] < 1.0
-    assert r.metrics["sil_stamp_error_ms_max"] < 2.0
+    m = r.metrics
+    assert r.error is None and m["landed"] and not m["aborted"]
+    assert m["sil_behind_wall_clock_ms_max"] < 100.0, _diag(m)
+    assert m["outcome"] == "safe", (m["outcome_reason"], _diag(m))
+    assert m["sil_stamp_error_ms_max"] < 2.0
 
 
 def test_sil_refuses_missions_without_a_bridge_navigator():

@@ -86,3 +86,21 @@ def test_sil_link_carries_a_delayed_estimate_through_a_camera_gap_with_the_imu(l
     assert np.max(np.abs(est.position - p)) < 1e-4 and np.max(np.abs(est.velocity - v)) < 1e-4
     assert np.allclose(est.attitude, EULER)  # the autopilot's own attitude
     assert link.fusion.fused == 1
+
+
+def test_sil_camera_streams_while_the_mission_needs_no_frames():
+    """In-process PALACE renders no frames below 1 m (the mission's camera gate); behind the bridge the camera
+    is the companion computer's and streams on, else the bridge would see a camera stall in the final descent."""
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.missions import make_simulation
+    from visnav.sim.sil import sil_simulation
+
+    sc = load_scenario("palace-landing")
+    gate = make_simulation(sc).parts.gates["camera"]  # the in-process economy this test is about
+    gate.__self__.mode = "final"
+    assert gate(60.0) is False
+    sim = sil_simulation(sc)
+    try:
+        assert "camera" not in sim.parts.gates and "camera" in sim.sensors
+    finally:
+        sim.sil_link.close()
