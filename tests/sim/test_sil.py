@@ -100,7 +100,7 @@ def test_sil_without_a_bridge_says_so(tmp_path):
 def test_palace_landing_over_sil_lands_like_in_process():
     """The whole landing (~75 s wall): the in-process outcome of seed 1 is `safe` (0.28 m, 0.49 m/s); flown on
     the held ODOMETRY (before the autopilot side fused it at its instant and carried it with the IMU) it landed
-    at 0.87-1.06 m/s, `unsafe`. (On a machine too loaded to fly it in real time the run says so.)"""
+    at 0.87-1.06 m/s (1.06: `unsafe`). (On a machine too loaded to fly it in real time the run says so.)"""
     r = run_sil(load_scenario("palace-landing"))
     m = r.metrics
     assert r.error is None and m["landed"] and not m["aborted"]
