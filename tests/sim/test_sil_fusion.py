@@ -80,12 +80,16 @@ def test_sil_link_carries_a_delayed_estimate_through_a_camera_gap_with_the_imu(l
             link._receive(_odometry(link, 0.1))
         if k == 16:
             link._receive(_odometry(link, 0.12, quality=0))  # quality 0: not fused
+        if k == 20:  # stamped ahead of the autopilot's IMU (a simulation behind the wall clock): it waits
+            link._receive(_odometry(link, 0.5))
+        if k in (49, 51):  # fused once the IMU has reached 0.5 s (the stamp is whole microseconds)
+            assert link.fusion.fused == (1 if k == 49 else 2)
     est = link.estimate(1.2)
     p, v = truth(1.2)
-    assert est.valid is False  # the newest message said quality 0
+    assert est.valid  # the newest message (0.5 s) is valid
     assert np.max(np.abs(est.position - p)) < 1e-4 and np.max(np.abs(est.velocity - v)) < 1e-4
     assert np.allclose(est.attitude, EULER)  # the autopilot's own attitude
-    assert link.fusion.fused == 1
+    assert link.fusion.fused == 2
 
 
 def test_sil_camera_streams_while_the_mission_needs_no_frames():

@@ -210,8 +210,8 @@ class SilLink:
         if isinstance(m, AttitudeSample) and np.all(np.isfinite(m.euler)):
             self._att = np.asarray(m.euler, float)
         elif isinstance(m, ImuSample) and self._att is not None and np.all(np.isfinite(m.accel)):
-            self._fuse_received()
             self.fusion.imu(float(m.t), accel_ned(euler_to_dcm(self._att), np.asarray(m.accel, float)))
+            self._fuse_received(float(m.t))
         if isinstance(m, ImuSample):
             msg = mav.highres_imu_encode(self.boot_us(m.t), *m.accel, *m.gyro, 0, 0, 0, 0, 0, 0, 20.0, 0x3F)
         elif isinstance(m, AttitudeSample):
@@ -311,18 +311,20 @@ class SilLink:
                 self._odo_usec.add(int(r.time_usec))
                 self._odo_new.append(odo)
 
-    def _fuse_received(self) -> None:
-        """The ODOMETRY received since the last call, fused at their instants (a valid one: quality > 0)."""
+    def _fuse_received(self, t_imu: float) -> None:
+        """The ODOMETRY received since the last call (a valid one: quality > 0), each fused at its instant once
+        the autopilot's IMU has reached it (``t_imu``: a stamp ahead of it waits, as on an EKF's buffer)."""
         with self._lock:
-            new, self._odo_new = self._odo_new, []
-        for ts, p, v, _, _, _, q in new:
+            due = [o for o in self._odo_new if o[0] <= t_imu]
+            self._odo_new = [o for o in self._odo_new if o[0] > t_imu]
+        for ts, p, v, _, _, _, q in due:
             if q > 0 and np.all(np.isfinite(p)) and np.all(np.isfinite(v)):
                 self.fusion.fuse(ts, p, v)
 
     def estimate(self, t: float) -> NavEstimate:
         """The autopilot's solution at ``t`` (``ExternalFusion``): the bridge's estimates fused at their instants,
         carried to ``t`` with the IMU; its attitude is the autopilot's own."""
-        self._fuse_received()
+        self._fuse_received(t)
         with self._lock:
             last = self._odo[-1] if self._odo else None
         if last is None or self.fusion.t is None:
