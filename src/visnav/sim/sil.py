@@ -389,11 +389,12 @@ def sil_simulation(sc):
     return sim
 
 
-def bridge_command(sc_toml: Path, link: SilLink, out_dir: Path) -> list[str]:
-    """The ``visnav bridge`` command line that serves this SIL flight."""
+def bridge_command(sc_toml: Path, link: SilLink, out_dir: Path, gps_sigma_m: float = mm.GPS_SIGMA_M) -> list[str]:
+    """The ``visnav bridge`` command line that serves this SIL flight. ``gps_sigma_m``: the simulated GPS's
+    sigma (GLOBAL_POSITION_INT carries none; in-process the navigator gets it with every fix)."""
     return ["visnav", "bridge", "--mavlink", f"udpin:127.0.0.1:{link.port}", "--camera", link.frames.url,
             "--navigator", str(sc_toml), "--origin", ",".join(f"{x:g}" for x in ORIGIN), "--health",
-            "--out", str(out_dir)]
+            "--gps-sigma", f"{gps_sigma_m:g}", "--out", str(out_dir)]
 
 
 def _wait_ready(link: SilLink, proc, timeout_s: float, log: Path) -> None:
@@ -444,7 +445,7 @@ def run_sil(sc, progress=None, notify=None, sim=None, out_dir: str | Path | None
     bdir.mkdir(parents=True, exist_ok=True)
     sc_toml = bdir / "navigator-scenario.toml"
     sc_toml.write_text(to_toml(sc))
-    cmd = bridge_command(sc_toml, link, bdir)
+    cmd = bridge_command(sc_toml, link, bdir, float(sc.sensors.gps.sigma_m))
     out_log = bdir / "bridge.out"
     proc = None
     if spawn:
