@@ -575,7 +575,7 @@ def bridge(
     health: bool = typer.Option(False, "--health", help="also send the navigator's health (DEBUG_FLOAT_ARRAY "
                                 "VN_HEALTH, docs/autopilots.md) with every estimate: for a mission on the "
                                 "autopilot side (the SIL)"),
-    gps_sigma: float = typer.Option(2.5, "--gps-sigma", help="1-sigma [m] the navigator gives a position fix whose "
+    gps_sigma: float = typer.Option(2.5, "--gps-sigma", help="1-sigma \\[m] the navigator gives a position fix whose "
                                     "message carries no accuracy (GLOBAL_POSITION_INT; GPS_RAW_INT without h_acc)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
