@@ -575,6 +575,8 @@ def bridge(
     health: bool = typer.Option(False, "--health", help="also send the navigator's health (DEBUG_FLOAT_ARRAY "
                                 "VN_HEALTH, docs/autopilots.md) with every estimate: for a mission on the "
                                 "autopilot side (the SIL)"),
+    gps_sigma: float = typer.Option(2.5, "--gps-sigma", help="1-sigma \\[m] the navigator gives a position fix whose "
+                                    "message carries no accuracy (GLOBAL_POSITION_INT; GPS_RAW_INT without h_acc)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
     import time
@@ -598,6 +600,8 @@ def bridge(
         fail(f"--output must be one of {', '.join(OUTPUTS)}, got {output!r}")
     if frame not in ("frd", "ned"):
         fail(f"--frame must be frd or ned, got {frame!r}")
+    if not 0.0 < gps_sigma < 1000.0:
+        fail(f"--gps-sigma must be a positive number of metres, got {gps_sigma:g}")
     out_dir = Path(out or f"runs/bridge-{time.strftime('%Y%m%d-%H%M%S')}")
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -608,7 +612,7 @@ def bridge(
     link = src = None
     try:
         cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
-                           send_health=health, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
+                           send_health=health, gps_sigma_m=gps_sigma, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
         link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=lambda m: console.print(m))
         built = build_navigator(navigator, map_, set_, recorder=navlog.record)

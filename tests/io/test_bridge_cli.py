@@ -33,6 +33,10 @@ def test_bad_output_and_origin(tmp_path):
     r = CliRunner().invoke(app, ["bridge", "--mavlink", f"udpin:127.0.0.1:{free_udp_port()}", "--camera", "0",
                                  "--origin", "58.4,north", "--out", str(tmp_path)])
     assert r.exit_code == 2 and "--origin must be LAT_DEG,LON_DEG,ALT_M" in r.output and len(_lines(r.output)) == 1
+    r = CliRunner().invoke(app, ["bridge", "--mavlink", "udpin:127.0.0.1:1", "--camera", "0", "--gps-sigma", "0",
+                                 "--out", str(tmp_path)])
+    assert r.exit_code == 2 and "--gps-sigma must be a positive number of metres, got 0" in r.output
+    assert len(_lines(r.output)) == 1
 
 
 def test_missing_camera(tmp_path):

@@ -77,6 +77,11 @@ def test_decode_baro_range_gps():
                       stamp, ORIGIN, recv_t=0.0)
     np.testing.assert_allclose(g.position, pymap3d.geodetic2ned(lat, lon, h, 58.3950, 15.5750, 95.0), atol=0.02)
     np.testing.assert_allclose(g.velocity, [1.5, -2.5, 0.3])
+    assert g.sigma == mm.GPS_SIGMA_M == 2.5  # no accuracy in the message: the bridge's --gps-sigma, default 2.5 m
+    g2 = mm.decode_gps(_roundtrip(TX.global_position_int_encode(3000, int(lat * 1e7), int(lon * 1e7),
+                                                                 int(h * 1000), 0, 150, -250, 30, 0)),
+                       stamp, ORIGIN, recv_t=0.0, sigma_m=0.02)
+    assert g2.sigma == 0.02 and np.array_equal(g2.position, g.position)
     raw = TX.gps_raw_int_encode(int(4e6), 3, int(lat * 1e7), int(lon * 1e7), int(h * 1000), 80, 120, 500, 9000,
                                 12, 0, 1500, 2000, 300, 0)
     g = mm.decode_gps(_roundtrip(raw), stamp, ORIGIN, recv_t=0.0)

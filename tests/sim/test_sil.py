@@ -98,10 +98,16 @@ def test_sil_without_a_bridge_says_so(tmp_path):
 
 @pytest.mark.slow
 def test_palace_landing_over_sil_lands_like_in_process():
+    """The whole landing (~75 s wall): the in-process outcome of seed 1 is `safe` (0.28 m, 0.49 m/s); flown on
+    the held ODOMETRY (before the autopilot side fused it at its instant and carried it with the IMU) it landed
+    at 0.87-1.06 m/s (1.06: `unsafe`). (It landed `safe` on seeds 1-5 also with the simulation falling 1.7-14 s
+    behind the wall clock on a loaded machine, BENCHMARKS.md.)"""
     r = run_sil(load_scenario("palace-landing"))
-    assert r.error is None and r.metrics["landed"] and not r.metrics["aborted"]
-    assert r.metrics["touchdown_error_m"] < 1.0
-    assert r.metrics["sil_stamp_error_ms_max"] < 2.0
+    m = r.metrics
+    diag = dict(_diag(m), behind_ms=m["sil_behind_wall_clock_ms_max"])
+    assert r.error is None and m["landed"] and not m["aborted"], diag
+    assert m["outcome"] == "safe", (m["outcome_reason"], diag)
+    assert m["sil_stamp_error_ms_max"] < 2.0
 
 
 def test_sil_refuses_missions_without_a_bridge_navigator():

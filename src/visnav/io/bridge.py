@@ -95,6 +95,7 @@ class BridgeConfig:
     status_period_s: float = 1.0
     frame_log: Path | None = None  # a folder: every frame as lossless PNG + frames.csv (index, t, capture_t)
     send_health: bool = False  # the navigator's Health as DEBUG_FLOAT_ARRAY "VN_HEALTH" with every estimate
+    gps_sigma_m: float = mm.GPS_SIGMA_M  # 1-sigma of a position fix whose message carries no accuracy
 
 
 class Bridge:
@@ -231,7 +232,7 @@ class Bridge:
                 return None
             if typ == "GLOBAL_POSITION_INT" and self.link.counts_in["GPS_RAW_INT"]:
                 return None  # the receiver's own fix is streamed: never feed back the autopilot's fused one
-            m = mm.decode_gps(msg, stamp, self.origin, t_recv)
+            m = mm.decode_gps(msg, stamp, self.origin, t_recv, self.cfg.gps_sigma_m)
             self._last_gps = m if m is not None else self._last_gps
         else:
             return None

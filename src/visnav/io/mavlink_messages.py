@@ -148,11 +148,15 @@ def decode_range(msg, stamp: Stamp) -> RangeSample:
     return RangeSample(t=_ms(stamp, msg.time_boot_ms), range=r, sensor=sensor)
 
 
+GPS_SIGMA_M = 2.5  # 1-sigma of a position with no accuracy of its own (GLOBAL_POSITION_INT; GPS_RAW_INT h_acc 0)
+
+
 def decode_gps(msg, stamp: Stamp, origin: LocalTangentPlane, recv_t: float,
-               sigma_m: float = 2.5) -> GpsSample | None:
+               sigma_m: float = GPS_SIGMA_M) -> GpsSample | None:
     """GLOBAL_POSITION_INT (the autopilot's fused position, 1e-7 deg, mm AMSL, cm/s NED) or GPS_RAW_INT
     (the receiver: fix_type >= 3, ground speed + course, h_acc mm) -> GpsSample in the origin's NED.
-    GPS_RAW_INT with a UNIX time_usec is stamped at reception ``recv_t``."""
+    GPS_RAW_INT with a UNIX time_usec is stamped at reception ``recv_t``. ``sigma_m``: the sample's sigma
+    where the message gives none."""
     if msg.get_type() == "GLOBAL_POSITION_INT":
         if msg.lat == 0 and msg.lon == 0:
             return None

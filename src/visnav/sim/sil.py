@@ -9,14 +9,19 @@ autopilot side of a MAVLink link:
   AttitudeSample -> ATTITUDE_QUATERNION, BaroSample -> SCALED_PRESSURE, RangeSample -> DISTANCE_SENSOR,
   GpsSample -> GLOBAL_POSITION_INT), stamped with the instant it describes in the autopilot's boot clock;
   HEARTBEAT at 1 Hz, TIMESYNC answered, GPS_GLOBAL_ORIGIN on request;
-* camera frames go to the bridge's camera input ``vnframes://127.0.0.1:PORT`` (``io/camera_source``: TCP,
-  with the exposure instant in CLOCK_MONOTONIC, the clock every process of the machine shares);
+* camera frames, all of them (the mission's camera gate is an in-process economy), go to the bridge's camera
+  input ``vnframes://127.0.0.1:PORT`` (``io/camera_source``: TCP, with the exposure instant in CLOCK_MONOTONIC,
+  the clock every process of the machine shares);
 * the mission's requests to its navigator (``command(NavCommand)``) travel as COMMAND_LONG MAV_CMD_USER_1
   (acknowledged, retried), the navigator's health comes back as DEBUG_FLOAT_ARRAY "VN_HEALTH"
   (``io/mavlink_messages``, docs/autopilots.md); a request is pending for the mission until a health
   message says the navigator applied it;
-* what the bridge sends back (ODOMETRY) is the navigation solution the mission and controller fly on:
-  ``estimate(t)`` = the newest ODOMETRY carried forward to ``t`` with its velocity, in the simulation's NED.
+* what the bridge sends back (ODOMETRY) is fused by the autopilot's own navigation solution
+  (``ExternalFusion``), which the mission and controller fly on: as PX4's EKF2 and ArduPilot's EKF3 do with
+  an external vision source, each estimate is fused at the instant it describes (``time_usec``, the delayed
+  horizon) and the solution is carried from there to the present with the autopilot's IMU (its specific
+  force through its attitude), sample by sample, so neither the capture-to-send latency nor the time
+  between two estimates (a camera the mission switched off) is flown on a stale state.
 
 ``run_sil`` starts ``visnav bridge`` as a subprocess (``spawn=True``) or waits for one the user starts in
 another terminal (it prints the command line), and ends the bridge's session with MAV_CMD_PREFLIGHT_REBOOT_
@@ -37,11 +42,13 @@ import subprocess
 import sys
 import threading
 import time
+from collections import deque
 from pathlib import Path
 
 import numpy as np
 
 from visnav.estimation.ins import euler_to_quat, quat_to_euler
+from visnav.estimation.position_filter import accel_ned
 from visnav.geometry.frames import LocalTangentPlane
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.io import mavlink_messages as mm
@@ -50,11 +57,13 @@ from visnav.io.mavlink_link import mavutil
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, Health, ImuSample, NavEstimate,
                                  RangeSample)
+from visnav.navigation.base import propagate
 
 P0_HPA = 1013.25  # pressure at the NED origin's height
 ORIGIN = (58.395, 15.575, 0.0)  # the simulation's NED origin as the autopilot reports it
 BRIDGE_COMPONENT = mavlink.MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
 REQUEST_RETRY_S, REQUEST_TRIES = 0.3, 10
+SIL_BEHIND_LIMIT_S = 0.1  # a paced run that fell further behind the wall clock than this is said not real-time
 SIL_NAVIGATORS = ("palace", "witas")  # navigators the bridge can run from a scenario alone
 
 
@@ -68,6 +77,53 @@ def free_port(kind=socket.SOCK_DGRAM) -> int:
     port = s.getsockname()[1]
     s.close()
     return port
+
+
+class ExternalFusion:
+    """The autopilot's position/velocity solution from an external navigation source and its own IMU.
+
+    ``imu(t, a)`` carries the solution to the IMU sample's instant with its kinematic acceleration ``a``
+    (NED: the specific force through the autopilot's attitude, plus gravity) over the interval ending at
+    ``t`` -- the mechanization of the in-process navigators (``PositionFilter.predict``). ``fuse(ts, p, v)``
+    takes an external estimate at the instant ``ts`` it describes (in the past: the bridge's latency): the
+    solution at ``ts`` becomes that estimate (the navigator's filtered position and velocity: the autopilot
+    trusts it fully -- with its tight covariance an EKF's gain is near one) and is propagated again to the
+    newest IMU sample through the accelerations buffered since ``ts``: the delayed-horizon fusion of PX4's
+    EKF2 (EKF2_EV_DELAY) and ArduPilot's EKF3 (VISO_DELAY_MS), with the IMU carrying it to the present.
+    ``at(t)`` is the solution carried on to ``t`` with the newest acceleration (``navigation.base.propagate``).
+    """
+
+    def __init__(self, horizon_s: float = 5.0):
+        self.horizon_s = horizon_s
+        self._acc: deque = deque()  # (t, kinematic acceleration NED) of the IMU samples within the horizon
+        self.t: float | None = None  # the solution's instant (None: nothing fused yet)
+        self.p = np.zeros(3)
+        self.v = np.zeros(3)
+        self.a = np.zeros(3)  # the newest acceleration it was carried with
+        self.fused = 0
+
+    def imu(self, t: float, a: np.ndarray) -> None:
+        acc = self._acc
+        if acc and t <= acc[-1][0]:
+            return  # not after the previous sample
+        acc.append((t, a))
+        while acc and acc[0][0] < t - self.horizon_s:
+            acc.popleft()
+        if self.t is not None and t > self.t:
+            self.p, self.v = propagate(self.p, self.v, a, t - self.t)
+            self.t, self.a = t, a
+
+    def fuse(self, ts: float, p, v) -> None:
+        p, v, t, a = np.asarray(p, float), np.asarray(v, float), ts, self.a
+        for tk, ak in self._acc:  # the IMU samples after the estimate's instant, in order
+            if tk > t:
+                p, v = propagate(p, v, ak, tk - t)
+                t, a = tk, ak
+        self.t, self.p, self.v, self.a = t, p, v, a
+        self.fused += 1
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        return propagate(self.p, self.v, self.a, t - self.t)
 
 
 class SilLink:
@@ -85,12 +141,16 @@ class SilLink:
         self._next_hb = 0.0
         self._odo: list = []  # (t_sim, position, velocity_ned, euler, covariance 6x6, reset_counter, quality)
         self._odo_usec: set[int] = set()
+        self._odo_new: list = []  # received, not fused yet (the simulation's thread fuses them)
+        self.fusion = ExternalFusion()  # the autopilot's solution the mission and controller fly on
+        self._att: np.ndarray | None = None  # the autopilot's newest attitude (Euler 3-2-1)
         self.received: dict[str, int] = {}
         self.sent = 0
         self.timesync_answered = 0
         self.bridge_seen = False
         self._ts_rx: list[float] = []  # when the bridge's last TIMESYNC requests came
         self.frame_t: dict[int, float] = {}  # frame index -> exposure instant (simulation time)
+        self.behind_s = 0.0  # how far the simulation fell behind the wall clock at worst (paced runs) [s]
         self.frame_lag_ms: list[float] = []  # the simulated camera's latency plus any lag behind the wall clock
         self.stamp_errors_ms: list[float] = []  # ODOMETRY time_usec -> sim time, minus the frame's exposure
         self.h = Health(source="bridge")
@@ -140,11 +200,18 @@ class SilLink:
             lead = t_sim - self.now_sim()
             if lead > 0:
                 time.sleep(lead)
+            elif -lead > self.behind_s:
+                self.behind_s = -lead  # the simulation could not keep up with the wall clock
 
     # ------------------------------------------------------------------ navigator interface
     def update(self, m) -> None:
         self._pace(m.t)
         mav = self.mav
+        if isinstance(m, AttitudeSample) and np.all(np.isfinite(m.euler)):
+            self._att = np.asarray(m.euler, float)
+        elif isinstance(m, ImuSample) and self._att is not None and np.all(np.isfinite(m.accel)):
+            self.fusion.imu(float(m.t), accel_ned(euler_to_dcm(self._att), np.asarray(m.accel, float)))
+            self._fuse_received(float(m.t))
         if isinstance(m, ImuSample):
             msg = mav.highres_imu_encode(self.boot_us(m.t), *m.accel, *m.gyro, 0, 0, 0, 0, 0, 0, 20.0, 0x3F)
         elif isinstance(m, AttitudeSample):
@@ -236,21 +303,37 @@ class SilLink:
             P = np.zeros((6, 6))
             P[:3, :3] = mm.from_upper_triangle(r.pose_covariance)[:3, :3]
             P[3:, 3:] = Cb @ mm.from_upper_triangle(r.velocity_covariance)[:3, :3] @ Cb.T
+            odo = (self.sim_of_boot_us(r.time_usec), np.array([r.x, r.y, r.z]), v_ned, e, P, r.reset_counter,
+                   r.quality)
             with self._lock:
-                self._odo.append((self.sim_of_boot_us(r.time_usec), np.array([r.x, r.y, r.z]), v_ned, e, P,
-                                  r.reset_counter, r.quality))
+                self._odo.append(odo)
                 del self._odo[:-50]
                 self._odo_usec.add(int(r.time_usec))
+                self._odo_new.append(odo)
+
+    def _fuse_received(self, t_imu: float) -> None:
+        """The ODOMETRY received since the last call (a valid one: quality > 0), each fused at its instant once
+        the autopilot's IMU has reached it (``t_imu``: a stamp ahead of it waits, as on an EKF's buffer)."""
+        with self._lock:
+            due = [o for o in self._odo_new if o[0] <= t_imu]
+            self._odo_new = [o for o in self._odo_new if o[0] > t_imu]
+        for ts, p, v, _, _, _, q in due:
+            if q > 0 and np.all(np.isfinite(p)) and np.all(np.isfinite(v)):
+                self.fusion.fuse(ts, p, v)
 
     def estimate(self, t: float) -> NavEstimate:
+        """The autopilot's solution at ``t`` (``ExternalFusion``): the bridge's estimates fused at their instants,
+        carried to ``t`` with the IMU; its attitude is the autopilot's own."""
+        self._fuse_received(t)
         with self._lock:
             last = self._odo[-1] if self._odo else None
-        if last is None:
+        if last is None or self.fusion.t is None:
             return NavEstimate(t=t, position=np.zeros(3), velocity=np.zeros(3), attitude=np.zeros(3), valid=False,
                                source="bridge")
-        ts, p, v, e, P, _, q = last
-        return NavEstimate(t=t, position=p + v * (t - ts), velocity=v, attitude=e, covariance=P, valid=q > 0,
-                           source=self.h.source if self.h.source != "bridge" else "bridge")
+        _, _, _, e, P, _, q = last
+        p, v = self.fusion.at(t)
+        return NavEstimate(t=t, position=p, velocity=v, attitude=self._att.copy() if self._att is not None else e,
+                           covariance=P, valid=q > 0, source=self.h.source if self.h.source != "bridge" else "bridge")
 
     def health(self, t: float | None = None) -> Health:
         """The navigator's newest health; a request it has not applied yet is pending (``tracking_pending``),
@@ -298,15 +381,20 @@ def sil_simulation(sc):
     frames = FrameStreamServer()
     link = SilLink(free_port(), frames, LocalTangentPlane(*ORIGIN))
     sim = make_simulation(sc, navigator_wrapper=lambda nav: link)
+    # the camera is the companion computer's and streams all the time: in-process the mission's gate skips
+    # rendering the frames its navigator will not use (PALACE below 1 m), behind the bridge that gap would
+    # be a camera stall (no estimate out for ``BridgeConfig.stall_s``, then quality capped)
+    sim.parts.gates.pop("camera", None)
     sim.sil_link = link
     return sim
 
 
-def bridge_command(sc_toml: Path, link: SilLink, out_dir: Path) -> list[str]:
-    """The ``visnav bridge`` command line that serves this SIL flight."""
+def bridge_command(sc_toml: Path, link: SilLink, out_dir: Path, gps_sigma_m: float = mm.GPS_SIGMA_M) -> list[str]:
+    """The ``visnav bridge`` command line that serves this SIL flight. ``gps_sigma_m``: the simulated GPS's
+    sigma (GLOBAL_POSITION_INT carries none; in-process the navigator gets it with every fix)."""
     return ["visnav", "bridge", "--mavlink", f"udpin:127.0.0.1:{link.port}", "--camera", link.frames.url,
             "--navigator", str(sc_toml), "--origin", ",".join(f"{x:g}" for x in ORIGIN), "--health",
-            "--out", str(out_dir)]
+            "--gps-sigma", f"{gps_sigma_m:g}", "--out", str(out_dir)]
 
 
 def _wait_ready(link: SilLink, proc, timeout_s: float, log: Path) -> None:
@@ -357,7 +445,7 @@ def run_sil(sc, progress=None, notify=None, sim=None, out_dir: str | Path | None
     bdir.mkdir(parents=True, exist_ok=True)
     sc_toml = bdir / "navigator-scenario.toml"
     sc_toml.write_text(to_toml(sc))
-    cmd = bridge_command(sc_toml, link, bdir)
+    cmd = bridge_command(sc_toml, link, bdir, float(sc.sensors.gps.sigma_m))
     out_log = bdir / "bridge.out"
     proc = None
     if spawn:
@@ -418,6 +506,13 @@ def run_sil(sc, progress=None, notify=None, sim=None, out_dir: str | Path | None
         "sil_requests_applied": link.applied, "sil_bridge_process": "spawned" if spawn else "external",
         "sil_bridge_dir": str(bdir),
     })
+    result.metrics["sil_behind_wall_clock_ms_max"] = link.behind_s * 1e3
+    if link.behind_s > SIL_BEHIND_LIMIT_S:
+        msg = (f"the simulation fell {link.behind_s:.2f} s behind the wall clock (the machine could not fly it in "
+               "real time): its latency and outcome do not describe a real-time flight")
+        say(msg)
+        if notify is not None:
+            notes.append(msg)
     if link.requests_failed:
         notes += link.requests_failed[:5]
     if out_log.is_file():
