@@ -70,8 +70,8 @@ class DeckController:
         # the vertical specific-force reading, level frame, up positive, gravity removed
         acc_up = -(euler_to_dcm([roll, pitch, 0.0]) @ est.accel)[2] - G
         tilt_cos = np.cos(roll) * np.cos(pitch)
-        if ref.kind == "level":
-            thr = self.throttle.command(0.0, acc_up, 1.0, tilt_cos, dt)
+        if ref.kind == "level":  # (ref.accel: a vertical acceleration to hold, z down; zero by default)
+            thr = self.throttle.command(-float(ref.accel[2]), acc_up, 1.0, tilt_cos, dt)
             self._record(t, position=np.full(3, np.nan), velocity=np.zeros(3), accel=np.zeros(3))
             return AttitudeThrustCommand(t=t, roll=0.0, pitch=0.0, yaw_rate=0.0, throttle=thr)
         x = ref.pilot_view if ref.pilot_view is not None else est.state
