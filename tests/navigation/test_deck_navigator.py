@@ -318,3 +318,22 @@ def test_the_mission_config_turns_the_clock_check_and_the_reacquisition_on():
                                         "mission.filter.reacquire_after_outage=false"]).mission
     c2 = DeckNavConfig.from_mission(off, 0.03)
     assert c2.frame_interval_s == 0.0 and c2.reacquire_after_s == np.inf
+
+
+def test_a_covariance_that_is_no_longer_positive_definite_restarts_the_filter_honestly():
+    """issue #18: the run stopped on LinAlgError (black-out seeds 3, 5 and 8, IMU drops seed 3). Now the
+    filter restarts where it is with the deck attitude's sea-state prior and at least 0.5 m / 0.5 m/s per
+    axis: its protection level is then far above a landing's (the mission holds)."""
+    from visnav.estimation.integrity import horizontal_protection_level
+    from visnav.navigation.deck import DIVERGED_SIGMA_M
+
+    nav = _nav(deck_prior_var=dm.deck_prior_variance("stewart"))
+    nav.update(ImuSample(0.0, ACC, np.zeros(3)))
+    x = nav.x.copy()
+    nav.ukf.P[4, 4] = -1e-3  # not positive definite
+    nav.update(ImuSample(0.01, ACC, np.zeros(3)))
+    assert nav.stats.divergences == 1
+    np.linalg.cholesky(nav.P)
+    assert np.all(np.sqrt(np.diag(nav.P)[:3]) >= DIVERGED_SIGMA_M)
+    np.testing.assert_allclose(nav.x[:3], x[:3], atol=1e-3)  # where it was
+    assert horizontal_protection_level(nav.P[:2, :2]) > 1.5  # 3.72 sigma at 0.999

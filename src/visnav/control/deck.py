@@ -88,6 +88,8 @@ class DeckController:
         elif ref.kind == "follow":
             p_des, v_des = ref.position, ref.velocity
             a_cmd_ld = follow(p_des, v_des, ref.accel, p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
+            if ref.vertical_accel is not None:  # the mission holds the height on the IMU (hover without a fix)
+                a_cmd_ld = np.array([a_cmd_ld[0], a_cmd_ld[1], float(ref.vertical_accel)])
         else:
             raise ValueError(f"unknown deck reference kind {ref.kind!r} (level, follow, descend)")
         if ref.flare_time_left is not None and g.flare_s > 0:

@@ -190,18 +190,21 @@ class DeckMission:
             self._v_up += float(acc_up) * self.period
 
     def _blind_hold(self, t: float) -> DeckReference:
-        """Hover without a fix (unusable for ``blind_hold_s``, or its HPL above ``hover_hpl_m``): no position
-        loop on an estimate that may lead it onto the deck; level on the IMU, climbing at ``BLIND_CLIMB_MPS``
-        for ``BLIND_CLIMB_S`` and then holding the height (the vertical speed from the last good fix plus the
-        IMU since, :meth:`_vertical_speed`), until the fix is good again."""
+        """Hover without a fix (unusable for ``blind_hold_s``, or its HPL above ``hover_hpl_m``): the horizontal
+        position loop stays on the dead-reckoned estimate (it brings the lights back into view: a level hold on
+        the IMU alone drifted out of view for good, black-out seed 7), the vertical one does not (the
+        estimate's height may lead it onto the deck): it climbs at ``BLIND_CLIMB_MPS`` for ``BLIND_CLIMB_S``
+        and then holds the height (the vertical speed from the last good fix plus the IMU since,
+        :meth:`_vertical_speed`), until the fix is good again."""
         if self._blind_t is None:
             self._blind_t = t
-            self.watch.react(t, "hold level", f"hover without a fix (HPL {self.watch.hpl_m:.2f} m): level on the "
+            self.watch.react(t, "hold height", f"hover without a fix (HPL {self.watch.hpl_m:.2f} m): height on the "
                                               f"IMU, climb {BLIND_CLIMB_MPS * BLIND_CLIMB_S:g} m")
         v_ref = BLIND_CLIMB_MPS if t - self._blind_t < BLIND_CLIMB_S else 0.0
         v_up = self._v_up if self._v_up is not None else 0.0
         a_up = float(np.clip(BLIND_GAIN_PER_S * (v_ref - v_up), -1.0, 1.0))
-        return DeckReference(t=t, kind="level", accel=np.array([0.0, 0.0, -a_up]))
+        return DeckReference(t=t, kind="follow", position=self.start_rel_ld, velocity=np.zeros(3), accel=np.zeros(3),
+                             vertical_accel=-a_up)
 
     def _restart(self, t: float) -> None:
         f = self.cfg.filter

@@ -48,6 +48,7 @@ from visnav.navigation.base import CommandDispatch
 from visnav.vision.blobs import BearingTracker, find_blobs
 
 G = 9.81
+DIVERGED_SIGMA_M, DIVERGED_SIGMA_MPS = 0.5, 0.5  # the restart's least position / velocity sigma per axis
 #: centroid error of the rendered spots alone, found by ``find_blobs`` (measured: 0.0033 deg at f = 420 px)
 RENDER_CENTROID_PX = 0.025
 
@@ -62,6 +63,7 @@ class DeckNavStats:
     clock_steps: int = 0  # steps of the camera's stamps against its frame counter (re-stamped)
     reacquisitions: int = 0  # outages after which the deck's attitude went back to its sea-state prior
     updates_gated: int = 0  # frames whose whole update (with and without rates) was beyond the update gate
+    divergences: int = 0  # covariance not positive definite: restarted where it was (``_diverged``)
     empty_frames: int = 0
     blobs: int = 0
     blobs_rejected: int = 0
@@ -349,7 +351,33 @@ class DeckNavigator(CommandDispatch):
         scale = 1.0 if abs(dt - self.cfg.imu_period_s) < 1e-9 else self.cfg.imu_period_s / dt
         Q = dm.process_noise(self.ukf.x, dt, u, self.imu_cov * scale if scale != 1.0 else self.imu_cov,
                              self.ship_cov * scale if scale != 1.0 else self.ship_cov)
-        self.ukf.predict(dt, Q, u=u)
+        try:
+            self.ukf.predict(dt, Q, u=u)
+        except np.linalg.LinAlgError as exc:
+            self._diverged(str(exc))
+            self.ukf.predict(dt, Q, u=u)
+
+    def _diverged(self, why: str) -> None:
+        """The covariance is no longer positive definite: restart the filter where it is, honestly unsure.
+        The deck's attitude and rates from their sea-state prior (as after an outage), position and velocity
+        kept with at least ``DIVERGED_SIGMA_M`` / ``DIVERGED_SIGMA_MPS`` per axis (their variances otherwise),
+        no correlation: the protection level is then far above any landing's, the mission holds until frames
+        have brought it down. Logged in ``nav_init``, counted in ``stats.divergences``."""
+        x, P = self.ukf.x.copy(), self.ukf.P
+        d = np.abs(np.diag(P)) if np.all(np.isfinite(P)) else np.zeros(12)
+        if not np.all(np.isfinite(x)):
+            x = self._hist[0].x.copy() if self._hist else np.zeros(12)
+        rp = self._rp if self._rp is not None else np.zeros(2)
+        var = np.asarray(self.cfg.deck_prior_var, float)
+        x[3:5], x[9:12] = rp, 0.0
+        dd = np.maximum(d, np.r_[[DIVERGED_SIGMA_M**2] * 3, np.zeros(3), [DIVERGED_SIGMA_MPS**2] * 3, np.zeros(3)])
+        dd[[3, 4, 9, 10, 11]] = var
+        dd[5] = max(dd[5], np.radians(10.0) ** 2)
+        self.ukf.x, self.ukf.P = x, np.diag(dd)
+        self.stats.divergences += 1
+        if self.recorder is not None:
+            self.recorder("nav_init", self._t if self._t is not None else 0.0, x0=x.copy(), sigma=np.sqrt(dd),
+                          source=f"filter restarted where it was: {why}")
 
     def _frame(self, f: Frame) -> None:
         self.stats.frames += 1
@@ -522,8 +550,18 @@ class DeckNavigator(CommandDispatch):
             raise ValueError(f"bearings {b.shape} and rates {r.shape} differ in shape")
         ok = np.all(np.isfinite(b), axis=1)
         b, r = b[ok], r[ok]
+        try:
+            return self._correct_checked(b, r, int(ok.sum()), gyro, replay)
+        except np.linalg.LinAlgError as exc:
+            self._diverged(str(exc))
+            self.stats.lights_used_last = 0
+            if not replay:
+                self.integrity.record(self._t, "bearing", float("nan"), 0, False)
+            return 0, 0
+
+    def _correct_checked(self, b, r, n_ok: int, gyro, replay: bool = False) -> tuple[int, int]:
         st = self.stats if not replay else DeckNavStats()
-        st.blobs += int(ok.sum())
+        st.blobs += n_ok
         if len(b) == 0:
             st.empty_frames += 1
             st.lights_used_last = 0
