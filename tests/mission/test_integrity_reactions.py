@@ -113,7 +113,7 @@ def test_deck_hover_without_a_fix_climbs_and_holds_its_height_on_the_imu():
     estimate onto the deck, 5.3 m from the point. Unusable for blind_hold_s in the hover: the vertical channel
     climbs and holds the height on the IMU, the horizontal one stays on the estimate (a level hold drifted
     out of view for good, black-out seed 7); the whole position loop again once the navigator is usable."""
-    from visnav.mission.deck import BLIND_CLIMB_MPS, BLIND_GAIN_PER_S
+    from visnav.mission.deck import BLIND_CLIMB_MPS, BLIND_FOLLOW_HPL_M, BLIND_GAIN_PER_S
 
     m, cfg, log, t = _deck_in_approach()
     g = cfg.guidance
@@ -123,7 +123,7 @@ def test_deck_hover_without_a_fix_climbs_and_holds_its_height_on_the_imu():
     refs = []
     for _ in range(30):
         t += 0.1
-        refs.append(m.step(t, _est(), DeckHealth(converged=True, integrity="unusable", hpl_m=np.inf))[0])
+        refs.append(m.step(t, _est(), DeckHealth(converged=True, integrity="unusable", hpl_m=0.5))[0])
     held = [r.vertical_accel is not None for r in refs]
     n_follow = held.index(True)
     assert all(held[n_follow:]) and 0.1 * (n_follow + 1) >= g.blind_hold_s - 1e-9
@@ -138,6 +138,9 @@ def test_deck_hover_without_a_fix_climbs_and_holds_its_height_on_the_imu():
     # usable but with a protection level above hover_hpl_m: the same hold
     ref, _ = m.step(t + 0.2, _est(), DeckHealth(converged=True, integrity="ok", hpl_m=2 * g.hover_hpl_m))
     assert ref.vertical_accel is not None and "HPL" in log.get("integrity_reaction")["reason"][-1]
+    # with no guide at all (HPL above BLIND_FOLLOW_HPL_M: a restarted filter) the hold is level
+    ref, _ = m.step(t + 0.3, _est(), DeckHealth(converged=True, integrity="ok", hpl_m=2 * BLIND_FOLLOW_HPL_M))
+    assert ref.kind == "level"
 
 
 def _fw():

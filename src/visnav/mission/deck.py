@@ -45,6 +45,7 @@ from visnav.mission.integrity import IntegrityWatch
 
 BLIND_CLIMB_MPS, BLIND_CLIMB_S = 0.2, 1.5  # the level hold's climb away from the deck (0.3 m) when the hover loses its fix
 BLIND_GAIN_PER_S = 1.0  # its vertical-speed loop on the IMU [1/s]
+BLIND_FOLLOW_HPL_M = 1.0  # above this HPL the hold is level (no horizontal loop on the estimate either)
 G = 9.81
 
 
@@ -203,6 +204,8 @@ class DeckMission:
         v_ref = BLIND_CLIMB_MPS if t - self._blind_t < BLIND_CLIMB_S else 0.0
         v_up = self._v_up if self._v_up is not None else 0.0
         a_up = float(np.clip(BLIND_GAIN_PER_S * (v_ref - v_up), -1.0, 1.0))
+        if self.watch.hpl_m > BLIND_FOLLOW_HPL_M:  # the estimate is no guide at all (a restarted filter): level
+            return DeckReference(t=t, kind="level", accel=np.array([0.0, 0.0, -a_up]))
         return DeckReference(t=t, kind="follow", position=self.start_rel_ld, velocity=np.zeros(3), accel=np.zeros(3),
                              vertical_accel=-a_up)
 
