@@ -354,3 +354,4 @@ class DeckReference:
     normal: np.ndarray | None = None
     flare_time_left: float | None = None
     pilot_view: np.ndarray | None = None
+    vertical_accel: float | None = None  # follow: this vertical acceleration (z down) instead of the position loop's

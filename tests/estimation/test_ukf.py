@@ -96,3 +96,18 @@ def test_not_positive_definite_is_a_clear_error():
     ukf = UnscentedKalmanFilter(np.zeros(2), -np.eye(2), lambda s, dt: s)
     with pytest.raises(np.linalg.LinAlgError, match="positive definite"):
         ukf.predict(0.1, np.eye(2))
+
+
+def test_an_update_beyond_max_nis_is_not_applied():
+    """The whole-update gate: NIS = y^T S^-1 y of a linear model (closed form) decides; beyond it x, P stay."""
+    H = np.array([[1.0, 0.0]])
+    ukf = UnscentedKalmanFilter(np.zeros(2), np.diag([4.0, 1.0]), lambda s, dt: s, lambda s: s @ H.T, alpha=0.5)
+    R = np.array([[1.0]])
+    nis = 3.0**2 / (4.0 + 1.0)  # y = 3, S = 4 + 1
+    assert not ukf.update([3.0], R, max_nis=nis - 1e-6)
+    np.testing.assert_array_equal(ukf.x, [0.0, 0.0])
+    np.testing.assert_array_equal(ukf.P, np.diag([4.0, 1.0]))
+    assert ukf.nis == pytest.approx(nis)
+    assert ukf.update([3.0], R, max_nis=nis + 1e-6)
+    np.testing.assert_allclose(ukf.x, [3.0 * 4.0 / 5.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(ukf.P, np.diag([4.0 - 16.0 / 5.0, 1.0]), atol=1e-12)

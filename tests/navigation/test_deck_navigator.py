@@ -257,3 +257,83 @@ def test_the_mission_config_turns_the_frozen_link_check_on():
     assert DeckNavConfig.from_mission(cfg, 1 / 30).reject_repeated_frames
     off = load_scenario("deck-moving", ["navigation.reject_repeated_frames=false"])
     assert not DeckNavConfig.from_mission(off, 1 / 30).reject_repeated_frames
+
+
+def test_a_camera_clock_step_is_found_from_the_frame_counter_and_re_stamped():
+    """issue #18 (clock_jump): the camera's stamps step +0.2 s for frames 10-19 and back after; the loop
+    delivers by stamp, so frames 14-19 (stamped 0.62-0.77 s) come after frame 20 (0.667 s). The counter x
+    the frame interval gives every frame its true time; health says degraded with the reason after a step."""
+    T = 1 / 30.0
+    nav = _nav(frame_interval_s=T)
+    img = np.zeros((480, 752), np.uint8)
+    frames = [Frame(t=k * T + (0.2 if 10 <= k < 20 else 0.0), image=img, index=k) for k in range(30)]
+    seen = {}
+    for f in sorted(frames, key=lambda f: f.t):  # the loop's latency queue: by stamp
+        seen[f.index] = nav._camera_time(f)
+        if f.index == 10:
+            assert nav.clock_offset_s == pytest.approx(0.2)
+            h = nav.health(f.t)
+            assert h.integrity == "degraded" and "camera clock stepped +0.200 s" in h.integrity_reason
+    np.testing.assert_allclose([seen[k] for k in range(30)], np.arange(30) * T, atol=1e-9)
+    assert nav.clock_offset_s == pytest.approx(0.0, abs=1e-9) and nav.stats.clock_steps == 2
+    assert nav.health(30 * T + nav.cfg.clock_alarm_s + 0.1).integrity_reason.find("clock") < 0
+    # no counter interval given: stamps are taken as they come (the check is off)
+    off = _nav()
+    assert off._camera_time(frames[10]) == pytest.approx(10 * T + 0.2)
+
+
+def test_after_an_outage_the_deck_attitude_restarts_from_its_sea_state_prior():
+    """issue #18 (black-out, seed 5 of deck-moving): the constant-rate deck model carried a 0.1 rad/s deck
+    rate through a 2 s outage into a 0.2 rad relative-attitude error, the first frame after it moved the
+    relative pitch by 0.74 rad (towards the Euler singularity) and the next prediction's covariance was not
+    positive definite. After ``reacquire_after_s`` without a fused frame the deck's roll, pitch and rates go
+    back to a level deck's with the sea state's variances before that frame is fused."""
+    truth = np.r_[1.0, 0.0, 1.0, np.zeros(9)]
+    b, _ = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    make = _render_uv(b[0])
+    prior = dm.deck_prior_variance("stewart")
+    nav = _nav(reacquire_after_s=0.5, deck_prior_var=prior)
+    nav.command(NavCommand(0.0, "track"))
+    nav.update(ImuSample(0.0, ACC, np.zeros(3)))
+    nav.update(make(0.0))
+    assert nav.stats.lights_used_last == 4
+    nav.ukf.x[9:12] = [0.1, -0.1, 0.0]  # a deck rate the filter believes in
+    for k in range(1, 101):  # 1 s of IMU alone: the rates turn into a relative attitude
+        nav.update(ImuSample(k / 100.0, ACC, np.zeros(3)))
+    assert abs(nav.x[3]) > 0.08 and nav.stats.reacquisitions == 0
+    nav.update(make(1.0))
+    assert nav.stats.reacquisitions == 1 and nav.stats.lights_used_last == 4
+    assert np.all(np.abs(nav.x[3:5]) < 0.03) and np.all(np.abs(nav.x[9:11]) < 0.05)
+    assert np.all(np.diag(nav.P)[[3, 4]] <= prior[:2] + 1e-12)
+    np.linalg.cholesky(nav.P)
+    # the prior: A + 3 sigma_A of the Stewart platform's roll (6 + 3 deg), A^2 / 2, and A^2 w^2 / 2 for the rate
+    a, w = np.radians(9.0), 0.9 + 0.3
+    assert prior[0] == pytest.approx(a**2 / 2) and prior[2] == pytest.approx(a**2 * w**2 / 2)
+
+
+def test_the_mission_config_turns_the_clock_check_and_the_reacquisition_on():
+    cfg = DeckNavConfig.from_mission(load_scenario("deck-moving").mission, 0.03)
+    assert cfg.frame_interval_s == 0.03 and cfg.reacquire_after_s == 0.5
+    off = load_scenario("deck-moving", ["mission.filter.camera_clock_check=false",
+                                        "mission.filter.reacquire_after_outage=false"]).mission
+    c2 = DeckNavConfig.from_mission(off, 0.03)
+    assert c2.frame_interval_s == 0.0 and c2.reacquire_after_s == np.inf
+
+
+def test_a_covariance_that_is_no_longer_positive_definite_restarts_the_filter_honestly():
+    """issue #18: the run stopped on LinAlgError (black-out seeds 3, 5 and 8, IMU drops seed 3). Now the
+    filter restarts where it is with the deck attitude's sea-state prior and at least 0.5 m / 0.5 m/s per
+    axis: its protection level is then far above a landing's (the mission holds)."""
+    from visnav.estimation.integrity import horizontal_protection_level
+    from visnav.navigation.deck import DIVERGED_SIGMA_M
+
+    nav = _nav(deck_prior_var=dm.deck_prior_variance("stewart"))
+    nav.update(ImuSample(0.0, ACC, np.zeros(3)))
+    x = nav.x.copy()
+    nav.ukf.P[4, 4] = -1e-3  # not positive definite
+    nav.update(ImuSample(0.01, ACC, np.zeros(3)))
+    assert nav.stats.divergences == 1
+    np.linalg.cholesky(nav.P)
+    assert np.all(np.sqrt(np.diag(nav.P)[:3]) >= DIVERGED_SIGMA_M)
+    np.testing.assert_allclose(nav.x[:3], x[:3], atol=1e-3)  # where it was
+    assert horizontal_protection_level(nav.P[:2, :2]) > 1.5  # 3.72 sigma at 0.999

@@ -70,8 +70,8 @@ class DeckController:
         # the vertical specific-force reading, level frame, up positive, gravity removed
         acc_up = -(euler_to_dcm([roll, pitch, 0.0]) @ est.accel)[2] - G
         tilt_cos = np.cos(roll) * np.cos(pitch)
-        if ref.kind == "level":
-            thr = self.throttle.command(0.0, acc_up, 1.0, tilt_cos, dt)
+        if ref.kind == "level":  # (ref.accel: a vertical acceleration to hold, z down; zero by default)
+            thr = self.throttle.command(-float(ref.accel[2]), acc_up, 1.0, tilt_cos, dt)
             self._record(t, position=np.full(3, np.nan), velocity=np.zeros(3), accel=np.zeros(3))
             return AttitudeThrustCommand(t=t, roll=0.0, pitch=0.0, yaw_rate=0.0, throttle=thr)
         x = ref.pilot_view if ref.pilot_view is not None else est.state
@@ -88,6 +88,8 @@ class DeckController:
         elif ref.kind == "follow":
             p_des, v_des = ref.position, ref.velocity
             a_cmd_ld = follow(p_des, v_des, ref.accel, p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
+            if ref.vertical_accel is not None:  # the mission holds the height on the IMU (hover without a fix)
+                a_cmd_ld = np.array([a_cmd_ld[0], a_cmd_ld[1], float(ref.vertical_accel)])
         else:
             raise ValueError(f"unknown deck reference kind {ref.kind!r} (level, follow, descend)")
         if ref.flare_time_left is not None and g.flare_s > 0:

@@ -74,6 +74,27 @@ def ship_process_noise(sea_state: str, motion_scale: float = 1.0, accel_scale: f
     return np.maximum(var, 1e-4)
 
 
+def deck_prior_variance(sea_state: str, motion_scale: float = 1.0, attitude_noise_deg: float = 0.0,
+                        floor_deg: float = 1.0) -> np.ndarray:
+    """Prior variances (5,) of the relative roll and pitch of a level-mean deck and of the deck's three body
+    rates, from the sea state (eq. 3.14-3.15: A^2/2 and A^2 w^2/2, with the eq. 3.7 amplitude and frequency
+    bounds A + 3 sigma_A, w + 3 sigma_w, times ``motion_scale``), the roll/pitch adding the autopilot's
+    attitude noise. Floored at ``floor_deg`` (deg, deg/s): a calm deck still has a mounting tolerance.
+
+    What the filter falls back to for the deck's attitude after an outage (``DeckNavigator``): the deck
+    oscillates about level, so after a few seconds without a frame its attitude is known no better than
+    its sea state says, while the constant-rate model would extrapolate the last rates without bound.
+    """
+    if sea_state not in SEA_STATES:
+        raise ValueError(f"unknown sea state {sea_state!r}; known: {', '.join(SEA_STATES)}")
+    A, W, sA, sW = SEA_STATES[sea_state]
+    a = (A[3:6] + 3.0 * sA[3:6]) * motion_scale
+    w = W[3:6] + 3.0 * sW[3:6]
+    cov = np.diag(initial_covariance_sea_state(np.zeros(3), np.zeros(3), a, w))
+    att, rate = cov[3:5] + np.radians(attitude_noise_deg) ** 2, cov[9:12]
+    return np.maximum(np.r_[att, rate], np.radians(floor_deg) ** 2)
+
+
 def camera_rotation(depression: float, yaw: float) -> np.ndarray:
     """T_cam: body FRD -> OpenCV camera axes for an optical axis ``depression`` below x, turned by ``yaw``."""
     zc = np.array([np.cos(depression) * np.cos(yaw), np.cos(depression) * np.sin(yaw), np.sin(depression)])

@@ -131,19 +131,25 @@ class UnscentedKalmanFilter:
         zp, S, dz = self.unscented_transform(zs, self.z_mean, self.residual_z, R)
         return zp, S, sig, dz
 
-    def update(self, z, R, hx: Callable | None = None, **hx_args) -> None:
-        """Correct (x, P) with measurement ``z`` of noise covariance ``R``."""
+    def update(self, z, R, hx: Callable | None = None, max_nis: float | None = None, **hx_args) -> bool:
+        """Correct (x, P) with measurement ``z`` of noise covariance ``R``. With ``max_nis`` an update whose
+        normalised innovation squared is above it is not applied (x, P unchanged; ``S``, ``y``, ``nis`` are
+        still those of the measurement): returns whether it was applied."""
         z = np.asarray(z, dtype=float).ravel()
         if z.size == 0:
-            return
+            return False
         zp, S, sig, dz = self.predict_measurement(np.asarray(R, dtype=float), hx, **hx_args)
         dx = self.residual_x(sig, self.x)
         Pxz = (dx * self.weights.wc[:, None]).T @ dz
         y = self.residual_z(z[None, :], zp[None, :])[0]
         sol = np.linalg.solve(S, np.column_stack([Pxz.T, y]))  # S^-1 [Pxz^T y]
+        if max_nis is not None and float(y @ sol[:, -1]) > max_nis:
+            self.S, self.y, self.nis = S, y, float(y @ sol[:, -1])
+            return False
         K = sol[:, :-1].T  # K = Pxz S^-1 (S symmetric)
         self.x = self.state_add(self.x[None, :], (K @ y)[None, :])[0]
         P = self.P - K @ S @ K.T
         self.P = 0.5 * (P + P.T)
         self.S, self.y = S, y
         self.nis = float(y @ sol[:, -1])  # normalised innovation squared (chi2 with y.size dof)
+        return True

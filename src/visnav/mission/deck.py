@@ -37,10 +37,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from visnav.geometry.rotations import euler_to_dcm
 from visnav.guidance.deck_approach import (StraightApproach, TauGapApproach, level_deck_geometry, rot_z,
                                            touchdown_acceleration, touchdown_target)
 from visnav.measurements import DeckReference, NavCommand, NavInit, RelativeStateSample
 from visnav.mission.integrity import IntegrityWatch
+
+BLIND_CLIMB_MPS, BLIND_CLIMB_S = 0.2, 1.5  # the level hold's climb away from the deck (0.3 m) when the hover loses its fix
+BLIND_GAIN_PER_S = 1.0  # its vertical-speed loop on the IMU [1/s]
+BLIND_FOLLOW_HPL_M = 1.0  # above this HPL the hold is level (no horizontal loop on the estimate either)
+G = 9.81
 
 
 class DeckMission:
@@ -63,6 +69,8 @@ class DeckMission:
         self._seen: dict[str, RelativeStateSample] = {}
         self.watch = IntegrityWatch(recorder)
         self._held = False  # an approach start is being held for integrity (logged once per hold)
+        self._blind_t: float | None = None  # start of the hover's level hold without a fix
+        self._v_up: float | None = None  # vertical speed (up) the level hold flies on (_vertical_speed)
         self.mode, self.t_mode, self.done = "", 0.0, False
         self._set_mode(0.0, "manual", "pilot holds the start while the filter starts")
 
@@ -94,8 +102,9 @@ class DeckMission:
         if mode == "manual" and cfg.start.pilot == "truth" and "pilot" in self._seen:
             pilot_view = self._seen["pilot"].state  # the safety pilot flies on what he sees
         x = pilot_view if pilot_view is not None else est.state
-        p, _, Cd0, psi_d, wd = level_deck_geometry(x, est.gyro, est.roll, est.pitch)
+        p, vel, Cd0, psi_d, wd = level_deck_geometry(x, est.gyro, est.roll, est.pitch)
         p_ld = rot_z(psi_d).T @ p
+        self._vertical_speed(est, -(rot_z(psi_d).T @ vel)[2])
         tm = t - self.t_mode
         if mode in ("manual", "hover"):
             if mode == "manual" and tm >= cfg.start.manual_s:
@@ -105,6 +114,10 @@ class DeckMission:
                     self._restart(t)
             elif mode == "hover":
                 self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
+                if self.mode == "hover" and self.moving and (self.watch.unusable_for(t) >= g.blind_hold_s or (
+                        self.watch.seen_ok and self.watch.state != "unusable" and self.watch.hpl_m > g.hover_hpl_m)):
+                    return self._blind_hold(t), self.mode
+                self._blind_t = None
             if self.mode == "manual" and cfg.start.pilot == "imu":
                 return DeckReference(t=t, kind="level"), self.mode
             return DeckReference(t=t, kind="follow", position=self.start_rel_ld, velocity=np.zeros(3),
@@ -132,16 +145,14 @@ class DeckMission:
             ref = DeckReference(t=t, kind="follow", position=c + pd, velocity=vd,
                                 accel=np.array([a_lead[0], a_lead[1], a_now[2]]), target=c, normal=n_up,
                                 flare_time_left=self.approach.T - tm if tau else None)
-            if (tau and self.watch.unusable_for(t) >= g.integrity_unusable_s
-                    and self.approach.T - tm > g.integrity_commit_s):
-                if self._go_arounds < g.go_arounds:
-                    self._go_arounds += 1
-                    self.watch.react(t, "go-around", f"unusable {self.watch.unusable_for(t):.1f} s, "
-                                                     f"{self.approach.T - tm:.1f} s to go")
-                    self._set_mode(t, "hover", f"integrity unusable: go-around {self._go_arounds}")
-                    return ref, self.mode
-                if self.watch.unusable_for(t) - g.integrity_unusable_s < self.period:  # log it once
-                    self.watch.react(t, "none", "go-arounds used up: the approach goes on")
+            why = self._no_commit(t) if tau and self.approach.T - tm > g.integrity_commit_s else ""
+            if why:
+                # no touchdown without a fix: go around even with the go-arounds used up (the hover holds and
+                # starts again when the fix is good; no landing is safe, a blind one is not)
+                self._go_arounds += 1
+                self.watch.react(t, "go-around", f"{why}, {self.approach.T - tm:.1f} s to go")
+                self._set_mode(t, "hover", f"integrity: {why}: go-around {self._go_arounds}")
+                return ref, self.mode
             if tm >= self.approach.T:
                 if tau and self._go_arounds < g.go_arounds:
                     # no contact at the trajectory's end: back to the start point, a new approach when the
@@ -155,6 +166,49 @@ class DeckMission:
         c, n_up = self.target(Cd0, wd, psi_d, 0.0)
         return DeckReference(t=t, kind="descend", target=c, normal=n_up,
                              flare_time_left=np.inf if tau else None), self.mode
+
+    def _no_commit(self, t: float, persist: bool = True) -> str:
+        """Why the relative position is not known well enough to commit to a touchdown ('' if it is):
+        the navigator unusable (for ``integrity_unusable_s`` with ``persist``), or usable with its protection
+        level above ``commit_hpl_m``."""
+        g, w = self.cfg.guidance, self.watch
+        if not w.seen_ok:
+            return ""
+        if w.state == "unusable":  # (its own persistence: a short outage is ridden through)
+            return f"navigator unusable {w.unusable_for(t):.1f} s" if (
+                not persist or w.unusable_for(t) >= g.integrity_unusable_s) else ""
+        if w.hpl_m > g.commit_hpl_m:
+            return f"HPL {w.hpl_m:.2f} m above {g.commit_hpl_m:g} m"
+        return ""
+
+    def _vertical_speed(self, est, v_up_fix: float) -> None:
+        """The vertical speed (up) the level hold flies on: the navigator's while its fix is good (usable,
+        HPL within ``hover_hpl_m``), then the IMU's vertical specific force integrated on from it."""
+        g, w = self.cfg.guidance, self.watch
+        if w.state != "unusable" and w.hpl_m <= g.hover_hpl_m and np.isfinite(v_up_fix):
+            self._v_up = float(v_up_fix)
+        elif self._v_up is not None and np.isfinite(est.roll) and np.isfinite(est.pitch):
+            acc_up = -(euler_to_dcm([est.roll, est.pitch, 0.0]) @ np.asarray(est.accel, float))[2] - G
+            self._v_up += float(acc_up) * self.period
+
+    def _blind_hold(self, t: float) -> DeckReference:
+        """Hover without a fix (unusable for ``blind_hold_s``, or its HPL above ``hover_hpl_m``): the horizontal
+        position loop stays on the dead-reckoned estimate (it brings the lights back into view: a level hold on
+        the IMU alone drifted out of view for good, black-out seed 7), the vertical one does not (the
+        estimate's height may lead it onto the deck): it climbs at ``BLIND_CLIMB_MPS`` for ``BLIND_CLIMB_S``
+        and then holds the height (the vertical speed from the last good fix plus the IMU since,
+        :meth:`_vertical_speed`), until the fix is good again."""
+        if self._blind_t is None:
+            self._blind_t = t
+            self.watch.react(t, "hold height", f"hover without a fix (HPL {self.watch.hpl_m:.2f} m): height on the "
+                                              f"IMU, climb {BLIND_CLIMB_MPS * BLIND_CLIMB_S:g} m")
+        v_ref = BLIND_CLIMB_MPS if t - self._blind_t < BLIND_CLIMB_S else 0.0
+        v_up = self._v_up if self._v_up is not None else 0.0
+        a_up = float(np.clip(BLIND_GAIN_PER_S * (v_ref - v_up), -1.0, 1.0))
+        if self.watch.hpl_m > BLIND_FOLLOW_HPL_M:  # the estimate is no guide at all (a restarted filter): level
+            return DeckReference(t=t, kind="level", accel=np.array([0.0, 0.0, -a_up]))
+        return DeckReference(t=t, kind="follow", position=self.start_rel_ld, velocity=np.zeros(3), accel=np.zeros(3),
+                             vertical_accel=-a_up)
 
     def _restart(self, t: float) -> None:
         f = self.filter_cfg
@@ -201,10 +255,11 @@ class DeckMission:
         ok = (near and dl <= np.radians(g.lambda_max_deg)
               and np.radians(g.gamma_min_deg) <= gam <= np.radians(g.gamma_max_deg))
         relaxed = tm >= g.max_wait_s and gam <= np.radians(g.gamma_max_deg)  # late: any heading, never too flat
-        if (ok or relaxed) and self.watch.state == "unusable" and self.watch.seen_ok:
+        why = self._no_commit(t, persist=False)
+        if (ok or relaxed) and why:
             if not self._held:
                 self._held = True
-                self.watch.react(t, "hold", "no approach while the navigator is unusable")
+                self.watch.react(t, "hold", f"no approach: {why}")
             return
         self._held = False
         if ok or relaxed:

@@ -33,9 +33,10 @@ Tuning comes from :class:`DeckNavConfig` alone: the ship process noise from ``fi
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.stats import chi2
 
 from visnav.estimation import deck as dm
 from visnav.estimation.association import associate
@@ -47,6 +48,7 @@ from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
 
 G = 9.81
+DIVERGED_SIGMA_M, DIVERGED_SIGMA_MPS = 0.5, 0.5  # the restart's least position / velocity sigma per axis
 #: centroid error of the rendered spots alone, found by ``find_blobs`` (measured: 0.0033 deg at f = 420 px)
 RENDER_CENTROID_PX = 0.025
 
@@ -58,6 +60,10 @@ class DeckNavStats:
     frames: int = 0
     frames_dropped: int = 0  # older than the history, or before initialisation
     frames_frozen: int = 0  # bit-identical to the previous frame (a frozen video link): not fused
+    clock_steps: int = 0  # steps of the camera's stamps against its frame counter (re-stamped)
+    reacquisitions: int = 0  # outages after which the deck's attitude went back to its sea-state prior
+    updates_gated: int = 0  # frames whose whole update (with and without rates) was beyond the update gate
+    divergences: int = 0  # covariance not positive definite: restarted where it was (``_diverged``)
     empty_frames: int = 0
     blobs: int = 0
     blobs_rejected: int = 0
@@ -86,6 +92,16 @@ class DeckNavConfig:
     history_s: float = 0.5
     integrity: IntegrityConfig = field(default_factory=IntegrityConfig)
     reject_repeated_frames: bool = False  # a frame bit-identical to the previous one is a frozen link
+    # the camera's frame interval [s] (its frame counter times this is its own clock); 0: no clock check
+    frame_interval_s: float = 0.0
+    clock_alarm_s: float = 1.0  # health degraded this long after a camera clock step was found
+    # re-acquisition after an outage: no frame fused for this long [s] (inf: never) -> the deck's attitude
+    # and rates go back to their sea-state prior (level deck, deck_prior_var) before the next frame is fused
+    reacquire_after_s: float = float("inf")
+    deck_prior_var: np.ndarray = field(default_factory=lambda: np.full(5, np.radians(1.0) ** 2))
+    # a frame's whole update is not applied when its NIS is above the chi2 1 - update_gate_alpha quantile
+    # (0: no such gate; each light is gated by ``gate`` in the association anyway)
+    update_gate_alpha: float = 0.0
 
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
@@ -114,7 +130,11 @@ class DeckNavConfig:
                    gate=f.gate, alpha=f.alpha, beta=f.beta, kappa=f.kappa, blob_threshold=c.blob_threshold,
                    converged_bearing_rms=np.radians(f.converged_bearing_rms_deg),
                    integrity=IntegrityConfig(stale_s=f.integrity_stale_s),
-                   reject_repeated_frames=f.reject_repeated_frames)
+                   reject_repeated_frames=f.reject_repeated_frames,
+                   frame_interval_s=frame_interval_s if f.camera_clock_check else 0.0,
+                   reacquire_after_s=f.integrity_stale_s if f.reacquire_after_outage else float("inf"),
+                   deck_prior_var=dm.deck_prior_variance(sea, f.motion_scale, imu.attitude_noise_deg),
+                   update_gate_alpha=f.update_gate_alpha)
 
 
 @dataclass(frozen=True)
@@ -180,6 +200,12 @@ class DeckNavigator(CommandDispatch):
         self.last_bearing_rms = float("nan")  # RMS bearing innovation of the last update [rad]
         self._hist: deque[_Step] = deque(maxlen=max(2, int(np.ceil(config.history_s / config.imu_period_s)) + 1))
         self._frames: deque = deque()  # (t, lights used, bearing rms) of the recent frames
+        self.clock_offset_s = 0.0  # the camera stamps' offset found from the frame counter (subtracted)
+        self._cam_prev: tuple[int, float] | None = None  # (frame counter, corrected stamp) of the previous frame
+        self._clock_alarm: tuple[float, str] | None = None  # (time, reason) of the newest clock step
+        self._t_fused: float | None = None  # stamp of the newest frame that was fused
+        self._t_reacq = -np.inf  # time of the newest re-acquisition
+        self._gates: dict[int, float] = {}  # the update gate's chi2 quantile per dof
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -227,7 +253,11 @@ class DeckNavigator(CommandDispatch):
                        lights_used=self.stats.lights_used_last, frames_1s=len(recent),
                        min_lights_1s=min(used) if used else 0, bearing_rms_1s=rms_1s, converged=conv)
         P_h = self.ukf.P[0:2, 0:2] if self.ukf is not None else None
-        return h.set_integrity(self.integrity.assess(t, P_h))
+        a = self.integrity.assess(t, P_h)
+        if (self._clock_alarm is not None and a["integrity"] == "ok"
+                and t - self._clock_alarm[0] <= self.cfg.clock_alarm_s):
+            a["integrity"], a["integrity_reason"] = "degraded", self._clock_alarm[1]
+        return h.set_integrity(a)
 
     def _cmd_restart(self, t: float, yaw_deg: float = 0.0) -> None:
         """The operator's reset (Fig. 5.7): eq. 5.12-5.17 again, relative yaw ``yaw_deg``, acquisition R."""
@@ -258,6 +288,7 @@ class DeckNavigator(CommandDispatch):
         self.bearing_var, self.rate_var = (s**2 for s in sigmas)
         if self._t is None or t > self._t:
             self._t = t
+        self._t_fused = None
         self._hist.clear()
         self._hist.append(_Step(self._t, self.ukf.x.copy(), self.ukf.P.copy(), None))
         if self.recorder is not None:
@@ -321,14 +352,40 @@ class DeckNavigator(CommandDispatch):
         scale = 1.0 if abs(dt - self.cfg.imu_period_s) < 1e-9 else self.cfg.imu_period_s / dt
         Q = dm.process_noise(self.ukf.x, dt, u, self.imu_cov * scale if scale != 1.0 else self.imu_cov,
                              self.ship_cov * scale if scale != 1.0 else self.ship_cov)
-        self.ukf.predict(dt, Q, u=u)
+        try:
+            self.ukf.predict(dt, Q, u=u)
+        except np.linalg.LinAlgError as exc:
+            self._diverged(str(exc))
+            self.ukf.predict(dt, Q, u=u)
+
+    def _diverged(self, why: str) -> None:
+        """The covariance is no longer positive definite: restart the filter where it is, honestly unsure.
+        The deck's attitude and rates from their sea-state prior (as after an outage), position and velocity
+        kept with at least ``DIVERGED_SIGMA_M`` / ``DIVERGED_SIGMA_MPS`` per axis (their variances otherwise),
+        no correlation: the protection level is then far above any landing's, the mission holds until frames
+        have brought it down. Logged in ``nav_init``, counted in ``stats.divergences``."""
+        x, P = self.ukf.x.copy(), self.ukf.P
+        d = np.abs(np.diag(P)) if np.all(np.isfinite(P)) else np.zeros(12)
+        if not np.all(np.isfinite(x)):
+            x = self._hist[0].x.copy() if self._hist else np.zeros(12)
+        rp = self._rp if self._rp is not None else np.zeros(2)
+        var = np.asarray(self.cfg.deck_prior_var, float)
+        x[3:5], x[9:12] = rp, 0.0
+        dd = np.maximum(d, np.r_[[DIVERGED_SIGMA_M**2] * 3, np.zeros(3), [DIVERGED_SIGMA_MPS**2] * 3, np.zeros(3)])
+        dd[[3, 4, 9, 10, 11]] = var
+        dd[5] = max(dd[5], np.radians(10.0) ** 2)
+        self.ukf.x, self.ukf.P = x, np.diag(dd)
+        self.stats.divergences += 1
+        if self.recorder is not None:
+            self.recorder("nav_init", self._t if self._t is not None else 0.0, x0=x.copy(), sigma=np.sqrt(dd),
+                          source=f"filter restarted where it was: {why}")
 
     def _frame(self, f: Frame) -> None:
         self.stats.frames += 1
         if self.ukf is None:
             self.stats.frames_dropped += 1
             return
-        t = float(f.t)
+        t = self._camera_time(f)
         # a live camera's noise never repeats an image bit for bit: a repeat is a frozen link, not a view
         # (issue #18); nothing is fused, so the navigator goes stale -> unusable as with no frame at all
         same = self._frozen.repeated(f.image) and self.cfg.reject_repeated_frames
@@ -338,6 +395,10 @@ class DeckNavigator(CommandDispatch):
             return
         uv = find_blobs(f.image, self.tracker.threshold)
         bf = self.tracker.from_pixels(t, uv)
+        if (self._t_fused is not None and t - max(self._t_fused, self._t_reacq) > self.cfg.reacquire_after_s
+                and np.isfinite(bf.bearings).all(axis=1).any()):
+            self._reacquire(t)
+            bf = replace(bf, rates=np.full_like(np.asarray(bf.rates, float), np.nan))  # rates across the gap: none
         if t >= self._t - 1e-12:
             if t > self._t + 1e-12 and self._u is not None:  # newer than the IMU: predict to the frame
                 self._predict(t - self._t, self._u)
@@ -355,6 +416,8 @@ class DeckNavigator(CommandDispatch):
                 used, rejected = 0, 0
             else:
                 used, rejected = res
+        if used:
+            self._t_fused = t if self._t_fused is None else max(self._t_fused, t)
         self._frames.append((t, used, self.last_bearing_rms if used else float("nan")))
         while self._frames and self._frames[0][0] < t - 2.0:
             self._frames.popleft()
@@ -362,6 +425,67 @@ class DeckNavigator(CommandDispatch):
             self.recorder("camera", t, blobs=len(bf.bearings), lights_used=used, rejected=rejected,
                           nis=self.last_nis if used else float("nan"), dof=self.last_dof if used else 0,
                           bearing_rms=self.last_bearing_rms if used else float("nan"))
+
+    def _camera_time(self, f: Frame) -> float:
+        """The frame's time on the IMU's clock: its stamp minus the camera clock's offset found so far.
+
+        A camera counts its frames and takes them at its own fixed interval, so between two frames the stamps
+        must advance by (counter difference) x ``frame_interval_s``. A step of more than half an interval is a
+        jump of the camera's clock, not of the scene: the offset takes it up and the frame (and every later
+        one) is fused at its corrected stamp (late frames through the prediction history), the step is
+        logged (``camera_clock``) and ``health`` says ``degraded`` with the reason for ``clock_alarm_s``.
+        """
+        t_raw = float(f.t)
+        T = self.cfg.frame_interval_s
+        idx = int(getattr(f, "index", -1))
+        t = t_raw - self.clock_offset_s
+        prev = self._cam_prev
+        if T > 0 and prev is not None and 0 <= idx < prev[0] and np.isfinite(t_raw):
+            # an older frame after a newer one (stamped before the jump back, delivered after it): it
+            # belongs to the previous offset; put it where its counter says, the offset stays
+            step = t - (prev[1] - (prev[0] - idx) * T)
+            return t - step if abs(step) > 0.5 * T else t
+        self._cam_prev = None
+        if T > 0 and prev is not None and idx > prev[0] and np.isfinite(t_raw):
+            step = t - (prev[1] + (idx - prev[0]) * T)
+            if abs(step) > 0.5 * T:
+                self.clock_offset_s += step
+                t = t_raw - self.clock_offset_s
+                self.stats.clock_steps += 1
+                why = (f"camera clock stepped {step:+.3f} s against its frame counter (offset now "
+                       f"{self.clock_offset_s:+.3f} s): frames re-stamped")
+                self._clock_alarm = (t, why)
+                if self.recorder is not None:
+                    self.recorder("camera_clock", t, step=step, offset=self.clock_offset_s, stamp=t_raw)
+        if idx >= 0 and np.isfinite(t):
+            self._cam_prev = (idx, t)
+        return t
+
+    def _reacquire(self, t: float) -> None:
+        """After an outage (no frame fused for ``reacquire_after_s``): the deck's relative roll and pitch go
+        back to a level deck's (the autopilot's roll and pitch), its rates to zero, with the sea state's
+        variances and no correlation (``deck_prior_var``); position, velocity and relative yaw keep what the
+        IMU carried them to. Applied to the stored history too (a late frame rewinds into it)."""
+        rp = self._rp if self._rp is not None else np.zeros(2)
+        var = np.asarray(self.cfg.deck_prior_var, float)
+        ii = np.array([3, 4, 9, 10, 11])
+
+        def reset(x, P):
+            x, P = x.copy(), P.copy()
+            x[3:5], x[9:12] = rp, 0.0
+            P[ii, :], P[:, ii] = 0.0, 0.0
+            P[ii, ii] = var
+            return x, P
+
+        self.ukf.x, self.ukf.P = reset(self.ukf.x, self.ukf.P)
+        for s in self._hist:
+            s.x, s.P = reset(s.x, s.P)
+        self.stats.reacquisitions += 1
+        self._t_reacq = t
+        if self.recorder is not None:
+            self.recorder("nav_init", t, x0=self.ukf.x.copy(), sigma=np.sqrt(np.diag(self.ukf.P)),
+                          source=f"re-acquisition after {t - self._t_fused:.2f} s without a fused frame: "
+                                 "deck attitude and rates from the sea-state prior")
 
     def _fuse_late(self, t: float, bf):
         """Rewind to the stored step before ``t``, fuse there, replay the IMU inputs since. None: too old."""
@@ -393,6 +517,15 @@ class DeckNavigator(CommandDispatch):
         self._hist = deque(new, maxlen=self._hist.maxlen)
         return res
 
+    def _max_nis(self, dof: int) -> float | None:
+        a = self.cfg.update_gate_alpha
+        if a <= 0:
+            return None
+        q = self._gates.get(dof)
+        if q is None:
+            q = self._gates[dof] = float(chi2.isf(a, dof))
+        return q
+
     def expected_bearings(self):
         """Predicted bearings (L, 2) of every light and their covariances (L, 2, 2) with R."""
         L = len(self.lights)
@@ -416,8 +549,18 @@ class DeckNavigator(CommandDispatch):
             raise ValueError(f"bearings {b.shape} and rates {r.shape} differ in shape")
         ok = np.all(np.isfinite(b), axis=1)
         b, r = b[ok], r[ok]
+        try:
+            return self._correct_checked(b, r, int(ok.sum()), gyro, replay)
+        except np.linalg.LinAlgError as exc:
+            self._diverged(str(exc))
+            self.stats.lights_used_last = 0
+            if not replay:
+                self.integrity.record(self._t, "bearing", float("nan"), 0, False)
+            return 0, 0
+
+    def _correct_checked(self, b, r, n_ok: int, gyro, replay: bool = False) -> tuple[int, int]:
         st = self.stats if not replay else DeckNavStats()
-        st.blobs += int(ok.sum())
+        st.blobs += n_ok
         if len(b) == 0:
             st.empty_frames += 1
             st.lights_used_last = 0
@@ -438,8 +581,20 @@ class DeckNavigator(CommandDispatch):
         ridx = idx[has_rate]
         z = np.concatenate([b[m].ravel(), r[m][has_rate].ravel()])
         R = np.diag(np.r_[np.full(2 * idx.size, self.bearing_var), np.full(2 * ridx.size, self.rate_var)])
-        self.ukf.update(z, R, hx=dm.measurement_model, lights=self.lights, cam=self.cam, gyro=gyro,
-                        idx=idx, rate_idx=ridx)
+        applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), lights=self.lights,
+                                  cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx)
+        if not applied and ridx.size:  # the rates (frame-to-frame blob matches) are the fragile part: try without
+            nb = 2 * idx.size
+            applied = self.ukf.update(z[:nb], R[:nb, :nb], hx=dm.measurement_model, max_nis=self._max_nis(nb),
+                                      lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx[:0])
+            ridx = ridx[:0]
+            z = z[:nb]
+        if not applied:  # the whole frame disagrees with the filter beyond its gate: not fused
+            st.lights_used_last = 0
+            st.updates_gated += 1
+            if not replay:
+                self.integrity.record(self._t, "bearing", float("nan"), 0, False)
+            return 0, rejected + int(idx.size)
         st.lights_used_last = int(idx.size)
         if replay:
             return int(idx.size), rejected

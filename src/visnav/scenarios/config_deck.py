@@ -126,6 +126,17 @@ class DeckFilterConfig(_M):
     reject_repeated_frames: bool = Field(True, description="drop a frame bit-identical to the previous one (a "
                                          "frozen video link: the camera's noise never repeats an image; issue #18). "
                                          "Turn off with camera.noise_gray = 0 over a still deck")
+    camera_clock_check: bool = Field(True, description="check each frame's stamp against the camera's frame counter "
+                                     "x its frame interval: a step of more than half an interval is a clock jump, "
+                                     "the stream is re-stamped by the step (and health degraded for a second, "
+                                     "reason given; issue #18)")
+    update_gate_alpha: float = Field(1e-6, ge=0, lt=0.5, description="a frame whose whole update has a NIS above the "
+                                     "chi2 1 - alpha quantile is fused without its bearing rates, or not at all "
+                                     "(0: off; fault-free the largest NIS is 0.83 of the 1e-4 quantile; issue #18)")
+    reacquire_after_outage: bool = Field(True, description="after integrity_stale_s without a fused frame the "
+                                         "deck's relative roll, pitch and rates go back to their sea-state prior "
+                                         "(level deck) before the next frame: the constant-rate model would "
+                                         "extrapolate them without bound (issue #18)")
 
 
 class DeckGuidanceConfig(_M):
@@ -163,6 +174,15 @@ class DeckGuidanceConfig(_M):
                                         "approach starts while it is unusable (issue #18)")
     integrity_commit_s: float = Field(1.0, ge=0, le=30, description="... except in the approach's last seconds "
                                       "(the lights leave the view near the deck): there it lands on")
+    commit_hpl_m: float = Field(0.15, gt=0, le=10, description="moving deck: no approach starts, and one with more "
+                                "than integrity_commit_s to go goes around, while the navigator's horizontal "
+                                "protection level of the relative position is above this (half the 0.6 m plate "
+                                "less the guidance's own scatter; fault-free it stays below 0.05 m; issue #18)")
+    hover_hpl_m: float = Field(0.3, gt=0, le=10, description="moving deck: a hover whose navigator's protection level "
+                               "is above this holds level on the IMU as without a fix (issue #18)")
+    blind_hold_s: float = Field(0.5, ge=0, le=30, description="moving deck: hover with the navigator unusable this "
+                                "long -> hold level on the IMU (no position loop on a dead-reckoned estimate, "
+                                "which may lead it onto the deck) until it is usable again (issue #18)")
     descent_hold: bool = Field(True, description="descend mode: horizontal spring-damper on the touchdown point "
                                 "(tilts the thrust off the deck normal; off: the vehicle drifts, moving seed 17 "
                                 "missed the plate)")

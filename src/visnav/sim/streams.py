@@ -95,6 +95,10 @@ DECK_STREAMS = {
                  "source": ("text", "", "how the filter was started or restarted: static (eq. 5.12), truth+noise "
                                         "(the Vicon start, NavInit from the simulation), restart from a yaw")},
     "imu_dropped": {"reason": ("text", "", "why the navigator dropped an IMU sample")},
+    "camera_clock": {"step": ("s", "", "step of the camera's stamps against its frame counter x frame interval "
+                                       "(t: the corrected stamp)"),
+                     "offset": ("s", "", "the camera clock's offset subtracted from its stamps from now on"),
+                     "stamp": ("s", "", "the frame's stamp as received")},
     "touchdown": {"rel_speed": ("m/s", "", "true speed of the gear relative to the deck point it meets"),
                   "pos_err": ("m", "deck plane", "true gear distance from the desired landing location"),
                   "on_deck": ("bool", "", "the gear is on the square plate"),
