@@ -312,10 +312,10 @@ def test_after_an_outage_the_deck_attitude_restarts_from_its_sea_state_prior():
 
 
 def test_the_mission_config_turns_the_clock_check_and_the_reacquisition_on():
-    cfg = DeckNavConfig.from_mission(load_scenario("deck-moving").mission, 0.03)
+    cfg = DeckNavConfig.from_mission(load_scenario("deck-moving"), 0.03)
     assert cfg.frame_interval_s == 0.03 and cfg.reacquire_after_s == 0.5
-    off = load_scenario("deck-moving", ["mission.filter.camera_clock_check=false",
-                                        "mission.filter.reacquire_after_outage=false"]).mission
+    off = load_scenario("deck-moving", ["navigation.camera_clock_check=false",
+                                        "navigation.reacquire_after_outage=false"])
     c2 = DeckNavConfig.from_mission(off, 0.03)
     assert c2.frame_interval_s == 0.0 and c2.reacquire_after_s == np.inf
 
