@@ -165,8 +165,10 @@ def test_bad_input_raises(call):
         call()
 
 
-def test_single_vector_fast_paths_equal_the_batch_arithmetic_bit_for_bit():
-    """The one-vector paths (scalar math, the 100 Hz loops) give the batch (numpy) path's bits."""
+def test_single_vector_fast_paths_equal_the_batch_arithmetic_to_the_ulp():
+    """The one-vector paths (scalar math, the 100 Hz loops) give the batch (numpy) path's numbers: the
+    same arithmetic, bit for bit where numpy's ufuncs use libm; on a CPU where numpy takes its own SIMD
+    arctan2 / arcsin (AVX-512) the two may differ in the last bit, so the check is a few ulp, not equality."""
     rng = np.random.default_rng(7)
     e = _random_euler(rng, 300)
     e[:5, 2] = [np.pi, -np.pi, np.nextafter(-np.pi, 0.0), 0.0, np.pi / 2]
@@ -174,11 +176,11 @@ def test_single_vector_fast_paths_equal_the_batch_arithmetic_bit_for_bit():
     C[5] = euler_to_dcm([0.3, np.pi / 2, 0.2])  # gimbal lock: roll set to 0
     single = np.array([dcm_to_euler(c) for c in C])
     batch = dcm_to_euler(C)
-    assert np.array_equal(single, batch)
+    np.testing.assert_array_max_ulp(single, batch, maxulp=4)
     assert single[5, 0] == 0.0 and np.all((single[:, 2] > -np.pi) & (single[:, 2] <= np.pi))
     ed = rng.normal(0.0, 1.0, (300, 3))
-    assert np.array_equal(np.array([euler_rates_to_body_rates(a, b) for a, b in zip(e, ed)]),
-                          euler_rates_to_body_rates(e, ed))
+    np.testing.assert_allclose(np.array([euler_rates_to_body_rates(a, b) for a, b in zip(e, ed)]),
+                               euler_rates_to_body_rates(e, ed), rtol=1e-15, atol=1e-15)
     a, b = rng.normal(0.0, 10.0, (2, 300, 3))
     assert np.array_equal(np.array([cross3(x, y) for x, y in zip(a, b)]), np.cross(a, b))
     assert np.array_equal(cross3([1.0, 0.0, 0.0], (0.0, 1.0, 0.0)), [0.0, 0.0, 1.0])
