@@ -45,6 +45,10 @@ from visnav.mission.integrity import IntegrityWatch
 
 BLIND_GAIN_PER_S = 2.0  # the blind hold's vertical-speed loop on the IMU [1/s]
 BLIND_ACCEL_MAX = 2.0  # ... and its largest vertical acceleration command [m/s^2]
+V_UP_TAU_S = 1.0  # the IMU's vertical speed follows a trusted fix's with this time constant [s]
+# a blind hold this long [s] climbs at BLIND_DRIFT_CLIMB_MPS instead of holding: on the IMU alone its vertical speed
+# drifts by a few cm/s (IMU drops seed 3: 0.04 m/s down, onto the sea 3.4 m off after 40 s): away from the deck
+BLIND_LONG_S, BLIND_DRIFT_CLIMB_MPS = 5.0, 0.1
 BLIND_FOLLOW_HPL_M = 1.0  # above this HPL the hold is level (no horizontal loop on the estimate either)
 G = 9.81
 
@@ -214,13 +218,21 @@ class DeckMission:
         return ""
 
     def _vertical_speed(self, est, v_up_fix: float) -> None:
-        """The vertical speed (up) the level hold flies on: the navigator's while its fix is good (usable,
-        HPL within ``hover_hpl_m``), then the IMU's vertical specific force integrated on from it."""
+        """The vertical speed (up) the blind hold and the blind landing fly on: the IMU's vertical acceleration
+        integrated, pulled towards the navigator's vertical speed with ``V_UP_TAU_S`` while its fix is trusted
+        (``ok``, HPL within ``commit_hpl_m``; the first such fix sets it). Only a trusted fix: the HPL bounds
+        the horizontal error, and a degraded fix whose HPL was still below ``hover_hpl_m`` had the vertical speed
+        0.4-0.6 m/s off (IMU drops seed 11, accelerometer bias seed 20), which the hold then flew for good.
+        The time constant averages the deck's heave out of the relative speed."""
         g, w = self.cfg.guidance, self.watch
-        if w.state != "unusable" and w.hpl_m <= g.hover_hpl_m and np.isfinite(v_up_fix):
-            self._v_up = float(v_up_fix)
-        elif self._v_up is not None:
-            self._v_up += self._imu_up_accel(est) * self.period
+        trusted = w.state == "ok" and w.hpl_m <= g.commit_hpl_m and np.isfinite(v_up_fix)
+        if self._v_up is None:
+            if trusted:
+                self._v_up = float(v_up_fix)
+            return
+        self._v_up += self._imu_up_accel(est) * self.period
+        if trusted:
+            self._v_up += (float(v_up_fix) - self._v_up) * min(self.period / V_UP_TAU_S, 1.0)
 
     @staticmethod
     def _imu_up_accel(est) -> float:
@@ -238,7 +250,8 @@ class DeckMission:
         the start point on the dead-reckoned estimate (it brings the lights back into view: a level hold on the
         IMU alone drifted out of view for good), until the fix is good again. The climb goes no higher than the
         start height by the estimate (straight up from 0.8 m the lights came back at the bottom of the image and
-        the filter re-acquired 0.3 m off, blur seed 11); level when the HPL is above ``BLIND_FOLLOW_HPL_M``."""
+        the filter re-acquired 0.3 m off, blur seed 11); level when the HPL is above ``BLIND_FOLLOW_HPL_M``. After
+        ``BLIND_LONG_S`` without a fix it climbs at ``BLIND_DRIFT_CLIMB_MPS``: the IMU's drift away from the deck."""
         g, w = self.cfg.guidance, self.watch
         if self._blind_t is None:
             self._blind_t, self._climbed = t, 0.0
@@ -249,7 +262,7 @@ class DeckMission:
                                       f"{self._climb_to:.2f} m at {g.blind_climb_mps:g} m/s")
         v_up = self._v_up if self._v_up is not None else 0.0
         climbing = self._climbed < self._climb_to
-        v_ref = g.blind_climb_mps if climbing else 0.0
+        v_ref = g.blind_climb_mps if climbing else BLIND_DRIFT_CLIMB_MPS if t - self._blind_t >= BLIND_LONG_S else 0.0
         a_up = float(np.clip(BLIND_GAIN_PER_S * (v_ref - v_up), -BLIND_ACCEL_MAX, BLIND_ACCEL_MAX))
         self._climbed += v_up * self.period
         if w.hpl_m > BLIND_FOLLOW_HPL_M:  # the estimate is no guide at all (a restarted filter): level
