@@ -288,3 +288,20 @@ def test_condor_falls_back_to_the_gps_loiter_and_returns_after_ok():
     m.step(t + 0.2 + o.integrity_ok_s, _fw(), h("ok"))
     assert m.mode == "vision_orbit" and m.switched_at == o.switch_time_s
     assert log.get("integrity_reaction")["action"][-1] == "back to vision"
+
+
+def test_deck_long_blind_hold_drifts_up_not_down():
+    """A hold without a fix for BLIND_LONG_S cannot hold its height on the IMU (its integration drifts by a few
+    cm/s: IMU drops seed 3 sank 0.04 m/s onto the sea 3.4 m off after 40 s): it climbs at BLIND_DRIFT_CLIMB_MPS."""
+    from visnav.mission.deck import BLIND_DRIFT_CLIMB_MPS, BLIND_LONG_S
+
+    m, cfg, log, t = _deck_in_approach()
+    t = _run(m, t, 0.1, 8, "unusable", hpl_m=0.5)
+    assert m.mode == "hover"
+    dt = 0.02
+    out, t = _fly_vertical(m, t, dt, int((BLIND_LONG_S + 4.0) / dt),
+                           DeckHealth(converged=True, integrity="unusable", hpl_m=0.5))
+    v = np.array([o[1] for o in out])
+    n_long = int((BLIND_LONG_S - 1.0) / dt)  # (the hold began in the last steps of _run)
+    assert np.all(np.abs(v[:n_long]) < 1e-9)  # at the start height: holds
+    assert v[-1] == pytest.approx(BLIND_DRIFT_CLIMB_MPS, abs=0.01) and np.all(v >= -1e-9)
