@@ -30,7 +30,12 @@ over): on a moving deck the navigator ``unusable`` (no frame fused for ``filter.
 ``guidance.integrity_unusable_s`` during an approach with more than ``guidance.integrity_commit_s`` to go
 is a go-around (back to ``hover``, one of ``guidance.go_arounds``); no approach starts while it is
 unusable (the hover holds). In the approach's last ``integrity_commit_s`` the landing goes on (the
-lights leave the view near the deck). Each reaction is logged in ``integrity_reaction``.
+lights leave the view near the deck); a trajectory that then ends without contact and without a trusted
+fix lands on (``guidance.blind_end = "land"``: ``descend`` level, the horizontal velocity arrested, sinking
+at ``final_descent_mps`` on the IMU, at most ``blind_land_s``) instead of going around over the heaving deck.
+A hover without a fix holds blind (:meth:`DeckMission._blind_hold`): it climbs ``blind_climb_m`` at
+``blind_climb_mps`` on the IMU with the horizontal velocity arrested, then steers back to the start point on
+the dead-reckoned estimate. Each reaction is logged in ``integrity_reaction``.
 """
 
 from __future__ import annotations
