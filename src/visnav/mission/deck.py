@@ -54,6 +54,10 @@ V_UP_TAU_S = 1.0  # the IMU's vertical speed follows a trusted fix's with this t
 # a blind hold this long [s] climbs at BLIND_DRIFT_CLIMB_MPS instead of holding: on the IMU alone its vertical speed
 # drifts by a few cm/s (IMU drops seed 3: 0.04 m/s down, onto the sea 3.4 m off after 40 s): away from the deck
 BLIND_LONG_S, BLIND_DRIFT_CLIMB_MPS = 5.0, 0.1
+# a hover whose navigator has been degraded (its own consistency tests failing) this long [s] holds blind and level:
+# a filter re-acquired after a black-out flapped between fixes with velocities 4 m/s off while its HPL said
+# 0.04-0.2 m, and the hover followed it off the plate (black-out seed 8); fault-free episodes last 0.02-0.3 s
+DEGRADED_HOLD_S = 0.5
 BLIND_FOLLOW_HPL_M = 1.0  # above this HPL the hold is level (no horizontal loop on the estimate either)
 G = 9.81
 
@@ -128,7 +132,8 @@ class DeckMission:
             elif mode == "hover":
                 self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
                 if self.mode == "hover" and self.moving and (self.watch.unusable_for(t) >= g.blind_hold_s or (
-                        self.watch.seen_ok and self.watch.state != "unusable" and self.watch.hpl_m > g.hover_hpl_m)):
+                        self.watch.seen_ok and self.watch.state != "unusable" and self.watch.hpl_m > g.hover_hpl_m)
+                        or self._degraded_for(t) >= DEGRADED_HOLD_S):
                     return self._blind_hold(t, p_ld), self.mode
                 self._blind_t = None
             if self.mode == "manual" and cfg.start.pilot == "imu":
@@ -222,6 +227,11 @@ class DeckMission:
             return f"HPL {w.hpl_m:.2f} m above {g.commit_hpl_m:g} m"
         return ""
 
+    def _degraded_for(self, t: float) -> float:
+        """How long the navigator has been ``degraded`` (0 when it is not)."""
+        w = self.watch
+        return t - w.since if w.state == "degraded" and w.seen_ok else 0.0
+
     def _vertical_speed(self, est, v_up_fix: float) -> None:
         """The vertical speed (up) the blind hold and the blind landing fly on: the IMU's vertical acceleration
         integrated, pulled towards the navigator's vertical speed with ``V_UP_TAU_S`` while its fix is trusted
@@ -255,7 +265,8 @@ class DeckMission:
         the start point on the dead-reckoned estimate (it brings the lights back into view: a level hold on the
         IMU alone drifted out of view for good), until the fix is good again. The climb goes no higher than the
         start height by the estimate (straight up from 0.8 m the lights came back at the bottom of the image and
-        the filter re-acquired 0.3 m off, blur seed 11); level when the HPL is above ``BLIND_FOLLOW_HPL_M``. After
+        the filter re-acquired 0.3 m off, blur seed 11); level when the HPL is above ``BLIND_FOLLOW_HPL_M`` or the
+        navigator has been degraded for ``DEGRADED_HOLD_S`` (its updates are suspect, so is the estimate). After
         ``BLIND_LONG_S`` without a fix it climbs at ``BLIND_DRIFT_CLIMB_MPS``: the IMU's drift away from the deck."""
         g, w = self.cfg.guidance, self.watch
         if self._blind_t is None:
@@ -270,7 +281,7 @@ class DeckMission:
         v_ref = g.blind_climb_mps if climbing else BLIND_DRIFT_CLIMB_MPS if t - self._blind_t >= BLIND_LONG_S else 0.0
         a_up = float(np.clip(BLIND_GAIN_PER_S * (v_ref - v_up), -BLIND_ACCEL_MAX, BLIND_ACCEL_MAX))
         self._climbed += v_up * self.period
-        if w.hpl_m > BLIND_FOLLOW_HPL_M:  # the estimate is no guide at all (a restarted filter): level
+        if w.hpl_m > BLIND_FOLLOW_HPL_M or self._degraded_for(t) >= DEGRADED_HOLD_S:  # no guide: level
             return DeckReference(t=t, kind="level", accel=np.array([0.0, 0.0, -a_up]))
         # climbing: the position loop on where the vehicle is (its damper arrests the horizontal velocity)
         pos = np.asarray(p_ld, float).copy() if climbing else self.start_rel_ld
