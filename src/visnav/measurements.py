@@ -354,4 +354,5 @@ class DeckReference:
     normal: np.ndarray | None = None
     flare_time_left: float | None = None
     pilot_view: np.ndarray | None = None
-    vertical_accel: float | None = None  # follow: this vertical acceleration (z down) instead of the position loop's
+    vertical_accel: float | None = None  # follow / descend: this vertical acceleration (z down) instead of the
+    # position loop's / the sink-rate loop's on the estimate (the mission flies the height on the IMU)

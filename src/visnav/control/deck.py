@@ -8,7 +8,8 @@ states, newest gyro, specific force, roll and pitch) and a ``DeckReference`` fro
 * ``follow`` - the spring-damper follower of eq. 4.25-4.27 (``control/multirotor.follow``) on the
   reference position, velocity and feed-forward acceleration (level-deck frame);
 * ``descend`` - thrust along the predicted deck normal with the vertical speed servoed to
-  ``final_descent_mps`` and, with ``descent_hold``, the spring-damper on the horizontal error.
+  ``final_descent_mps`` (or the mission's ``vertical_accel``) and, with ``descent_hold``, the spring-damper
+  on the horizontal error.
 
 With ``reference.flare_time_left`` set the last ``flare_s`` before contact turn the commanded
 specific force onto the deck normal (:func:`flare`). Then eq. 4.28 (``attitude_command``) and the
@@ -82,6 +83,8 @@ class DeckController:
             c, n_up = ref.target, ref.normal
             p_des, v_des = np.array([c[0], c[1], p_ld[2]]), np.array([0.0, 0.0, g.final_descent_mps])
             a_z = g.damper_per_s * (g.final_descent_mps - v_ld[2])
+            if ref.vertical_accel is not None:  # the mission sinks on the IMU (a blind end, no fix to trust)
+                a_z = float(ref.vertical_accel)
             a_ff = np.array([0.0, 0.0, G]) + (G - a_z) / max(-n_up[2], 0.5) * n_up
             fb = follow(p_des, np.zeros(3), np.zeros(3), p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
             a_cmd_ld = a_ff + (np.array([fb[0], fb[1], 0.0]) if g.descent_hold else 0.0)

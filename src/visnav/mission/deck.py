@@ -30,7 +30,12 @@ over): on a moving deck the navigator ``unusable`` (no frame fused for ``filter.
 ``guidance.integrity_unusable_s`` during an approach with more than ``guidance.integrity_commit_s`` to go
 is a go-around (back to ``hover``, one of ``guidance.go_arounds``); no approach starts while it is
 unusable (the hover holds). In the approach's last ``integrity_commit_s`` the landing goes on (the
-lights leave the view near the deck). Each reaction is logged in ``integrity_reaction``.
+lights leave the view near the deck); a trajectory that then ends without contact and without a trusted
+fix lands on (``guidance.blind_end = "land"``: ``descend`` level, the horizontal velocity arrested, sinking
+at ``final_descent_mps`` on the IMU, at most ``blind_land_s``) instead of going around over the heaving deck.
+A hover without a fix holds blind (:meth:`DeckMission._blind_hold`): it climbs ``blind_climb_m`` at
+``blind_climb_mps`` on the IMU with the horizontal velocity arrested, then steers back to the start point on
+the dead-reckoned estimate. Each reaction is logged in ``integrity_reaction``.
 """
 
 from __future__ import annotations
@@ -43,8 +48,16 @@ from visnav.guidance.deck_approach import (StraightApproach, TauGapApproach, lev
 from visnav.measurements import DeckReference, NavCommand, NavInit, RelativeStateSample
 from visnav.mission.integrity import IntegrityWatch
 
-BLIND_CLIMB_MPS, BLIND_CLIMB_S = 0.2, 1.5  # the level hold's climb away from the deck (0.3 m) when the hover loses its fix
-BLIND_GAIN_PER_S = 1.0  # its vertical-speed loop on the IMU [1/s]
+BLIND_GAIN_PER_S = 2.0  # the blind hold's vertical-speed loop on the IMU [1/s]
+BLIND_ACCEL_MAX = 2.0  # ... and its largest vertical acceleration command [m/s^2]
+V_UP_TAU_S = 1.0  # the IMU's vertical speed follows a trusted fix's with this time constant [s]
+# a blind hold this long [s] climbs at BLIND_DRIFT_CLIMB_MPS instead of holding: on the IMU alone its vertical speed
+# drifts by a few cm/s (IMU drops seed 3: 0.04 m/s down, onto the sea 3.4 m off after 40 s): away from the deck
+BLIND_LONG_S, BLIND_DRIFT_CLIMB_MPS = 5.0, 0.1
+# a hover whose navigator has been degraded (its own consistency tests failing) this long [s] holds blind and level:
+# a filter re-acquired after a black-out flapped between fixes with velocities 4 m/s off while its HPL said
+# 0.04-0.2 m, and the hover followed it off the plate (black-out seed 8); fault-free episodes last 0.02-0.3 s
+DEGRADED_HOLD_S = 0.5
 BLIND_FOLLOW_HPL_M = 1.0  # above this HPL the hold is level (no horizontal loop on the estimate either)
 G = 9.81
 
@@ -71,6 +84,10 @@ class DeckMission:
         self._held = False  # an approach start is being held for integrity (logged once per hold)
         self._blind_t: float | None = None  # start of the hover's level hold without a fix
         self._v_up: float | None = None  # vertical speed (up) the level hold flies on (_vertical_speed)
+        self._climbed = 0.0  # height gained on the IMU since the blind hold began
+        self._climb_to = 0.0  # ... and what it climbs to before steering back to the start point
+        self._blind_land_t: float | None = None  # start of a blind end's descent (blind_end = "land")
+        self._v_land = 0.0  # its vertical speed (up): the level hold's at its start, the IMU alone since
         self.mode, self.t_mode, self.done = "", 0.0, False
         self._set_mode(0.0, "manual", "pilot holds the start while the filter starts")
 
@@ -115,8 +132,9 @@ class DeckMission:
             elif mode == "hover":
                 self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
                 if self.mode == "hover" and self.moving and (self.watch.unusable_for(t) >= g.blind_hold_s or (
-                        self.watch.seen_ok and self.watch.state != "unusable" and self.watch.hpl_m > g.hover_hpl_m)):
-                    return self._blind_hold(t), self.mode
+                        self.watch.seen_ok and self.watch.state != "unusable" and self.watch.hpl_m > g.hover_hpl_m)
+                        or self._degraded_for(t) >= DEGRADED_HOLD_S):
+                    return self._blind_hold(t, p_ld), self.mode
                 self._blind_t = None
             if self.mode == "manual" and cfg.start.pilot == "imu":
                 return DeckReference(t=t, kind="level"), self.mode
@@ -154,7 +172,17 @@ class DeckMission:
                 self._set_mode(t, "hover", f"integrity: {why}: go-around {self._go_arounds}")
                 return ref, self.mode
             if tm >= self.approach.T:
-                if tau and self._go_arounds < g.go_arounds:
+                blind = self._no_commit(t, persist=False) if tau and g.blind_end == "land" else ""
+                if blind:
+                    # no contact and no fix: the vehicle is at the deck by construction (its estimate a few cm
+                    # off); a go-around from there blind swept it over the heaving deck (black-out seed 7):
+                    # finish the landing on the deck UKF's prediction, gently
+                    self._blind_land_t = t
+                    self._v_land = self._v_up if self._v_up is not None else 0.0
+                    self.watch.react(t, "land on", f"{blind}: trajectory ended without contact, descend on the "
+                                                   f"prediction for at most {g.blind_land_s:g} s")
+                    self._set_mode(t, "descend", f"trajectory ended without contact, no fix ({blind}): land on")
+                elif tau and self._go_arounds < g.go_arounds:
                     # no contact at the trajectory's end: back to the start point, a new approach when the
                     # start conditions hold again (the descend mode would hold the matched tilt for too long)
                     self._go_arounds += 1
@@ -163,7 +191,25 @@ class DeckMission:
                     self._set_mode(t, "descend", "trajectory ended without contact")
             return ref, self.mode
         # descend
+        if self._blind_land_t is not None and t - self._blind_land_t >= g.blind_land_s:
+            # the blind end found no deck within blind_land_s: its height estimate is off, climb away
+            self._blind_land_t = None
+            self._go_arounds += 1
+            self.watch.react(t, "go-around", f"no contact after {g.blind_land_s:g} s of blind descent")
+            self._set_mode(t, "hover", f"blind descent without contact: go-around {self._go_arounds}")
+            self._blind_t = None
+            return self._blind_hold(t, p_ld), self.mode
         c, n_up = self.target(Cd0, wd, psi_d, 0.0)
+        if self._blind_land_t is not None:
+            # blind: thrust level, the horizontal velocity arrested (no spring to the predicted point, no tilt
+            # onto the predicted normal, no flare: they swept it sideways at 0.4 m/s over the last 3 cm, seed 7),
+            # the sink rate on the IMU from the last good fix (a filter re-acquired near the deck had the
+            # vehicle sinking while it hovered 4 cm above the deck, seed 5)
+            self._v_land += self._imu_up_accel(est) * self.period
+            a_up = float(np.clip(g.damper_per_s * (-g.final_descent_mps - self._v_land), -BLIND_ACCEL_MAX,
+                                 BLIND_ACCEL_MAX))
+            return DeckReference(t=t, kind="descend", target=np.array([p_ld[0], p_ld[1], c[2]]),
+                                 normal=np.array([0.0, 0.0, -1.0]), vertical_accel=-a_up), self.mode
         return DeckReference(t=t, kind="descend", target=c, normal=n_up,
                              flare_time_left=np.inf if tau else None), self.mode
 
@@ -181,33 +227,65 @@ class DeckMission:
             return f"HPL {w.hpl_m:.2f} m above {g.commit_hpl_m:g} m"
         return ""
 
-    def _vertical_speed(self, est, v_up_fix: float) -> None:
-        """The vertical speed (up) the level hold flies on: the navigator's while its fix is good (usable,
-        HPL within ``hover_hpl_m``), then the IMU's vertical specific force integrated on from it."""
-        g, w = self.cfg.guidance, self.watch
-        if w.state != "unusable" and w.hpl_m <= g.hover_hpl_m and np.isfinite(v_up_fix):
-            self._v_up = float(v_up_fix)
-        elif self._v_up is not None and np.isfinite(est.roll) and np.isfinite(est.pitch):
-            acc_up = -(euler_to_dcm([est.roll, est.pitch, 0.0]) @ np.asarray(est.accel, float))[2] - G
-            self._v_up += float(acc_up) * self.period
+    def _degraded_for(self, t: float) -> float:
+        """How long the navigator has been ``degraded`` (0 when it is not)."""
+        w = self.watch
+        return t - w.since if w.state == "degraded" and w.seen_ok else 0.0
 
-    def _blind_hold(self, t: float) -> DeckReference:
-        """Hover without a fix (unusable for ``blind_hold_s``, or its HPL above ``hover_hpl_m``): the horizontal
-        position loop stays on the dead-reckoned estimate (it brings the lights back into view: a level hold on
-        the IMU alone drifted out of view for good, black-out seed 7), the vertical one does not (the
-        estimate's height may lead it onto the deck): it climbs at ``BLIND_CLIMB_MPS`` for ``BLIND_CLIMB_S``
-        and then holds the height (the vertical speed from the last good fix plus the IMU since,
-        :meth:`_vertical_speed`), until the fix is good again."""
+    def _vertical_speed(self, est, v_up_fix: float) -> None:
+        """The vertical speed (up) the blind hold and the blind landing fly on: the IMU's vertical acceleration
+        integrated, pulled towards the navigator's vertical speed with ``V_UP_TAU_S`` while its fix is trusted
+        (``ok``, HPL within ``commit_hpl_m``; the first such fix sets it). Only a trusted fix: the HPL bounds
+        the horizontal error, and a degraded fix whose HPL was still below ``hover_hpl_m`` had the vertical speed
+        0.4-0.6 m/s off (IMU drops seed 11, accelerometer bias seed 20), which the hold then flew for good.
+        The time constant averages the deck's heave out of the relative speed."""
+        g, w = self.cfg.guidance, self.watch
+        trusted = w.state == "ok" and w.hpl_m <= g.commit_hpl_m and np.isfinite(v_up_fix)
+        if self._v_up is None:
+            if trusted:
+                self._v_up = float(v_up_fix)
+            return
+        self._v_up += self._imu_up_accel(est) * self.period
+        if trusted:
+            self._v_up += (float(v_up_fix) - self._v_up) * min(self.period / V_UP_TAU_S, 1.0)
+
+    @staticmethod
+    def _imu_up_accel(est) -> float:
+        """The vertical acceleration (up) from the IMU's specific force and the autopilot's roll and pitch."""
+        if not (np.isfinite(est.roll) and np.isfinite(est.pitch)):
+            return 0.0
+        return float(-(euler_to_dcm([est.roll, est.pitch, 0.0]) @ np.asarray(est.accel, float))[2] - G)
+
+    def _blind_hold(self, t: float, p_ld: np.ndarray) -> DeckReference:
+        """Hover without a fix (unusable for ``blind_hold_s``, or its HPL above ``hover_hpl_m``): a go-around
+        flown on the IMU. The vertical loop never flies on the estimate's height (it may lead it onto the deck):
+        it climbs at ``blind_climb_mps`` by ``blind_climb_m`` (the vertical speed of the last good fix plus the
+        IMU since, :meth:`_vertical_speed`), with the horizontal velocity arrested (no sweep over a heaving
+        deck a few cm below: black-out seed 7), then holds the height while the horizontal loop steers back to
+        the start point on the dead-reckoned estimate (it brings the lights back into view: a level hold on the
+        IMU alone drifted out of view for good), until the fix is good again. The climb goes no higher than the
+        start height by the estimate (straight up from 0.8 m the lights came back at the bottom of the image and
+        the filter re-acquired 0.3 m off, blur seed 11); level when the HPL is above ``BLIND_FOLLOW_HPL_M`` or the
+        navigator has been degraded for ``DEGRADED_HOLD_S`` (its updates are suspect, so is the estimate). After
+        ``BLIND_LONG_S`` without a fix it climbs at ``BLIND_DRIFT_CLIMB_MPS``: the IMU's drift away from the deck."""
+        g, w = self.cfg.guidance, self.watch
         if self._blind_t is None:
-            self._blind_t = t
-            self.watch.react(t, "hold height", f"hover without a fix (HPL {self.watch.hpl_m:.2f} m): height on the "
-                                              f"IMU, climb {BLIND_CLIMB_MPS * BLIND_CLIMB_S:g} m")
-        v_ref = BLIND_CLIMB_MPS if t - self._blind_t < BLIND_CLIMB_S else 0.0
+            self._blind_t, self._climbed = t, 0.0
+            # up to the start height by the estimate, at most blind_climb_m (all of it if the estimate is no guide)
+            below = -self.start_rel_ld[2] + p_ld[2] if w.hpl_m <= BLIND_FOLLOW_HPL_M else np.inf
+            self._climb_to = float(np.clip(below, 0.0, g.blind_climb_m))
+            w.react(t, "hold height", f"hover without a fix (HPL {w.hpl_m:.2f} m): height on the IMU, climb "
+                                      f"{self._climb_to:.2f} m at {g.blind_climb_mps:g} m/s")
         v_up = self._v_up if self._v_up is not None else 0.0
-        a_up = float(np.clip(BLIND_GAIN_PER_S * (v_ref - v_up), -1.0, 1.0))
-        if self.watch.hpl_m > BLIND_FOLLOW_HPL_M:  # the estimate is no guide at all (a restarted filter): level
+        climbing = self._climbed < self._climb_to
+        v_ref = g.blind_climb_mps if climbing else BLIND_DRIFT_CLIMB_MPS if t - self._blind_t >= BLIND_LONG_S else 0.0
+        a_up = float(np.clip(BLIND_GAIN_PER_S * (v_ref - v_up), -BLIND_ACCEL_MAX, BLIND_ACCEL_MAX))
+        self._climbed += v_up * self.period
+        if w.hpl_m > BLIND_FOLLOW_HPL_M or self._degraded_for(t) >= DEGRADED_HOLD_S:  # no guide: level
             return DeckReference(t=t, kind="level", accel=np.array([0.0, 0.0, -a_up]))
-        return DeckReference(t=t, kind="follow", position=self.start_rel_ld, velocity=np.zeros(3), accel=np.zeros(3),
+        # climbing: the position loop on where the vehicle is (its damper arrests the horizontal velocity)
+        pos = np.asarray(p_ld, float).copy() if climbing else self.start_rel_ld
+        return DeckReference(t=t, kind="follow", position=pos, velocity=np.zeros(3), accel=np.zeros(3),
                              vertical_accel=-a_up)
 
     def _restart(self, t: float) -> None:

@@ -183,6 +183,20 @@ class DeckGuidanceConfig(_M):
     blind_hold_s: float = Field(0.5, ge=0, le=30, description="moving deck: hover with the navigator unusable this "
                                 "long -> hold level on the IMU (no position loop on a dead-reckoned estimate, "
                                 "which may lead it onto the deck) until it is usable again (issue #18)")
+    blind_end: Literal["land", "go-around"] = Field("land", description="moving deck: an approach that ends "
+                                                    "without contact while the fix is not trusted (navigator "
+                                                    "unusable, or HPL above commit_hpl_m): 'land' finishes the "
+                                                    "landing (the descend mode on the deck UKF's prediction, at "
+                                                    "most blind_land_s), 'go-around' flies back to the start as "
+                                                    "with a fix (before round 5: the blind climb of 0.2 m/s did "
+                                                    "not get clear of the heaving deck, black-out seed 7; issue #18)")
+    blind_land_s: float = Field(1.0, gt=0, le=10, description="moving deck: the blind end's descent at "
+                                "final_descent_mps lasts at most this long; no contact by then -> blind go-around")
+    blind_climb_mps: float = Field(0.6, gt=0, le=3, description="moving deck: a hover without a fix first climbs "
+                                   "at this vertical speed (on the IMU) with the horizontal velocity arrested, "
+                                   "before it steers back to the start point (issue #18)")
+    blind_climb_m: float = Field(0.5, ge=0, le=5, description="... by this much (above the deck's motion "
+                                 "envelope), at most up to the start height by the estimate")
     descent_hold: bool = Field(True, description="descend mode: horizontal spring-damper on the touchdown point "
                                 "(tilts the thrust off the deck normal; off: the vehicle drifts, moving seed 17 "
                                 "missed the plate)")

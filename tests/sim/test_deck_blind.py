@@ -1,0 +1,30 @@
+"""Closed-loop deck landings under camera faults (issue #18, round 5): a black-out that hides the deck in the
+approach's last second must not end in an unsafe touchdown."""
+
+import numpy as np
+
+from visnav.scenarios.schema import load_scenario
+from visnav.sim.missions import make_simulation
+
+
+def test_blackout_in_the_commit_window_lands_on_the_plate():
+    """Black-out seed 7 (2 s from 9.0 s): the approach (7.36 s, T = 2.91 s) ended at 10.28 s 2 cm above the
+    deck without contact and without a fix. Before round 5 it went around into the blind hold (0.2 m/s climb,
+    the horizontal loop pulling it back to the start point) and touched the deck at 1.20 m/s, 0.29 m from the
+    point, off the plate. Now it finishes the landing blind: level, sinking on the IMU."""
+    sc = load_scenario("deck-moving", ['faults=[{kind = "camera_blackout", start_s = 9.0, duration_s = 2.0}]'],
+                       seed=7)
+    sim = make_simulation(sc)
+    res = sim.run()
+    assert res.error is None, res.error
+    modes = list(sim.log.get("mode")["mode"])
+    assert modes == ["manual", "hover", "approach", "descend", "landed"]
+    assert "no fix" in sim.log.get("mode")["reason"][3]
+    assert list(sim.log.get("integrity_reaction")["action"]) == ["land on"]
+    td = sim.log.get("touchdown")
+    assert bool(td["on_deck"][0]) and float(td["t"][0]) < 11.0  # before the lights come back
+    assert float(td["rel_speed"][0]) <= 0.4 and float(td["pos_err"][0]) <= 0.27
+    # it never climbed away from the deck while blind
+    v = sim.log.get("vehicle")
+    blind = (v["t"] >= 10.28) & (v["t"] <= float(td["t"][0]))
+    assert np.all(v["velocity"][blind][:, 2] > -0.05)  # NED: never up
