@@ -17,6 +17,10 @@ It implements the ``Navigator`` interface (``navigation/base.py``) and takes onl
   frame newer than the filter is predicted to (zero-order hold of the last IMU sample); an older one
   (delivered late) rewinds the filter to its stamp from the stored prediction history (``history_s``),
   is fused there and the IMU samples since are replayed.
+* Gate lock-out (every light of ``retie_after_frames`` frames in a row rejected with >= 3 blobs in view):
+  re-tie (``_lockout``): position / velocity widened, deck attitude from its prior, the frame fused again,
+  the accelerometer noise in Q widened for ``retie_hold_s``. A gap of lost IMU samples is bridged with the
+  mean of the samples at its ends.
 
 ``initialize(NavInit)``: ``state`` / ``covariance`` given (the thesis' Vicon start, §5.3.5) -> the
 sensor's R from the first frame; none -> eq. 5.12-5.17 with the acquisition R (the thesis' 2 deg).
@@ -68,6 +72,7 @@ class DeckNavStats:
     blobs: int = 0
     blobs_rejected: int = 0
     lights_used_last: int = 0
+    reties: int = 0  # gate lock-outs undone (``DeckNavConfig.retie_after_frames``)
 
 
 @dataclass
@@ -102,6 +107,13 @@ class DeckNavConfig:
     # a frame's whole update is not applied when its NIS is above the chi2 1 - update_gate_alpha quantile
     # (0: no such gate; each light is gated by ``gate`` in the association anyway)
     update_gate_alpha: float = 0.0
+    # gate lock-out: this many frames in a row with >= 3 blobs and every light rejected -> re-tie (0: never):
+    # position / velocity sigmas added, deck attitude from its prior, the frame fused again; then the
+    # accelerometer noise in Q widened by retie_accel_sigma for retie_hold_s (absorbs an accelerometer bias)
+    retie_after_frames: int = 0
+    retie_sigmas: tuple[float, float] = (0.05, 0.1)
+    retie_accel_sigma: float = 1.0
+    retie_hold_s: float = 3.0
 
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
@@ -134,7 +146,9 @@ class DeckNavConfig:
                    frame_interval_s=frame_interval_s if f.camera_clock_check else 0.0,
                    reacquire_after_s=f.integrity_stale_s if f.reacquire_after_outage else float("inf"),
                    deck_prior_var=dm.deck_prior_variance(sea, f.motion_scale, imu.attitude_noise_deg),
-                   update_gate_alpha=f.update_gate_alpha)
+                   update_gate_alpha=f.update_gate_alpha, retie_after_frames=f.retie_after_frames,
+                   retie_sigmas=(f.retie_sigma_m, f.retie_sigma_mps), retie_accel_sigma=f.retie_accel_sigma_mps2,
+                   retie_hold_s=f.retie_hold_s)
 
 
 @dataclass(frozen=True)
@@ -206,6 +220,9 @@ class DeckNavigator(CommandDispatch):
         self._t_fused: float | None = None  # stamp of the newest frame that was fused
         self._t_reacq = -np.inf  # time of the newest re-acquisition
         self._gates: dict[int, float] = {}  # the update gate's chi2 quantile per dof
+        self._locked = 0  # frames in a row with >= 3 blobs and every light rejected
+        self._retying = False  # fusing a frame again after a re-tie (it cannot re-tie again)
+        self._widen_until = -np.inf  # accelerometer noise widened in Q until then (after a re-tie)
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -337,20 +354,28 @@ class DeckNavigator(CommandDispatch):
         self._gyro_dot = self._gyro_dot + a * (raw - self._gyro_dot)
         gb = euler_to_dcm([self._rp[0], self._rp[1], 0.0]).T @ np.array([0.0, 0.0, G])
         u = dm.ImuInput(accel=accel, gyro=gyro, gyro_dot=self._gyro_dot, gravity_body=gb)
+        prev_accel, prev_gyro = self._accel, self._gyro
         self._t_imu, self._gyro, self.last_gyro, self._accel, self._u = t, gyro, gyro, accel, u
         self.stats.imu_samples += 1
         if self.ukf is None:
             return None
         if t > self._t:
-            self._predict(t - self._t, u)
+            # a gap of lost samples (issue #18 imu_drop): the forces and rates over it are the mean of the
+            # samples at its ends, not the newest alone (a one-sided hold biases the attitude in a manoeuvre)
+            uu = u if dt_imu < 1.5 * self.cfg.imu_period_s else replace(
+                u, accel=0.5 * (accel + prev_accel), gyro=0.5 * (gyro + prev_gyro))
+            self._predict(t - self._t, uu)
             self._t = t
-            self._hist.append(_Step(t, self.ukf.x.copy(), self.ukf.P.copy(), u))
+            self._hist.append(_Step(t, self.ukf.x.copy(), self.ukf.P.copy(), uu))
         return None
 
     def _predict(self, dt: float, u: dm.ImuInput) -> None:
         """One prediction over ``dt``; a part of an IMU interval takes the noise of a continuous process (Q ~ dt)."""
         scale = 1.0 if abs(dt - self.cfg.imu_period_s) < 1e-9 else self.cfg.imu_period_s / dt
-        Q = dm.process_noise(self.ukf.x, dt, u, self.imu_cov * scale if scale != 1.0 else self.imu_cov,
+        imu_cov = self.imu_cov
+        if self._t is not None and self._t < self._widen_until:  # after a re-tie: the velocity follows the lights
+            imu_cov = imu_cov + np.diag([self.cfg.retie_accel_sigma**2] * 3 + [0.0] * 3)
+        Q = dm.process_noise(self.ukf.x, dt, u, imu_cov * scale if scale != 1.0 else imu_cov,
                              self.ship_cov * scale if scale != 1.0 else self.ship_cov)
         try:
             self.ukf.predict(dt, Q, u=u)
@@ -570,6 +595,8 @@ class DeckNavigator(CommandDispatch):
         rejected = int(np.sum(assign < 0))
         st.blobs_rejected += rejected
         m = np.nonzero(assign >= 0)[0]
+        if m.size == 0 and self._lockout(len(b), replay):
+            return self._refuse(b, r, n_ok, gyro)
         if m.size == 0:
             st.lights_used_last = 0
             if not replay:
@@ -589,6 +616,8 @@ class DeckNavigator(CommandDispatch):
                                       lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx[:0])
             ridx = ridx[:0]
             z = z[:nb]
+        if not applied and self._lockout(len(b), replay):
+            return self._refuse(b, r, n_ok, gyro)
         if not applied:  # the whole frame disagrees with the filter beyond its gate: not fused
             st.lights_used_last = 0
             st.updates_gated += 1
@@ -596,6 +625,8 @@ class DeckNavigator(CommandDispatch):
                 self.integrity.record(self._t, "bearing", float("nan"), 0, False)
             return 0, rejected + int(idx.size)
         st.lights_used_last = int(idx.size)
+        if not replay:
+            self._locked = 0
         if replay:
             return int(idx.size), rejected
         self.last_nis, self.last_dof = self.ukf.nis, int(z.size)
@@ -609,3 +640,50 @@ class DeckNavigator(CommandDispatch):
             yr = y[nb:]
             self.integrity.record(self._t, "rate", float(yr @ np.linalg.solve(S_all[nb:, nb:], yr)), yr.size, True)
         return int(idx.size), rejected
+
+    def _lockout(self, n_blobs: int, replay: bool) -> bool:
+        """A frame with ``n_blobs`` blobs had every light rejected. After ``retie_after_frames`` such frames in
+        a row (at least 3 blobs each: the lights are in view, the filter has drifted off them) re-tie the
+        filter and return True (the caller fuses the frame again, once); False otherwise.
+
+        With three or more lights in view the relative pose is observable from every frame, so a filter whose
+        prediction is beyond the gate of all of them has been carried off by its process input (an accelerometer
+        bias, lost IMU samples in a manoeuvre) with a covariance too small to let the lights back in: it would
+        stay locked out while the IMU drifts it metres away (issue #18). The re-tie adds ``retie_sigmas`` to
+        the position and velocity variances, puts the deck's relative roll, pitch and rates back to their
+        sea-state prior (as ``_reacquire``) and widens the accelerometer noise in Q for ``retie_hold_s`` so
+        that the velocity follows the lights instead of a biased accelerometer. Logged in ``nav_init``."""
+        n = self.cfg.retie_after_frames
+        if replay or n <= 0 or n_blobs < 3 or self._retying:
+            if not replay and n_blobs < 3:
+                self._locked = 0
+            return False
+        self._locked += 1
+        if self._locked < n:
+            return False
+        self._locked = 0
+        x, P = self.ukf.x.copy(), self.ukf.P.copy()
+        sp, sv = self.cfg.retie_sigmas
+        rp = self._rp if self._rp is not None else x[3:5]
+        ii = np.array([3, 4, 9, 10, 11])
+        x[3:5], x[9:12] = rp, 0.0
+        P[ii, :], P[:, ii] = 0.0, 0.0
+        P[ii, ii] = np.asarray(self.cfg.deck_prior_var, float)
+        P[0:3, 0:3] += np.eye(3) * sp**2
+        P[6:9, 6:9] += np.eye(3) * sv**2
+        self.ukf.x, self.ukf.P = x, P
+        self._widen_until = self._t + self.cfg.retie_hold_s
+        self.stats.reties += 1
+        if self.recorder is not None:
+            self.recorder("nav_init", self._t, x0=x.copy(), sigma=np.sqrt(np.diag(P)),
+                          source=f"re-tie after {n} frames with every light rejected: position, velocity and "
+                                 "deck attitude widened, accelerometer noise widened")
+        return True
+
+    def _refuse(self, b, r, n_ok, gyro) -> tuple[int, int]:
+        """Fuse a locked-out frame again after the re-tie (once)."""
+        self._retying = True
+        try:
+            return self._correct_checked(b, r, n_ok, gyro)
+        finally:
+            self._retying = False

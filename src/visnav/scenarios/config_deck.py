@@ -133,6 +133,17 @@ class DeckFilterConfig(_M):
     update_gate_alpha: float = Field(1e-6, ge=0, lt=0.5, description="a frame whose whole update has a NIS above the "
                                      "chi2 1 - alpha quantile is fused without its bearing rates, or not at all "
                                      "(0: off; fault-free the largest NIS is 0.83 of the 1e-4 quantile; issue #18)")
+    retie_after_frames: int = Field(3, ge=0, le=100, description="this many frames in a row with at least 3 blobs "
+                                    "and every light rejected (gate lock-out: the IMU carried the filter off the "
+                                    "lights, e.g. an accelerometer bias or lost IMU samples) -> position, velocity "
+                                    "and deck attitude uncertainty widened (retie_sigma_*) and the frame fused "
+                                    "again; 0: off (issue #18)")
+    retie_sigma_m: float = Field(0.05, gt=0, le=5, description="position sigma added per axis at a re-tie")
+    retie_sigma_mps: float = Field(0.1, gt=0, le=5, description="velocity sigma added per axis at a re-tie")
+    retie_accel_sigma_mps2: float = Field(1.0, ge=0, le=20, description="accelerometer noise sigma (per IMU "
+                                          "sample) added to Q for retie_hold_s after a re-tie: the velocity then "
+                                          "follows the lights and absorbs an accelerometer bias")
+    retie_hold_s: float = Field(3.0, ge=0, le=60, description="how long the widened accelerometer noise stays")
     reacquire_after_outage: bool = Field(True, description="after integrity_stale_s without a fused frame the "
                                          "deck's relative roll, pitch and rates go back to their sea-state prior "
                                          "(level deck) before the next frame: the constant-rate model would "
