@@ -404,3 +404,11 @@ def test_a_dropped_imu_sample_is_bridged_over_its_real_interval():
     assert np.linalg.norm(dropped.x[:3] - full.x[:3]) < 2e-3
     assert np.linalg.norm(dropped.x[6:9] - full.x[6:9]) < 5e-3
     assert abs(dropped._t - full._t) < 1e-12
+
+
+def test_the_mission_config_turns_the_re_tie_on():
+    cfg = DeckNavConfig.from_mission(load_scenario("deck-static"), 0.03)
+    assert cfg.retie_after_frames == 3 and cfg.retie_sigmas == (0.05, 0.1)
+    assert cfg.retie_accel_sigma == 1.0 and cfg.retie_hold_s == 3.0
+    off = load_scenario("deck-static", ["navigation.retie_after_frames=0"])
+    assert DeckNavConfig.from_mission(off, 0.03).retie_after_frames == 0
