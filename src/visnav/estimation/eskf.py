@@ -155,11 +155,27 @@ class ErrorStateKF:
         self._gates: dict[int, float] = {}
         self._I = np.eye(self.n)
         self._F0, self._G0 = self._model_template()
+        self._Qc = self._noise()
+
+    def _noise(self) -> np.ndarray:
         c = self.cfg
         qc = [c.accel_noise**2] * 3 + [c.gyro_noise**2] * 3 + [c.accel_bias_noise**2] * 3
         if c.gyro_bias:
             qc += [c.gyro_bias_noise**2] * 3
-        self._Qc = np.diag(qc)
+        return np.diag(qc)
+
+    def retune(self, **changes) -> None:
+        """Change noise densities or the gate in flight (``EskfConfig`` fields; not ``gyro_bias``, the state
+        size): e.g. a larger bias random walk once a sensor is known faulty, so that the bias states follow
+        its steps."""
+        from dataclasses import replace
+
+        if "gyro_bias" in changes and bool(changes["gyro_bias"]) != self.cfg.gyro_bias:
+            raise ValueError("retune cannot change the state size (gyro_bias)")
+        self.cfg = replace(self.cfg, **changes)
+        self._F0, self._G0 = self._model_template()
+        self._Qc = self._noise()
+        self._gates.clear()
 
     def _gate(self, dof: int) -> float:
         g = self._gates.get(dof)

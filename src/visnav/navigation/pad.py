@@ -26,6 +26,7 @@ from typing import Callable
 
 import numpy as np
 
+from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 from visnav.estimation.eskf import BA_, BG_, EskfConfig, ErrorStateKF
@@ -48,6 +49,8 @@ register_stream("pad_fault", reason=("text", "", "what the filter found wrong (a
                 position=("m", _NED, "filter position after (the re-initialisation's start)"),
                 velocity=("m/s", _NED, "filter velocity after"),
                 euler=("rad", _EUL, "filter attitude after"))
+register_stream("pad_attitude_check", angle=("deg", "", "rotation from the autopilot's attitude to the filter's "
+                                                         "(the attitude check, 10 Hz until an IMU fault is flagged)"))
 register_stream("pad_lost", reason=("text", "", "why the frame gave no pad pose"), rings=("1", "", "rings detected"))
 register_stream("pad_vision", position=("m", _NED, "body position from the pad pose (lever arm and pan-tilt removed)"),
                 camera=("m", "pad frame = NED world at the pad", "camera position from the pad pose"),
@@ -187,8 +190,7 @@ class PadNavigator(CommandDispatch):
         if self.kf is None:
             return
         self.kf.predict(m)
-        if self.gyro_check is not None:
-            self._check_gyro(m)
+        self._checks(m)
         x = self.kf.x
         self.hist.push(m.t, np.concatenate((x.position, x.euler)))
         if m.t >= self._next_out - 1e-9:  # the 50 Hz output
@@ -249,8 +251,8 @@ class PadNavigator(CommandDispatch):
             self._gated.clear()
             self._agree += 1
             if self._agree == self.integrity.monitor.config.window:  # a window of fixes agrees with the filter
-                self.integrity.clear("gyro")
-                self.integrity.clear("reinit")
+                for name in ("gyro", "attitude", "reinit"):
+                    self.integrity.clear(name)
         else:
             self.rejected += 1
             self._gated.append((f.t, p_vis, R))
@@ -265,23 +267,27 @@ class PadNavigator(CommandDispatch):
 
     # ------------------------------------------------------------------ IMU faults
     def _imu_fault(self, t: float, name: str, why: str) -> None:
-        """An IMU fault is flagged (``name``: "gyro" or "reinit"): from now on the autopilot's attitude is
-        fused (the gyros no longer hold the attitude, and a horizontal accelerometer bias can no longer hide
-        as a tilt); the state is degraded until a window of fixes agrees with the filter again."""
+        """An IMU fault is flagged (``name``: "gyro", "attitude" or "reinit"): from now on the autopilot's
+        attitude is fused (the gyros no longer hold the attitude, and a horizontal accelerometer bias can no
+        longer hide as a tilt) and the accelerometer bias random walk is ``fault_accel_bias_noise``; the
+        state is degraded until a window of fixes agrees with the filter again."""
         self.ahrs_aid = True
         self._next_aid = -math.inf
         self._agree = 0
+        # a faulty IMU's biases step (on, off): their states follow faster from now on
+        self.kf.retune(accel_bias_noise=max(self.cfg.accel_bias_noise, self.cfg.fault_accel_bias_noise))
         self.integrity.suspect(name, why, lambda _t: 0.0)
         x = self.kf.x
         self.recorder("pad_fault", t, reason=why, position=x.position.copy(), velocity=x.velocity.copy(),
                       euler=x.euler.copy())
 
-    def _check_gyro(self, m: ImuSample) -> None:
-        """The gyro / autopilot-attitude test (``GyroAttitudeCheck`` on the gyros less the filter's bias
-        estimate, at 50 Hz; the test at 10 Hz). On a failure the gyros no longer hold the attitude (the
-        autopilot's is fused, ``_imu_fault``), the gyro bias states start again from
-        ``reinit_gyro_bias_sigma_dps`` (they learn the faulty bias) and the test starts again (a bias that
-        changes again, or ends, fails it again)."""
+    def _checks(self, m: ImuSample) -> None:
+        """The IMU checks: the gyro / autopilot-attitude test (``GyroAttitudeCheck`` on the gyros less the
+        filter's bias estimate, fed at 50 Hz, tested at 10 Hz) and the attitude check (10 Hz,
+        ``_check_attitude``). On a gyro failure the gyros no longer hold the attitude (the autopilot's is
+        fused, ``_imu_fault``), the gyro bias states start again from ``reinit_gyro_bias_sigma_dps`` (they
+        learn the faulty bias) and the test starts again (a bias that changes again, or ends, fails it
+        again)."""
         a = self._gyro
         a[0] = a[0] + m.gyro
         a[1] += 1
@@ -291,23 +297,51 @@ class PadNavigator(CommandDispatch):
         if m.t - a[2] < 0.02 - 1e-6:
             return
         g = self.gyro_check
-        g.gyro(m.t, a[0] / a[1] - self.kf.x.gyro_bias, m.t - a[2])  # (rates the filter uses)
+        if g is not None:
+            g.gyro(m.t, a[0] / a[1] - self.kf.x.gyro_bias, m.t - a[2])  # (the rates the filter uses)
         a[:] = [np.zeros(3), 0, m.t]
         self._gyro_steps += 1
         if self._gyro_steps % 5:
+            return
+        if not self.ahrs_aid and self._check_attitude(m.t):
+            return
+        if g is None:
             return
         newest = self.att.newest_t
         failed = g.check(lambda ti: self.att.at(ti) if ti <= newest + 1e-9 else None)
         self.recorder("gyro_check", m.t, stat=g.last_stat)
         if not failed:
             return
-        self.gyro_check = gyro_check_from(getattr(self.cfg, "integrity", None))  # again, on the gyros less the new bias estimate
+        self.gyro_check = gyro_check_from(getattr(self.cfg, "integrity", None))  # again, on the new bias estimate
         if self.cfg.gyro_bias_states:
             s = math.radians(self.cfg.reinit_gyro_bias_sigma_dps)
             self.kf.P[BG_, BG_] += np.eye(3) * s * s
-        self._imu_fault(m.t, "gyro", f"gyros turned {math.degrees(float(np.linalg.norm(g.d))):.2f} deg more than the "
-                             f"autopilot's attitude over {g.detected_t - g.t0:.1f} s (chi2(3) {g.last_stat:.0f} > "
-                             f"{g.bound:.0f}): the autopilot's attitude is fused")
+        self._imu_fault(m.t, "gyro", f"gyros turned {math.degrees(float(np.linalg.norm(g.d))):.2f} deg more than "
+                                     f"the autopilot's attitude over {g.detected_t - g.t0:.1f} s (chi2(3) "
+                                     f"{g.last_stat:.0f} > {g.bound:.0f}): the autopilot's attitude is fused")
+
+    def _check_attitude(self, t: float) -> bool:
+        """The filter's attitude against the autopilot's (absolute, 10 Hz): a filter that folds an IMU fault
+        into its attitude (an accelerometer bias taken for a tilt or a heading error: the lever arm then
+        moves the fixes with it and they agree with the wrong estimate) leaves the autopilot's by more than
+        ``attitude_check_deg``: an IMU fault (``_imu_fault``). True when flagged."""
+        a = self.att.at(t) if t <= self.att.newest_t + 1e-9 else self.ahrs
+        if a is None:
+            return False
+        d = Rotation.from_matrix(euler_to_dcm(a).T @ self.kf.x.dcm).as_rotvec()
+        ang = math.degrees(float(np.linalg.norm(d)))
+        self.recorder("pad_attitude_check", t, angle=ang)
+        lim = getattr(getattr(self.cfg, "integrity", None), "attitude_check_deg", math.inf)
+        if ang <= lim:
+            return False
+        if self.cfg.gyro_bias_states:
+            s = math.radians(self.cfg.reinit_gyro_bias_sigma_dps)
+            self.kf.P[BG_, BG_] += np.eye(3) * s * s
+        s = self.cfg.reinit_accel_bias_sigma_mps2
+        self.kf.P[BA_, BA_] += np.eye(3) * s * s
+        self._imu_fault(t, "attitude", f"filter attitude {ang:.1f} deg from the autopilot's (> {lim:g}): an IMU "
+                                       "fault taken into the attitude; the autopilot's attitude is fused")
+        return True
 
     def _reinit(self, t: float, floor: float) -> None:
         """The last ``reinit_fixes`` fixes were all gated out. If they agree with each other (one smooth

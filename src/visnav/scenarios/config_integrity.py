@@ -99,6 +99,9 @@ class PadIntegrityConfig(GyroCheckBlock):
 
     alert_limit_m: float = Field(1.0, gt=0, description="unusable when the HPL exceeds it")
     stale_s: float = Field(1.0, gt=0, description="unusable when no update was accepted for this long")
+    attitude_check_deg: float = Field(2.0, gt=0, le=180, description="the filter's attitude more than this from "
+                                      "the autopilot's (10 Hz) -> an IMU fault taken into the attitude: the autopilot's "
+                                      "attitude is fused from then on (navigation/pad.py)")
 
 
 FAULT_KINDS = ("camera_blackout", "camera_frozen", "camera_brightness", "camera_blur", "imu_gyro_bias",
