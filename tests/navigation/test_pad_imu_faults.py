@@ -96,6 +96,26 @@ def test_gyro_bias_step_is_flagged_and_the_autopilot_attitude_holds():
     assert nav.health(10.0).integrity == "ok"  # a window of fixes agrees with the filter again
 
 
+def test_accelerometer_bias_taken_for_a_tilt_is_flagged_by_the_attitude_check():
+    """An accelerometer bias of 0.3 m/s^2 (x and y) in a still hover: the filter takes it for a tilt (its roll
+    and pitch leave the autopilot's); past ``attitude_check_deg`` (2 deg) the fault is flagged, the
+    autopilot's attitude is fused and the bias states learn it. (Gyro check off: the attitude check alone.)"""
+    from visnav.scenarios.config_integrity import PadIntegrityConfig
+
+    nav, det = _nav(integrity=PadIntegrityConfig(gyro_check=False))
+    _fly(nav, det, 0.0, 3.0, _still)
+    t = 3.0
+    while not nav.ahrs_aid and t < 8.0:
+        t = _fly(nav, det, t, t + 0.05, _still, accel_bias=np.array([0.3, 0.3, 0.0])) + 0.005
+    assert nav.ahrs_aid and 4.0 < t < 6.0
+    assert "filter attitude 2." in nav.health(t).integrity_reason
+    _fly(nav, det, t, 10.0, _still, accel_bias=np.array([0.3, 0.3, 0.0]))
+    assert np.max(np.abs(nav.kf.x.euler[:2])) < np.radians(0.1)
+    assert np.allclose(nav.kf.x.accel_bias[:2], 0.3, atol=0.05)
+    assert np.linalg.norm(nav.estimate(10.0).position - _still(10.0)) < 0.01
+    assert nav.reinits == 0 and nav.health(10.0).integrity == "ok"
+
+
 def test_gated_out_fixes_that_agree_reinitialise_the_filter():
     """The accelerometers miss 1 m/s^2 (x and y) from 3 s while the vehicle accelerates (in the loop the
     controller flies the filter's estimate, so the vehicle does what the accelerometers do not feel): the
