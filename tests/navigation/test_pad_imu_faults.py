@@ -132,11 +132,14 @@ def test_gated_out_fixes_that_agree_reinitialise_the_filter():
 
     _fly(nav, det, 0.0, 3.0, away)
     assert nav.rejected == 0
-    _fly(nav, det, 3.0, 10.0, away, log=log)
+    t = 3.0
+    while nav.rejected == 0 and t < 5.0:  # not "ok" from the first gated-out fix on
+        t = _fly(nav, det, t, t + 0.05, away) + 0.005
+    assert nav.rejected == 1 and "1 fixes in a row gated out" in nav.health(t).integrity_reason
+    _fly(nav, det, t, 10.0, away, log=log)
     assert nav.reinits >= 1 and nav.ahrs_aid
-    first_reject = next(t for t, r, _ in log if r > 0)
-    first_reinit = next(t for t, _, n in log if n > 0)
-    assert 3.0 < first_reject < 5.0 and first_reinit - first_reject <= 0.35 + 1e-9  # the 8th in a row
+    first_reinit = next(tl for tl, _, n in log if n > 0)
+    assert 3.0 < t < 5.0 and first_reinit - (t - 0.005) <= 0.35 + 1e-9  # the 8th gated-out fix in a row
     assert np.linalg.norm(nav.estimate(10.0).position - away(10.0)) < 0.06  # (24 m away at 7 m/s)
     assert np.allclose(nav.kf.x.accel_bias[:2], 1.0, atol=0.05)  # learnt
     assert nav.rejected == 8 * nav.reinits  # after a re-initialisation the fixes are taken again

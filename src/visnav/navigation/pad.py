@@ -248,7 +248,9 @@ class PadNavigator(CommandDispatch):
             self.fixes += 1
             self._floor_var = floor * floor
             self.h.source = "vision"
-            self._gated.clear()
+            if self._gated:
+                self._gated.clear()
+                self.integrity.clear("gated")
             self._agree += 1
             if self._agree == self.integrity.monitor.config.window:  # a window of fixes agrees with the filter
                 for name in ("gyro", "attitude", "reinit"):
@@ -257,6 +259,9 @@ class PadNavigator(CommandDispatch):
             self.rejected += 1
             self._gated.append((f.t, p_vis, R))
             self._agree = 0
+            # the filter and the camera disagree: one of them is wrong, the estimate is not "ok" until a fix is
+            # taken again (fault-free no fix is gated out: 0 in 20 seeds)
+            self.integrity.suspect("gated", f"{len(self._gated)} fixes in a row gated out", lambda _t: 0.0)
             if self.cfg.reinit_fixes and len(self._gated) >= self.cfg.reinit_fixes:
                 self._reinit(f.t, floor)
         self.h.tracking = True
@@ -373,6 +378,7 @@ class PadNavigator(CommandDispatch):
         self.hist = History(6, 256, angles=(5,), tolerance=0.05)  # the old filter's track is not the new one's
         self._next_out = -math.inf
         self._gated.clear()
+        self.integrity.clear("gated")
         self.reinits += 1
         self.t_fix = t
         self.h.source = "vision"
