@@ -99,8 +99,8 @@ class PadFilterConfig(_M):
     reinit_gyro_bias_sigma_dps: float = Field(1.0, gt=0, le=100, description="1-sigma gyro bias [deg/s] after "
                                               "a re-initialisation or a failed gyro check")
     fault_accel_bias_noise: float = Field(0.1, ge=0, le=10, description="accelerometer bias random walk "
-                                          "[m/s^3/sqrt(Hz)] once an IMU fault is flagged (the bias states follow its "
-                                          "steps: on, off)")
+                                          "[m/s^3/sqrt(Hz)] from an IMU fault's flag until a window of fixes agrees "
+                                          "with the filter again (the bias states learn the fault)")
     ahrs_sigma_deg: float = Field(0.1, gt=0, le=10, description="1-sigma of the autopilot's attitude fused at "
                                   "ahrs_hz once an IMU fault is flagged (the gyro check or a re-initialisation)")
     ahrs_hz: float = Field(50.0, gt=0, le=1000, description="rate of those attitude updates")
