@@ -14,6 +14,10 @@
   optical axis at the imaged pad centre; with no detection it points at the pad as predicted by the
   filter (re-acquisition after a black-out);
 * no fix: the filter dead-reckons on the INS, its covariance grows (``health.source = "inertial"``).
+* IMU faults (issue #18, docs/pad.md "IMU faults"): the gyros against the autopilot's attitude
+  (``GyroAttitudeCheck``), the filter's attitude against the autopilot's, and fixes gated out in a row
+  that agree with each other (the filter is re-initialised on them); any of them -> the autopilot's
+  attitude is fused from then on and the bias states learn the fault. A frozen frame is no fix.
 
 No GPS. Before the first fix the estimate is invalid (the controller holds the trim); the filter
 starts from that fix with zero velocity and the attitude of the R-MAX's attitude system.
