@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm
+from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 from visnav.estimation.ins import (
@@ -44,7 +45,7 @@ from visnav.estimation.ins import (
     quat_to_dcm,
     radii_of_curvature,
 )
-from visnav.geometry.rotations import skew, wrap_angle
+from visnav.geometry.rotations import euler_to_dcm, skew, wrap_angle
 from visnav.measurements import ImuSample, NavEstimate
 
 __all__ = ["EskfConfig", "ErrorStateKF", "UpdateResult", "heading_from_mag"]
@@ -154,11 +155,27 @@ class ErrorStateKF:
         self._gates: dict[int, float] = {}
         self._I = np.eye(self.n)
         self._F0, self._G0 = self._model_template()
+        self._Qc = self._noise()
+
+    def _noise(self) -> np.ndarray:
         c = self.cfg
         qc = [c.accel_noise**2] * 3 + [c.gyro_noise**2] * 3 + [c.accel_bias_noise**2] * 3
         if c.gyro_bias:
             qc += [c.gyro_bias_noise**2] * 3
-        self._Qc = np.diag(qc)
+        return np.diag(qc)
+
+    def retune(self, **changes) -> None:
+        """Change noise densities or the gate in flight (``EskfConfig`` fields; not ``gyro_bias``, the state
+        size): e.g. a larger bias random walk once a sensor is known faulty, so that the bias states follow
+        its steps."""
+        from dataclasses import replace
+
+        if "gyro_bias" in changes and bool(changes["gyro_bias"]) != self.cfg.gyro_bias:
+            raise ValueError("retune cannot change the state size (gyro_bias)")
+        self.cfg = replace(self.cfg, **changes)
+        self._F0, self._G0 = self._model_template()
+        self._Qc = self._noise()
+        self._gates.clear()
 
     def _gate(self, dof: int) -> float:
         g = self._gates.get(dof)
@@ -361,6 +378,16 @@ class ErrorStateKF:
         pitch, then a heading update."""
         r, p, _ = self.x.euler
         return self.update_heading(heading_from_mag(mag_body, r, p, declination), sigma, gate)
+
+    def update_attitude(self, euler, sigma, gate: bool = True) -> UpdateResult:
+        """Attitude aid from an independent attitude solution (the autopilot's, seed 002 §6.2), Euler angles
+        [rad]: with ``C_meas = (I + [eps x]) C`` the innovation is ``eps = log(C_meas C^T)`` (NED axes) and
+        ``H = [0 0 I 0 ...]``. ``sigma``: [rad], one or three (N, E, D axes)."""
+        Cm = euler_to_dcm(np.asarray(euler, dtype=float))
+        y = Rotation.from_matrix(Cm @ quat_to_dcm(self.x.quat).T).as_rotvec()
+        H = np.zeros((3, self.n))
+        H[:, E_] = np.eye(3)
+        return self.update("attitude", y, H, self._cov(sigma, 3, "attitude"), gate)
 
     def update_gravity(self, accel_body, sigma: float, gate: bool = True) -> UpdateResult:
         """AHRS aid: when not accelerating, the accelerometer reads ``C^T (-g^n) + b_a``.

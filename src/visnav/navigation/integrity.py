@@ -68,6 +68,13 @@ class NavIntegrity:
         """The filter (re)started at ``t``: the stale clock starts here (no update is owed before)."""
         self.monitor._last_accept = max(self.monitor._last_accept, float(t))
 
+    def restart(self, t: float) -> None:
+        """The filter was re-initialised at ``t``: the innovations of the one before say nothing of it (the
+        windows are emptied) and the stale clock starts again."""
+        for q in self.monitor._streams.values():
+            q.clear()
+        self.start(t)
+
     def fill(self, h: Health, t: float, P_h, unobserved_var: float = 0.0) -> Health:
         """``unobserved_var``: variance [m^2] per horizontal axis of an error the filter's covariance does
         not hold (a bias its aid shares), added to ``P_h`` for the HPL."""
@@ -299,3 +306,11 @@ class GyroAttitudeCheck:
 register_stream("gyro_check", stat=("1", "", "gyro / autopilot-attitude rotation test |d|^2 / sigma^2 over the "
                                                 "window (chi-square(3) when fault-free; "
                                                 "navigation/integrity.GyroAttitudeCheck)"))
+
+
+def gyro_check_from(block) -> GyroAttitudeCheck | None:
+    """A ``GyroAttitudeCheck`` from a navigator's ``integrity`` block (``GyroCheckBlock``); None when it is off."""
+    if block is None or not getattr(block, "gyro_check", False):
+        return None
+    return GyroAttitudeCheck(block.gyro_check_alpha, block.gyro_check_window_s,
+                             math.radians(block.gyro_check_attitude_sigma_deg))

@@ -37,7 +37,7 @@ from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
                                  NavEstimate, NavInit)
 from visnav.navigation.base import CommandDispatch, FrozenFrameCheck, propagate
-from visnav.navigation.integrity import (GyroAttitudeCheck, HandoverCheck, NavIntegrity, gps_check_from,
+from visnav.navigation.integrity import (HandoverCheck, NavIntegrity, gps_check_from, gyro_check_from,
                                         watch_gps)
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
@@ -199,9 +199,7 @@ class WitasNavigator(CommandDispatch):
         self._odo_var = 0.0  # variance [m^2] per axis of the odometry track from the hand-over
         self._frozen = FrozenFrameCheck()  # frames repeating the previous one (a frozen link): dropped
         # the ESKF's gyros against the autopilot's attitude solution (a gyro bias step): None when off
-        self.gyro_check = (GyroAttitudeCheck(ic.gyro_check_alpha, ic.gyro_check_window_s,
-                                             math.radians(ic.gyro_check_attitude_sigma_deg))
-                           if ic is not None and getattr(ic, "gyro_check", False) else None)
+        self.gyro_check = gyro_check_from(ic)
         self._gyro_steps = 0
 
     def initialize(self, init: NavInit) -> None:

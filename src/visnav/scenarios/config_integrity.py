@@ -64,7 +64,22 @@ class PalaceIntegrityConfig(GpsCheckBlock):
                                  "since the ground reference was set (fault-free campaign: 0.2-0.5 m in 25 s)")
 
 
-class WitasIntegrityConfig(GpsCheckBlock):
+class GyroCheckBlock(IntegrityBlock):
+    """The gyro / autopilot-attitude check's keys (navigators with a strapdown INS beside the R-MAX's own attitude
+    solution: WITAS, pad; ``navigation/integrity.GyroAttitudeCheck``)."""
+
+    gyro_check: bool = Field(True, description="test the navigation gyros against the autopilot's attitude "
+                             "solution; on a failure (a gyro bias step) the gyros are excluded: WITAS goes on with the "
+                             "position filter on the autopilot's attitude, the pad filter fuses the autopilot's "
+                             "attitude (navigation/integrity.GyroAttitudeCheck)")
+    gyro_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="level of the gyro test (chi-square(3))")
+    gyro_check_window_s: float = Field(1.0, gt=0, le=30, description="the gyro test's window: the rotation "
+                                       "integrated from the gyros vs the autopilot's over this long")
+    gyro_check_attitude_sigma_deg: float = Field(0.05, gt=0, le=10, description="1-sigma noise of the "
+                                                 "autopilot's attitude per axis (the simulated one: 0.03 deg)")
+
+
+class WitasIntegrityConfig(GpsCheckBlock, GyroCheckBlock):
     """WITAS homing: back within 30 m of home (the issue's unsafe homing), PMF -> KF updates at 5 Hz."""
 
     alert_limit_m: float = Field(30.0, gt=0, description="unusable when the HPL exceeds it")
@@ -77,21 +92,16 @@ class WitasIntegrityConfig(GpsCheckBlock):
                                  "the Kalman filter kept in the hand-over frame (navigation/integrity.HandoverCheck)")
     handover_alpha: float = Field(1e-4, gt=0, lt=0.5, description="level of the hand-over test (chi-square(2))")
     handover_updates: int = Field(3, ge=1, le=100, description="registrations in a row above the bound to latch")
-    gyro_check: bool = Field(True, description="ESKF backend: test the gyros against the autopilot's attitude "
-                             "solution; on a failure (a gyro bias step) exclude them and go on with the position "
-                             "filter on the autopilot's attitude (navigation/integrity.GyroAttitudeCheck)")
-    gyro_check_alpha: float = Field(1e-7, gt=0, lt=0.5, description="level of the gyro test (chi-square(3))")
-    gyro_check_window_s: float = Field(1.0, gt=0, le=30, description="the gyro test's window: the rotation "
-                                       "integrated from the gyros vs the autopilot's over this long")
-    gyro_check_attitude_sigma_deg: float = Field(0.05, gt=0, le=10, description="1-sigma noise of the "
-                                                 "autopilot's attitude per axis (the simulated one: 0.03 deg)")
 
 
-class PadIntegrityConfig(IntegrityBlock):
+class PadIntegrityConfig(GyroCheckBlock):
     """Pad landing: within 1 m of the pad centre, vision fixes at 20 Hz."""
 
     alert_limit_m: float = Field(1.0, gt=0, description="unusable when the HPL exceeds it")
     stale_s: float = Field(1.0, gt=0, description="unusable when no update was accepted for this long")
+    attitude_check_deg: float = Field(2.0, gt=0, le=180, description="the filter's attitude more than this from "
+                                      "the autopilot's (10 Hz) -> an IMU fault taken into the attitude: the autopilot's "
+                                      "attitude is fused from then on (navigation/pad.py)")
 
 
 FAULT_KINDS = ("camera_blackout", "camera_frozen", "camera_brightness", "camera_blur", "imu_gyro_bias",

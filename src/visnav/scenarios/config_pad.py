@@ -88,6 +88,22 @@ class PadFilterConfig(_M):
     track_deadband_deg: float = Field(1.0, ge=0, le=20)
     sigma_floor_px: float = Field(0.05, gt=0, le=5)
     cov_inflation: float = Field(1.5, gt=0, le=20)
+    # IMU faults (issue #18): a filter that gates out every fix while the fixes agree with each other is the
+    # one that is wrong (navigation/pad.py, docs/pad.md "IMU faults")
+    reinit_fixes: int = Field(8, ge=0, le=100, description="this many fixes in a row gated out that agree with "
+                              "each other (one smooth track) -> the filter is re-initialised on them (0: never)")
+    reinit_alpha: float = Field(1e-3, gt=0, lt=0.5, description="level of the agreement test: chi-square of the "
+                                "fixes about a constant-acceleration track fitted to them")
+    reinit_accel_bias_sigma_mps2: float = Field(0.5, gt=0, le=10, description="1-sigma accelerometer bias the "
+                                                "re-initialised filter starts with (it learns the faulty bias)")
+    reinit_gyro_bias_sigma_dps: float = Field(1.0, gt=0, le=100, description="1-sigma gyro bias [deg/s] after "
+                                              "a re-initialisation or a failed gyro check")
+    fault_accel_bias_noise: float = Field(0.1, ge=0, le=10, description="accelerometer bias random walk "
+                                          "[m/s^3/sqrt(Hz)] from an IMU fault's flag until a window of fixes agrees "
+                                          "with the filter again (the bias states learn the fault)")
+    ahrs_sigma_deg: float = Field(0.1, gt=0, le=10, description="1-sigma of the autopilot's attitude fused at "
+                                  "ahrs_hz once an IMU fault is flagged (the gyro check or a re-initialisation)")
+    ahrs_hz: float = Field(50.0, gt=0, le=1000, description="rate of those attitude updates")
     integrity: PadIntegrityConfig = PadIntegrityConfig()
 
 
