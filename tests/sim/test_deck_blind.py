@@ -28,3 +28,21 @@ def test_blackout_in_the_commit_window_lands_on_the_plate():
     v = sim.log.get("vehicle")
     blind = (v["t"] >= 10.28) & (v["t"] <= float(td["t"][0]))
     assert np.all(v["velocity"][blind][:, 2] > -0.05)  # NED: never up
+
+
+def test_static_deck_holds_when_the_navigator_is_unusable_mid_approach():
+    """deck-static, IMU drops seed 4 (50 % of the samples lost for 3 s from 9 s): the filter loses the lights at
+    10.2 s with 9 s of the straight approach to go. Before, the static mission acted on no integrity state: the
+    approach went on blind, then descended on the IMU alone, and the vehicle flew 100 m away (never touching
+    down). Now the approach is abandoned for the blind hold on the IMU; it stays within 12 m of the deck."""
+    sc = load_scenario("deck-static", ['faults=[{kind = "imu_drop", start_s = 9.0, duration_s = 3.0, '
+                                       'drop_probability = 0.5}]', "run.duration_s=30"], seed=4)
+    sim = make_simulation(sc)
+    res = sim.run()
+    assert res.error is None, res.error
+    mode = sim.log.get("mode")
+    assert list(mode["mode"][:3]) == ["manual", "approach", "hover"]
+    assert "integrity: navigator unusable" in mode["reason"][2] and 10.0 < float(mode["t"][2]) < 11.5
+    assert "go-around" in list(sim.log.get("integrity_reaction")["action"])
+    tr = sim.log.get("truth")
+    assert np.max(np.linalg.norm(tr["position"], axis=1)) < 12.0

@@ -29,7 +29,9 @@ Integrity (issue #18, ``mission/integrity.IntegrityWatch``; not in the thesis, w
 over): on a moving deck the navigator ``unusable`` (no frame fused for ``filter.integrity_stale_s``) for
 ``guidance.integrity_unusable_s`` during an approach with more than ``guidance.integrity_commit_s`` to go
 is a go-around (back to ``hover``, one of ``guidance.go_arounds``); no approach starts while it is
-unusable (the hover holds). In the approach's last ``integrity_commit_s`` the landing goes on (the
+unusable (the hover holds). On a static deck (``guidance.static_integrity``) the same unusable mid-approach
+holds (the blind hold) and a new straight approach starts from where the vehicle is once the fix has been
+``ok`` for ``go_around_hover_s``. In the approach's last ``integrity_commit_s`` the landing goes on (the
 lights leave the view near the deck); a trajectory that then ends without contact and without a trusted
 fix lands on (``guidance.blind_end = "land"``: ``descend`` level, the horizontal velocity arrested, sinking
 at ``final_descent_mps`` on the IMU, at most ``blind_land_s``) instead of going around over the heaving deck.
@@ -130,8 +132,14 @@ class DeckMission:
                 else:
                     self._restart(t)
             elif mode == "hover":
-                self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
-                if self.mode == "hover" and self.moving and (self.watch.unusable_for(t) >= g.blind_hold_s or (
+                if self.moving:
+                    self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
+                elif tm >= g.go_around_hover_s and self.watch.ok_for(t) >= g.go_around_hover_s:
+                    # static deck after an integrity hold: a new straight approach from where the vehicle is
+                    self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
+                    self.approach = StraightApproach(p_ld - self._c0, g.duration_s, g.k_static)
+                    self._set_mode(t, "approach", f"fix good for {g.go_around_hover_s:g} s: straight tau gaps again")
+                if self.mode == "hover" and (self.watch.unusable_for(t) >= g.blind_hold_s or (
                         self.watch.seen_ok and self.watch.state != "unusable" and self.watch.hpl_m > g.hover_hpl_m)
                         or self._degraded_for(t) >= DEGRADED_HOLD_S):
                     return self._blind_hold(t, p_ld), self.mode
@@ -163,7 +171,8 @@ class DeckMission:
             ref = DeckReference(t=t, kind="follow", position=c + pd, velocity=vd,
                                 accel=np.array([a_lead[0], a_lead[1], a_now[2]]), target=c, normal=n_up,
                                 flare_time_left=self.approach.T - tm if tau else None)
-            why = self._no_commit(t) if tau and self.approach.T - tm > g.integrity_commit_s else ""
+            why = self._no_commit(t, hpl=tau) if (tau or g.static_integrity) and \
+                self.approach.T - tm > g.integrity_commit_s else ""
             if why:
                 # no touchdown without a fix: go around even with the go-arounds used up (the hover holds and
                 # starts again when the fix is good; no landing is safe, a blind one is not)
@@ -213,17 +222,17 @@ class DeckMission:
         return DeckReference(t=t, kind="descend", target=c, normal=n_up,
                              flare_time_left=np.inf if tau else None), self.mode
 
-    def _no_commit(self, t: float, persist: bool = True) -> str:
+    def _no_commit(self, t: float, persist: bool = True, hpl: bool = True) -> str:
         """Why the relative position is not known well enough to commit to a touchdown ('' if it is):
-        the navigator unusable (for ``integrity_unusable_s`` with ``persist``), or usable with its protection
-        level above ``commit_hpl_m``."""
+        the navigator unusable (for ``integrity_unusable_s`` with ``persist``), or (with ``hpl``) usable with its
+        protection level above ``commit_hpl_m``."""
         g, w = self.cfg.guidance, self.watch
         if not w.seen_ok:
             return ""
         if w.state == "unusable":  # (its own persistence: a short outage is ridden through)
             return f"navigator unusable {w.unusable_for(t):.1f} s" if (
                 not persist or w.unusable_for(t) >= g.integrity_unusable_s) else ""
-        if w.hpl_m > g.commit_hpl_m:
+        if hpl and w.hpl_m > g.commit_hpl_m:
             return f"HPL {w.hpl_m:.2f} m above {g.commit_hpl_m:g} m"
         return ""
 

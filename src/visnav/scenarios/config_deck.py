@@ -179,6 +179,10 @@ class DeckGuidanceConfig(_M):
     go_arounds: int = Field(2, ge=0, le=10, description="moving deck: a trajectory that ends without contact "
                             "returns to the start point and tries again, this many times, before the descend mode")
     go_around_hover_s: float = Field(2.0, ge=0, le=60, description="hover before the next approach of a go-around")
+    static_integrity: bool = Field(True, description="static deck: the navigator unusable for integrity_unusable_s "
+                                   "with more than integrity_commit_s of the straight approach to go -> hold (the "
+                                   "blind hold on the IMU), and a new straight approach from where the vehicle is "
+                                   "once the fix has been ok for go_around_hover_s")
     final_descent_mps: float = Field(0.25, gt=0, le=2)
     integrity_unusable_s: float = Field(0.5, ge=0, le=30, description="moving deck: navigator integrity unusable "
                                         "this long during the approach -> go-around (one of go_arounds), and no "
