@@ -136,9 +136,8 @@ class DeckMission:
                     self._maybe_start(t, tm, p_ld, Cd0, wd, psi_d)
                 elif tm >= g.go_around_hover_s and self.watch.ok_for(t) >= g.go_around_hover_s:
                     # static deck after an integrity hold: a new straight approach from where the vehicle is
-                    self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
-                    self.approach = StraightApproach(p_ld - self._c0, g.duration_s, g.k_static)
-                    self._set_mode(t, "approach", f"fix good for {g.go_around_hover_s:g} s: straight tau gaps again")
+                    self._straight(t, p_ld, Cd0, wd, psi_d, f"fix good for {g.go_around_hover_s:g} s: straight tau "
+                                                            f"gaps again")
                 if self.mode == "hover" and (self.watch.unusable_for(t) >= g.blind_hold_s or (
                         self.watch.seen_ok and self.watch.state != "unusable" and self.watch.hpl_m > g.hover_hpl_m)
                         or self._degraded_for(t) >= DEGRADED_HOLD_S):
@@ -319,11 +318,17 @@ class DeckMission:
         g = self.cfg.guidance
         self.nav.command(NavCommand(t, "track"))  # converged: from now on the sensor's own noise
         if not self.moving:
-            self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
-            self.approach = StraightApproach(p_ld - self._c0, g.duration_s, g.k_static)
-            self._set_mode(t, "approach", f"manual hold over; straight tau gaps, k={g.k_static}, T={g.duration_s}s")
+            self._straight(t, p_ld, Cd0, wd, psi_d, f"manual hold over; straight tau gaps, k={g.k_static}, "
+                                                    f"T={g.duration_s}s")
         else:
             self._set_mode(t, "hover", "handed over to the autonomy")
+
+    def _straight(self, t, p_ld, Cd0, wd, psi_d, why: str) -> None:
+        """Static deck: the straight tau approach from where the vehicle is to the landing point."""
+        g = self.cfg.guidance
+        self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
+        self.approach = StraightApproach(p_ld - self._c0, g.duration_s, g.k_static)
+        self._set_mode(t, "approach", why)
 
     def _maybe_start(self, t, tm, p_ld, Cd0, wd, psi_d):
         g = self.cfg.guidance
