@@ -191,3 +191,23 @@ def test_flat_earth_path_equals_the_general_path_with_zero_rates():
         assert np.array_equal(getattr(fast.x, k), getattr(ref.x, k)), k
     assert np.array_equal(fast.P, ref.P)
     assert not np.array_equal(fast.x.position, s0.position)  # it moved
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-13, 1e-7, 1e-3, 0.5, 2.0, 3.1, math.pi - 1e-9])
+def test_rotvec_from_dcm_matches_scipy(angle):
+    from visnav.estimation.ins import rotvec_from_dcm
+
+    rng = np.random.default_rng(int(angle * 1e6) % 1000)
+    for _ in range(200):
+        axis = rng.normal(size=3)
+        rv = axis / np.linalg.norm(axis) * angle
+        C = Rotation.from_rotvec(rv).as_matrix()
+        got = rotvec_from_dcm(C)
+        np.testing.assert_allclose(got, Rotation.from_matrix(C).as_rotvec(), rtol=0, atol=2e-15 + 1e-15 * angle)
+        if angle < 3.0:  # (at pi the sign of the axis is a convention)
+            np.testing.assert_allclose(got, rv, rtol=0, atol=1e-14)
+    # a product of rotations slightly off orthogonality (rounding) still gives its rotation
+    C = np.eye(3)
+    for _ in range(1000):
+        C = C @ Rotation.from_rotvec(rng.normal(size=3) * 0.01).as_matrix()
+    np.testing.assert_allclose(rotvec_from_dcm(C), Rotation.from_matrix(C).as_rotvec(), atol=1e-12)

@@ -218,3 +218,35 @@ def test_gyro_attitude_check_against_chi2_and_a_bias_step():
     # a roll / pitch bias of the attitude solution (0.15 deg) over the turns: inside the att_bias term
     det, _ = _rotate(GyroAttitudeCheck(), np.zeros(3), t_end=60.0, offset=(0.0026, -0.0026, 0.0))
     assert det is None
+
+
+def test_gyro_attitude_check_rotation_equals_scipy_matrix_reference():
+    """The check integrates the gyros as a quaternion and takes logs in scalar math (speed, issue #19): its
+    statistic equals the rotation-matrix formula with scipy's exp / log (the earlier implementation) to
+    rounding, on a turning flight with a bias step, sample by sample."""
+    from scipy.spatial.transform import Rotation
+
+    from visnav.geometry.rotations import euler_to_dcm
+    from visnav.navigation.integrity import GyroAttitudeCheck
+
+    g = GyroAttitudeCheck()
+    rng = np.random.default_rng(3)
+    R, hist, att, t, dt, n = np.eye(3), [], {}, 0.0, 0.02, 0
+    for k in range(1500):
+        w = np.array([0.2 * math.sin(0.5 * t), 0.1 * math.cos(0.3 * t), 0.27]) + (0.01 if k > 1000 else 0.0)
+        t = round(t + dt, 6)
+        att[t] = np.array([0.1 * math.sin(t), 0.05 * math.cos(0.7 * t), 0.27 * t]) + 1e-3 * rng.standard_normal(3)
+        g.gyro(t, w, dt)
+        R = R @ Rotation.from_rotvec(w * dt).as_matrix()
+        hist.append((t, R.copy()))
+        if k % 5 or k < 60:
+            continue
+        g.check(lambda ti: att.get(round(ti, 6)))
+        (t1, R1), (t0, R0) = hist[-1], next(h for h in hist if h[0] >= t - g.window_s - 1e-9)
+        dRa = euler_to_dcm(att[t0]).T @ euler_to_dcm(att[t1])
+        d = Rotation.from_matrix(dRa.T @ (R0.T @ R1)).as_rotvec()
+        turned = np.linalg.norm(Rotation.from_matrix(dRa).as_rotvec())
+        ref = float(d @ d) / (g.sigma2 + (g.att_bias * turned) ** 2)
+        assert g.last_stat == pytest.approx(ref, rel=1e-9, abs=1e-12)
+        n += 1
+    assert n > 250 and g.last_stat > g.bound  # the bias step is seen by both

@@ -135,6 +135,36 @@ def dcm_to_quat(C) -> np.ndarray:
     return q.reshape(C.shape[:-2] + (4,))
 
 
+def rotvec_from_dcm(C) -> np.ndarray:
+    """Logarithm of one rotation matrix (3, 3): its rotation vector [rad] (|.| <= pi), in scalar math.
+
+    The quaternion by Shepperd's choice of the largest of the trace and the diagonal (well conditioned
+    at every angle), normalised (a product of rotations off orthogonality by rounding), turned to
+    w >= 0, then ``2 atan2(|v|, w) v / |v|`` (``2 v / w`` at a zero angle). Agrees with scipy's
+    ``Rotation.from_matrix(C).as_rotvec()`` to rounding (tests/estimation)."""
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = np.asarray(C, dtype=float).tolist()
+    tr = c00 + c11 + c22
+    if tr >= c00 and tr >= c11 and tr >= c22:
+        w = math.sqrt(1.0 + tr)
+        x, y, z, w = (c21 - c12) / w, (c02 - c20) / w, (c10 - c01) / w, w
+    elif c00 >= c11 and c00 >= c22:
+        x = math.sqrt(1.0 + c00 - c11 - c22)
+        x, y, z, w = x, (c01 + c10) / x, (c02 + c20) / x, (c21 - c12) / x
+    elif c11 >= c22:
+        y = math.sqrt(1.0 - c00 + c11 - c22)
+        x, y, z, w = (c01 + c10) / y, y, (c12 + c21) / y, (c02 - c20) / y
+    else:
+        z = math.sqrt(1.0 - c00 - c11 + c22)
+        x, y, z, w = (c02 + c20) / z, (c12 + c21) / z, z, (c10 - c01) / z
+    if w < 0.0:
+        x, y, z, w = -x, -y, -z, -w
+    n = math.sqrt(x * x + y * y + z * z + w * w)  # (the common factor 2 of Shepperd's formulas cancels)
+    x, y, z, w = x / n, y / n, z / n, w / n
+    s = math.sqrt(x * x + y * y + z * z)
+    k = 2.0 / w if s < 1e-12 else 2.0 * math.atan2(s, w) / s
+    return np.array([k * x, k * y, k * z])
+
+
 def quat_to_euler(q) -> np.ndarray:
     """(roll, pitch, yaw) [rad] of quaternion(s), ZYX as in geometry/rotations.py."""
     q = np.asarray(q, dtype=float)

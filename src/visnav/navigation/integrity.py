@@ -15,10 +15,10 @@ from dataclasses import replace
 from typing import Callable
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 from visnav.estimation.integrity import IntegrityMonitor
+from visnav.estimation.ins import quat_conj, quat_mult, quat_to_dcm, rotvec_from_dcm
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.log_schema import register_stream
 from visnav.measurements import Health
@@ -259,8 +259,8 @@ class GyroAttitudeCheck:
         self.window_s = float(window_s)
         self.sigma2 = 2 * att_sigma_rad**2 + gyro_noise**2 * dt * window_s + (gyro_bias * window_s) ** 2
         self.att_bias = float(att_bias_rad)
-        self._R = np.eye(3)
-        self._q: deque = deque()  # (t, cumulative gyro rotation at t)
+        self._R = (1.0, 0.0, 0.0, 0.0)
+        self._q: deque = deque()  # (t, cumulative gyro rotation at t: a quaternion)
         self.last_stat = 0.0
         self.detected_t: float | None = None
         self.t0: float | None = None
@@ -269,8 +269,16 @@ class GyroAttitudeCheck:
 
     def gyro(self, t: float, w, dt: float) -> None:
         """One propagation step of the filter: body rates ``w`` [rad/s] held over ``dt`` ending at ``t``."""
-        self._R = self._R @ Rotation.from_rotvec(np.asarray(w, float) * dt).as_matrix()
-        self._q.append((float(t), self._R.copy()))
+        # the cumulative rotation as a quaternion (w, x, y, z) of floats: q <- q (x) exp(w dt / 2), in
+        # scalar math (this runs at the IMU rate; the exponential is estimation/ins.quat_from_rotvec's)
+        x, y, z = (float(c) * dt for c in w)
+        a = math.sqrt(x * x + y * y + z * z)
+        k = 0.5 - a * a / 48.0 if a < 1e-8 else math.sin(0.5 * a) / a
+        qw, qx, qy, qz = math.cos(0.5 * a), x * k, y * k, z * k
+        pw, px, py, pz = self._R
+        self._R = (pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
+                   pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw)
+        self._q.append((float(t), self._R))
         while len(self._q) > 2 and self._q[1][0] <= t - 2.0 * self.window_s:
             self._q.popleft()
 
@@ -293,8 +301,8 @@ class GyroAttitudeCheck:
         if e0 is None:
             return False
         dRa = euler_to_dcm(e0).T @ euler_to_dcm(e1)
-        d = Rotation.from_matrix(dRa.T @ (R0.T @ R1)).as_rotvec()
-        turned = float(np.linalg.norm(Rotation.from_matrix(dRa).as_rotvec()))
+        d = rotvec_from_dcm(dRa.T @ quat_to_dcm(quat_mult(quat_conj(R0), R1)))  # R0^T R1 of the gyros
+        turned = float(np.linalg.norm(rotvec_from_dcm(dRa)))
         self.last_stat = float(d @ d) / (self.sigma2 + (self.att_bias * turned) ** 2)
         if self.last_stat > self.bound:
             self.detected_t, self.t0, self.d = float(t1), float(t0), d
