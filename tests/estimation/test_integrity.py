@@ -109,3 +109,25 @@ def test_inflation_pools_only_the_named_streams():
         every.record(0.1 * k, "pos", 4.0, 2, True)
         every.record(0.1 * k, "baro", 30.0, 1, True)
     assert every.inflation() == pytest.approx((5 * 4.0 + 5 * 30.0) / 15)
+
+
+def test_assess_between_updates_reuses_the_windows_and_sees_every_change():
+    """``assess`` runs every step and the windows change only at updates (issue #19 memo): interleaved at
+    random, it must give what the windows' own tests give at that moment, clears included."""
+    rng = np.random.default_rng(5)
+    m = IntegrityMonitor(IntegrityConfig(window=6, max_rejected_share=0.3))
+    P = np.diag([1.0, 2.0])
+    for k in range(600):
+        r = rng.uniform()
+        if r < 0.4:
+            m.record(0.01 * k, str(rng.choice(["gps", "vision"])), float(rng.chisquare(2) * rng.choice([1, 8])), 2,
+                     bool(rng.uniform() < 0.8))
+        elif r < 0.42:
+            m.clear()
+        a = m.assess(0.01 * k, P)
+        tests = {s: m.test(s) for s in m._streams}
+        assert a["consistency_k2"] == m.inflation()
+        assert a["nis_per_dof"] == pytest.approx({s: x.mean_nis_per_dof for s, x in tests.items()}, nan_ok=True)
+        assert a["rejected_share"] == {s: x.rejected_share for s, x in tests.items()}
+        want = "degraded" if any(x.over_confident or x.rejected_share > 0.3 for x in tests.values()) else "ok"
+        assert a["integrity"] == want

@@ -93,6 +93,13 @@ class IntegrityMonitor:
         self._quantiles: dict[int, tuple[float, float]] = {}
         self.transitions: list[tuple[float, str, str]] = []  # (t, state, reason)
         self._state = "ok"
+        self._memo: tuple | None = None  # what ``assess`` derives from the windows alone, until they change
+
+    def clear(self) -> None:
+        """Empty every stream's window (a filter re-initialised: its predecessor's innovations say nothing)."""
+        for q in self._streams.values():
+            q.clear()
+        self._memo = None
 
     def record(self, t: float, stream: str, nis: float, dof: int, accepted: bool) -> None:
         """One update: its NIS, its dimension, and whether the filter's gate accepted it."""
@@ -100,6 +107,7 @@ class IntegrityMonitor:
         if q is None:
             q = self._streams[stream] = deque(maxlen=self.config.window)
         q.append((float(nis), int(dof), bool(accepted)))
+        self._memo = None
         if accepted:
             self._last_accept = max(self._last_accept, float(t))
 
@@ -132,18 +140,13 @@ class IntegrityMonitor:
                     tot_n, tot_d = tot_n + n, tot_d + d
         return max(1.0, tot_n / tot_d) if tot_d else 1.0
 
-    def assess(self, t: float, P_h: np.ndarray | None = None) -> dict:
-        """The integrity output every navigator's ``health`` carries (one set of keys)."""
-        c = self.config
-        tests = [self.test(s) for s in self._streams]
-        k2 = self.inflation()
-        hpl = horizontal_protection_level(P_h, c.probability, k2) if P_h is not None else math.inf
-        state, reason = "ok", ""
-        if t - self._last_accept > c.stale_s:
-            state, reason = "unusable", f"no accepted update for {t - self._last_accept:.1f} s"
-        elif hpl > c.alert_limit_m:
-            state, reason = "unusable", f"HPL {hpl:.1f} m above the {c.alert_limit_m:g} m alert limit"
-        else:
+    def _windows(self) -> tuple:
+        """The windowed tests, k^2 and the state they give alone, computed once per change of the windows (the
+        navigators assess at every step, the windows change at each update)."""
+        if self._memo is None:
+            c = self.config
+            tests = [self.test(s) for s in self._streams]
+            state, reason = "ok", ""
             bad = [x for x in tests if x.over_confident]
             rej = [x for x in tests if x.rejected_share > c.max_rejected_share]
             if bad:
@@ -153,10 +156,21 @@ class IntegrityMonitor:
             elif rej:
                 state = "degraded"
                 reason = "; ".join(f"{x.stream} rejected {100 * x.rejected_share:.0f} %" for x in rej)
+            self._memo = (self.inflation(), state, reason, {x.stream: x.mean_nis_per_dof for x in tests},
+                          {x.stream: x.rejected_share for x in tests})
+        return self._memo
+
+    def assess(self, t: float, P_h: np.ndarray | None = None) -> dict:
+        """The integrity output every navigator's ``health`` carries (one set of keys)."""
+        c = self.config
+        k2, state, reason, nis, rejected = self._windows()
+        hpl = horizontal_protection_level(P_h, c.probability, k2) if P_h is not None else math.inf
+        if t - self._last_accept > c.stale_s:
+            state, reason = "unusable", f"no accepted update for {t - self._last_accept:.1f} s"
+        elif hpl > c.alert_limit_m:
+            state, reason = "unusable", f"HPL {hpl:.1f} m above the {c.alert_limit_m:g} m alert limit"
         if state != self._state:
             self.transitions.append((float(t), state, reason))
             self._state = state
         return {"integrity": state, "integrity_reason": reason, "hpl_m": hpl, "hpl_probability": c.probability,
-                "consistency_k2": k2,
-                "nis_per_dof": {x.stream: x.mean_nis_per_dof for x in tests},
-                "rejected_share": {x.stream: x.rejected_share for x in tests}}
+                "consistency_k2": k2, "nis_per_dof": dict(nis), "rejected_share": dict(rejected)}

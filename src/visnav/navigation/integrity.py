@@ -71,8 +71,7 @@ class NavIntegrity:
     def restart(self, t: float) -> None:
         """The filter was re-initialised at ``t``: the innovations of the one before say nothing of it (the
         windows are emptied) and the stale clock starts again."""
-        for q in self.monitor._streams.values():
-            q.clear()
+        self.monitor.clear()
         self.start(t)
 
     def fill(self, h: Health, t: float, P_h, unobserved_var: float = 0.0) -> Health:
