@@ -109,13 +109,6 @@ class CameraRenderer:
             return cam_pos + d * (-cam_pos[2] / d[2])
         return cam_pos
 
-    def _warp(self, image, affine, cam_pos, C_cn, ground) -> np.ndarray:
-        Hm = ground_homography(self.K, cam_pos, C_cn, affine)
-        return cv2.warpPerspective(
-            image, Hm, self.size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-            borderValue=self._border_value(ground),
-        )
-
     def _affine(self, ground, L: int) -> np.ndarray:
         """``ground.affine(L)``, cached (read-only)."""
         key = (id(ground), L)
@@ -138,7 +131,11 @@ class CameraRenderer:
             img = self._blend_cache[key] = cv2.addWeighted(lo, 1.0 - q / 8.0, up, q / 8.0, 0.0)
         return img
 
-    def render(self, cam_pos: np.ndarray, C_cn: np.ndarray, world) -> np.ndarray:
+    def plan(self, cam_pos: np.ndarray, C_cn: np.ndarray, world) -> tuple:
+        """Everything of a frame but its pixels: the pyramid level and its homography, the detail tile's,
+        the sky, the noise draw (``render`` = ``execute(plan(...))``). The Python part of a frame: a frame
+        rendered on a worker thread is planned on the caller's, so the worker only runs OpenCV (which
+        releases the GIL) and does not take the interpreter from the simulation loop between calls."""
         w, h = self.size
         height = -float(cam_pos[2])
         axis_down = float(C_cn[2, 2])
@@ -156,7 +153,9 @@ class CameraRenderer:
         q = int(round(8 * _clip(lf - L0, 0.0, 1.0))) if top > 0 else 0
         if q == 8:
             L0, q = min(L0 + 1, top), 0
-        img = self._warp(self._blended_level(ground, L0, q), self._affine(ground, L0), cam_pos, C_cn, ground)
+        base = (self._blended_level(ground, L0, q), ground_homography(self.K, cam_pos, C_cn, self._affine(ground, L0)),
+                self._border_value(ground))
+        detail = None
         if world.detail is not None and gsd < 0.03:
             tres = world.detail_resolution_m
             Lt = 0
@@ -172,22 +171,37 @@ class CameraRenderer:
             sc, sr = np.floor(c0 / period) * period, np.floor(r0 / period) * period
             # tile pixel (c, r) -> (n, e) = (-(row + sr) * r, (col + sc) * r): north up like every map
             At = np.array([[0.0, -r, -sr * r], [r, 0.0, sc * r], [0.0, 0.0, 1.0]])
-            Ht = ground_homography(self.K, cam_pos, C_cn, At)
-            det = cv2.warpPerspective(tile, Ht, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
             # fade the detail in as the ground sample distance shrinks below 3 cm
             wgt = _clip((0.03 - gsd) / 0.02, 0.0, 1.0)
-            img = cv2.addWeighted(img, 1.0, det, wgt, -128.0 * wgt)
+            detail = (tile, ground_homography(self.K, cam_pos, C_cn, At), wgt)
         sky = self._sky_mask(C_cn)
-        if sky is not None:
-            img[sky] = world.sky_level
-        if self._undistort_maps is not None:
-            img = cv2.remap(img, *self._undistort_maps, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        noise = None
         if self._noise is not None:
             k = int(self.rng.integers(0, self._noise.shape[0]))
             dy, dx = (int(x) for x in self.rng.integers(0, self._pad, 2))
-            img = cv2.add(img, self._noise_pos[k, dy : dy + h, dx : dx + w])
-            cv2.subtract(img, self._noise_neg[k, dy : dy + h, dx : dx + w], dst=img)
+            noise = (self._noise_pos[k, dy : dy + h, dx : dx + w], self._noise_neg[k, dy : dy + h, dx : dx + w])
+        return base, detail, sky, world.sky_level, noise
+
+    def execute(self, plan: tuple) -> np.ndarray:
+        """The pixels of a ``plan``: OpenCV calls only."""
+        (level, Hm, border), detail, sky, sky_level, noise = plan
+        img = cv2.warpPerspective(level, Hm, self.size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                                  borderValue=border)
+        if detail is not None:
+            tile, Ht, wgt = detail
+            det = cv2.warpPerspective(tile, Ht, self.size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
+            img = cv2.addWeighted(img, 1.0, det, wgt, -128.0 * wgt)
+        if sky is not None:
+            img[sky] = sky_level
+        if self._undistort_maps is not None:
+            img = cv2.remap(img, *self._undistort_maps, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        if noise is not None:
+            img = cv2.add(img, noise[0])
+            cv2.subtract(img, noise[1], dst=img)
         return img
+
+    def render(self, cam_pos: np.ndarray, C_cn: np.ndarray, world) -> np.ndarray:
+        return self.execute(self.plan(cam_pos, C_cn, world))
 
 
 class Camera:
@@ -224,12 +238,13 @@ class Camera:
 
     def sample_async(self, t: float, truth_at: TruthAt, world, executor) -> "PendingFrame":
         """Like ``sample`` but renders on ``executor`` (one worker: frames stay in order and the
-        noise draws stay reproducible); OpenCV releases the GIL, so the frame renders on the second
-        core while the simulation steps on through the camera's latency."""
+        noise draws stay reproducible); the frame is planned here (its Python part) and rendered there by
+        OpenCV, which releases the GIL, so it renders on the second core while the simulation steps on
+        through the camera's latency."""
         s = truth_at(t - self.delay_s)
         cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
         self.frames += 1
-        fut = executor.submit(self.renderer.render, cam_pos, C_cn, world)
+        fut = executor.submit(self.renderer.execute, self.renderer.plan(cam_pos, C_cn, world))
         return PendingFrame(t=t, future=fut, index=self.frames * self.decimation)
 
 
