@@ -17,14 +17,14 @@ SHORT = ["mission.start_height_m=14", "mission.settle_s=1"]
 @pytest.fixture
 def slow_render(monkeypatch):
     """Every frame takes 15 ms more on the render thread: it is never done when it falls due."""
-    render = CameraRenderer.render
+    execute = CameraRenderer.execute  # (the render worker's part of a frame)
 
     def slow(self, *a):
-        img = render(self, *a)
+        img = execute(self, *a)
         time.sleep(0.015)
         return img
 
-    monkeypatch.setattr(CameraRenderer, "render", slow)
+    monkeypatch.setattr(CameraRenderer, "execute", slow)
 
 
 def _run(sets, defer: bool, monkeypatch=None):
@@ -85,13 +85,13 @@ def test_the_switch_interval_is_short_while_frames_render_and_restored_after(mon
     from visnav.sim import loop
 
     seen = []
-    render = CameraRenderer.render
+    execute = CameraRenderer.execute  # (the worker's part of a frame)
 
     def spy(self, *a):
         seen.append(sys.getswitchinterval())
-        return render(self, *a)
+        return execute(self, *a)
 
-    monkeypatch.setattr(CameraRenderer, "render", spy)
+    monkeypatch.setattr(CameraRenderer, "execute", spy)
     before = sys.getswitchinterval()
     res, _ = _run(["run.duration_s=1"], True)
     assert res.error is None and seen and max(seen) <= loop.RENDER_SWITCH_INTERVAL_S < before
