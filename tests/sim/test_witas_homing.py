@@ -96,3 +96,36 @@ def test_five_degree_initial_attitude_error_converges(compass):
     if compass:
         assert err[late, 2].max() < 2.0  # heading too, with the compass
     assert res.metrics["returned_home"]
+
+
+def test_klt_worked_out_on_the_render_thread_flies_the_same_flight():
+    """The navigator's ``frame_prework`` (KLT on the render thread right after each frame, issue #19) is taken by
+    the odometry on nearly every frame, and the flight is the one without it, bit for bit."""
+    import threading
+
+    from visnav.vision import klt
+
+    sets = ["run.duration_s=16", "mission.gps_loss_s=3", "mission.settle_s=1"]
+    where = {"main": 0, "worker": 0}
+    track = klt.KltTracker._track
+
+    def counted(self, *a):
+        where["main" if threading.current_thread() is threading.main_thread() else "worker"] += 1
+        return track(self, *a)
+
+    klt.KltTracker._track = counted
+    try:
+        a = make_simulation(load_scenario("witas-homing", sets)).run()
+        with_prework = dict(where)
+        sim = make_simulation(load_scenario("witas-homing", sets))
+        sim.nav.frame_prework = None  # (the loop asks getattr: no work ahead)
+        b = sim.run()
+    finally:
+        klt.KltTracker._track = track
+    assert a.error is None and b.error is None
+    assert with_prework["worker"] >= 40 and with_prework["main"] <= 1
+    assert where["main"] - with_prework["main"] >= 40  # without it every frame was tracked on delivery
+    for s in ("estimate", "odometry", "truth"):
+        ea, eb = a.log.get(s), b.log.get(s)
+        for k in ea:
+            assert np.array_equal(np.asarray(ea[k]), np.asarray(eb[k]), equal_nan=ea[k].dtype.kind == "f"), f"{s}.{k}"

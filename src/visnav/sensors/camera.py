@@ -236,16 +236,27 @@ class Camera:
         self.frames += 1
         return Frame(t=t, image=img, index=self.frames * self.decimation)
 
-    def sample_async(self, t: float, truth_at: TruthAt, world, executor) -> "PendingFrame":
+    def sample_async(self, t: float, truth_at: TruthAt, world, executor, then=None) -> "PendingFrame":
         """Like ``sample`` but renders on ``executor`` (one worker: frames stay in order and the
         noise draws stay reproducible); the frame is planned here (its Python part) and rendered there by
         OpenCV, which releases the GIL, so it renders on the second core while the simulation steps on
-        through the camera's latency."""
+        through the camera's latency. ``then(image)``, when given, runs there too, right after the frame
+        is rendered (a navigator's ``frame_prework``: work on the image ahead of its delivery)."""
         s = truth_at(t - self.delay_s)
         cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
         self.frames += 1
-        fut = executor.submit(self.renderer.execute, self.renderer.plan(cam_pos, C_cn, world))
+        plan = self.renderer.plan(cam_pos, C_cn, world)
+        if then is None:
+            fut = executor.submit(self.renderer.execute, plan)
+        else:
+            fut = executor.submit(_render_then, self.renderer.execute, plan, then)
         return PendingFrame(t=t, future=fut, index=self.frames * self.decimation)
+
+
+def _render_then(execute, plan, then) -> np.ndarray:
+    img = execute(plan)
+    then(img)
+    return img
 
 
 class PendingFrame:

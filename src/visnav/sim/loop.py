@@ -137,7 +137,10 @@ class Simulation:
         for name, s in self.sensors.items():
             gate = self.parts.gates.get(name)
             rendered = self._render_pool is not None and hasattr(s, "sample_async") and s.latency_s >= self.dt
-            if rendered:
+            prework = getattr(self.nav, "frame_prework", None) if rendered else None
+            if prework is not None:  # the navigator's work on the image, on the render thread ahead of delivery
+                sample = lambda t, s=s, pre=prework: s.sample_async(t, h, w, self._render_pool, then=pre())  # noqa: E731
+            elif rendered:
                 sample = lambda t, s=s: s.sample_async(t, h, w, self._render_pool)  # noqa: E731
             else:
                 sample = lambda t, s=s: s.sample(t, h, w)  # noqa: E731

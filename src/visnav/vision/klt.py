@@ -40,6 +40,7 @@ class KltTracker:
         self.refill_below = 0.8
         self.prev_img: np.ndarray | None = None
         self.pts: np.ndarray = np.zeros((0, 2), np.float32)
+        self._ready: dict[int, tuple] = {}  # id(image) -> (image, state it started from, result): ``prework``
 
     def reset(self) -> None:
         self.prev_img = None
@@ -65,23 +66,43 @@ class KltTracker:
         """Track the features of the previous frame into ``img``; then top the set up from ``img``."""
         if img.ndim != 2 or img.dtype != np.uint8:
             raise ValueError(f"KltTracker needs a uint8 grey image, got {img.dtype} {img.shape}")
+        ready = self._ready.pop(id(img), None)
+        if len(self._ready) > 8:  # frames worked on but never tracked (a fault changed them)
+            self._ready.clear()
+        if ready is not None and ready[0] is img and ready[1] is self.prev_img and ready[2] is self.pts:
+            pairs, pts = ready[3]  # worked out by ``prework`` from this very state and image
+        else:
+            pairs, pts = self._track(self.prev_img, self.pts, img)
+        self.prev_img, self.pts = img, pts
+        return pairs
+
+    def prework(self):
+        """A function of the next image that tracks into it from the tracker's state now, off the caller's
+        thread (the render thread, right after the frame is rendered); ``track`` takes its result when it is
+        given that image while the state is still the one it started from, and otherwise works it out
+        itself (the same function of the same inputs: the result never depends on which thread did it)."""
+        prev, pts, ready = self.prev_img, self.pts, self._ready
+
+        def work(img: np.ndarray) -> None:
+            if img.ndim == 2 and img.dtype == np.uint8:
+                ready[id(img)] = (img, prev, pts, self._track(prev, pts, img))  # (one atomic store)
+
+        return work
+
+    def _track(self, prev_img: np.ndarray | None, pts: np.ndarray, img: np.ndarray) -> tuple[KltPairs, np.ndarray]:
+        """(pairs, the next feature set) from a state (previous image, its features) and a new image; pure."""
         empty = np.zeros((0, 2))
-        if self.prev_img is None or len(self.pts) == 0:
-            self.prev_img = img
-            self.pts = self._detect(img, np.zeros((0, 2), np.float32))
-            return KltPairs(empty, empty, 0)
-        p0 = self.pts.reshape(-1, 1, 2)
-        p1, st, _ = cv2.calcOpticalFlowPyrLK(self.prev_img, img, p0, None, **self.lk)
+        if prev_img is None or len(pts) == 0:
+            return KltPairs(empty, empty, 0), self._detect(img, np.zeros((0, 2), np.float32))
+        p0 = pts.reshape(-1, 1, 2)
+        p1, st, _ = cv2.calcOpticalFlowPyrLK(prev_img, img, p0, None, **self.lk)
         ok = st.ravel() == 1
         if self.fb_max > 0 and ok.any():
-            pb, stb, _ = cv2.calcOpticalFlowPyrLK(img, self.prev_img, p1, None, **self.lk)
+            pb, stb, _ = cv2.calcOpticalFlowPyrLK(img, prev_img, p1, None, **self.lk)
             fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
             ok &= (stb.ravel() == 1) & (fb < self.fb_max)
         h, w = img.shape
         q = p1.reshape(-1, 2)
         ok &= (q[:, 0] >= 0) & (q[:, 0] < w) & (q[:, 1] >= 0) & (q[:, 1] < h)
-        prev, curr = self.pts[ok].astype(float), q[ok].astype(float)
-        n = len(self.pts)
-        self.prev_img = img
-        self.pts = self._detect(img, q[ok].astype(np.float32))
-        return KltPairs(prev, curr, n)
+        prev, curr = pts[ok].astype(float), q[ok].astype(float)
+        return KltPairs(prev, curr, len(pts)), self._detect(img, q[ok].astype(np.float32))

@@ -1,0 +1,56 @@
+"""KLT tracking worked out ahead on the render thread (``KltTracker.prework``, issue #19): the same pairs and
+feature sets as tracking on delivery, and a result worked out from a state that changed since is not used."""
+
+from __future__ import annotations
+
+import threading
+
+import cv2
+import numpy as np
+
+from visnav.vision.klt import KltTracker
+
+
+def _frames(n: int = 12, seed: int = 0) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    ground = cv2.GaussianBlur(rng.integers(0, 256, (700, 900)).astype(np.uint8), (0, 0), 2.0)
+    return [np.ascontiguousarray(ground[40 + 3 * k:280 + 3 * k, 50 + 4 * k:370 + 4 * k]) for k in range(n)]
+
+
+def _same(a, b) -> bool:
+    return a.n_detected == b.n_detected and np.array_equal(a.prev, b.prev) and np.array_equal(a.curr, b.curr)
+
+
+def test_prework_gives_the_pairs_of_tracking_on_delivery_and_stale_work_is_redone():
+    frames = _frames()
+    ref, pre = KltTracker(max_features=40), KltTracker(max_features=40)
+    calls = {"main": 0, "worker": 0}
+    track = pre._track
+
+    def counted(*a):
+        calls["main" if threading.current_thread() is threading.main_thread() else "worker"] += 1
+        return track(*a)
+
+    pre._track = counted
+    for k, img in enumerate(frames):
+        if k == 6:  # a camera gap restarts both: work prepared before the restart must not be used
+            ref.reset()
+            work = pre.prework()
+            pre.reset()
+        else:
+            work = pre.prework()
+        th = threading.Thread(target=work, args=(img,))
+        th.start()
+        th.join()
+        a, b = ref.track(img), pre.track(img)
+        assert _same(a, b), k
+        assert np.array_equal(ref.pts, pre.pts) and ref.prev_img is img and pre.prev_img is img
+    assert len(ref.pts) >= 20  # features were tracked all along
+    assert calls == {"main": 1, "worker": len(frames)}  # the frame after the restart was tracked again on delivery
+    # a frame whose image a fault replaced (another array) is tracked on delivery from the tracker's state
+    img = frames[-1].copy()
+    th = threading.Thread(target=pre.prework(), args=(frames[-1],))
+    th.start()
+    th.join()
+    b, a = pre.track(img), ref.track(img)
+    assert _same(a, b) and calls["main"] == 2
