@@ -101,6 +101,7 @@ class CameraAhrs:
         self.gm = rng.normal(0.0, noise, 2) if noise > 0 else np.zeros(2)
         self.lag_s = lag_s
         self.lagged: np.ndarray | None = None
+        self._gm_coef: dict = {}  # (dt, noise_tau, noise) -> the Gauss-Markov step's (a, noise sqrt(1 - a^2))
 
     def step(self, dt: float, accel_unexplained_ned, cam_pan: float, tilt: float | None = None,
              roll: float | None = None) -> None:
@@ -118,8 +119,17 @@ class CameraAhrs:
         self.err[0] = e0 + (g * math.atan2(fwd, 9.81) - e0) * k
         self.err[1] = e1 + (g * -math.atan2(right, 9.81) - e1) * k
         if self.noise > 0 and self.noise_tau > 0:
-            a = np.exp(-dt / self.noise_tau)
-            self.gm = a * self.gm + self.noise * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
+            key = (dt, self.noise_tau, self.noise)
+            ak = self._gm_coef.get(key)
+            if ak is None:  # a = exp(-dt / tau) and noise sqrt(1 - a^2), as numpy computes them, per step size
+                a = np.exp(-dt / self.noise_tau)
+                if len(self._gm_coef) > 64:
+                    self._gm_coef.clear()
+                ak = self._gm_coef[key] = (float(a), float(self.noise * np.sqrt(1.0 - a * a)))
+            a, k = ak
+            g0, g1 = self.gm.tolist()
+            n0, n1 = self.rng.standard_normal(2).tolist()
+            self.gm = np.array([a * g0 + k * n0, a * g1 + k * n1])  # a gm + k n per axis
 
     def sample(self, t: float, truth_at, world) -> AttitudeSample:
         """The camera's (roll, tilt, NaN) [rad] at ``t`` (``sensor="camera"``): the unit is stepped over
@@ -146,7 +156,8 @@ class CameraAhrs:
             n = self.gm
         else:
             n = self.rng.normal(0.0, self.noise, 2) if self.noise > 0 else np.zeros(2)
-        return tilt + self.err[0] + self.bias[0] + n[0], roll + self.err[1] + self.bias[1] + n[1]
+        (e0, e1), (b0, b1), (n0, n1) = self.err.tolist(), self.bias.tolist(), n.tolist()
+        return tilt + e0 + b0 + n0, roll + e1 + b1 + n1
 
 
 class PanPotentiometer:
