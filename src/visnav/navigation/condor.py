@@ -144,26 +144,48 @@ class CondorNavigator(AutopilotNavigator):
         self._assess: dict | None = None
         self._assess_key: tuple | None = None
         self._assess_t = -math.inf
+        self._handlers: dict = {}  # message type -> update's handler
 
     # ------------------------------------------------------------------ measurements
     def update(self, m) -> None:
-        if isinstance(m, Frame):
-            self._frame(m)
-        elif isinstance(m, TargetRangeSample):
-            self._fix(m)
-        elif isinstance(m, AttitudeSample) and m.sensor == "camera":
+        fn = self._handlers.get(type(m))
+        if fn is None:  # (the isinstance chain below, once per message type)
+            fn = self._handlers[type(m)] = self._handler(type(m))
+        fn(m)
+
+    def _handler(self, kind: type):
+        """What ``update`` does with a message of type ``kind``."""
+        if issubclass(kind, Frame):
+            return self._frame
+        if issubclass(kind, TargetRangeSample):
+            return self._fix
+        if issubclass(kind, AttitudeSample):
+            return self._attitude
+        if issubclass(kind, PanSample):
+            return self._pan
+        if issubclass(kind, GpsSample):
+            return self._gps
+        if issubclass(kind, HeadingSample):
+            return self._heading
+        if issubclass(kind, OperatorClick):
+            return self._click
+        return super().update  # AHRS, IMU, pitot, baro
+
+    def _attitude(self, m: AttitudeSample) -> None:
+        if m.sensor == "camera":
             self.cam_att = m
-        elif isinstance(m, PanSample):
-            self.pan = m
-        elif isinstance(m, GpsSample):
-            self._gps(m)
-        elif isinstance(m, HeadingSample):
-            self.headings.append((float(m.t), float(m.heading)))
-        elif isinstance(m, OperatorClick):
-            self.tracker.start(float(m.pixel[0]), float(m.pixel[1]))
-            self.tracker_started = True
         else:
-            super().update(m)  # AHRS, IMU, pitot, baro
+            super().update(m)
+
+    def _pan(self, m: PanSample) -> None:
+        self.pan = m
+
+    def _heading(self, m: HeadingSample) -> None:
+        self.headings.append((float(m.t), float(m.heading)))
+
+    def _click(self, m: OperatorClick) -> None:
+        self.tracker.start(float(m.pixel[0]), float(m.pixel[1]))
+        self.tracker_started = True
 
     def initialize(self, init: NavInit) -> None:
         """``NavInit(source="survey", position=tent NED)``: where the tent is (the loiter's centre)."""
@@ -260,14 +282,19 @@ class CondorNavigator(AutopilotNavigator):
         cov = _NAN66
         if self.source == "gps":
             if self.gps_pos is not None:
-                pos = self.gps_pos + self.gps_vel * (t - self.gps_t)
+                # gps_pos + gps_vel (t - gps_t) per axis in floats (the same operations)
+                dt = t - self.gps_t
+                (p0, p1, p2), (v0, v1, v2) = self.gps_pos.tolist(), self.gps_vel.tolist()
+                pn, pe = p0 + v0 * dt, p1 + v1 * dt
+                pos = np.array([pn, pe, p2 + v2 * dt])
                 vel = self.gps_vel
-                gs = math.hypot(vel[0], vel[1])
+                gs = math.hypot(v0, v1)
                 cov = self._position_cov(t)
                 if self.target is not None:
-                    rn, re = pos[0] - self.target[0], pos[1] - self.target[1]
+                    tn, te, _ = self.target.tolist()
+                    rn, re = pn - tn, pe - te
                     R = math.hypot(rn, re)
-                    Rdot = (rn * vel[0] + re * vel[1]) / max(R, 1.0)
+                    Rdot = (rn * v0 + re * v1) / max(R, 1.0)
                     valid = t - self.gps_t <= self.gps_stale_s
         else:
             R, Rdot = self.radius.predict(t)
