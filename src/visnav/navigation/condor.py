@@ -145,9 +145,12 @@ class CondorNavigator(AutopilotNavigator):
         self._assess_key: tuple | None = None
         self._assess_t = -math.inf
         self._handlers: dict = {}  # message type -> update's handler
+        self._version = 0  # counts what can change the estimate (update, initialize, command)
+        self._memo: tuple | None = None  # (t, version, estimate) of the last estimate
 
     # ------------------------------------------------------------------ measurements
     def update(self, m) -> None:
+        self._version += 1
         fn = self._handlers.get(type(m))
         if fn is None:  # (the isinstance chain below, once per message type)
             fn = self._handlers[type(m)] = self._handler(type(m))
@@ -187,10 +190,15 @@ class CondorNavigator(AutopilotNavigator):
         self.tracker.start(float(m.pixel[0]), float(m.pixel[1]))
         self.tracker_started = True
 
+    def command(self, request) -> None:
+        self._version += 1
+        super().command(request)
+
     def initialize(self, init: NavInit) -> None:
         """``NavInit(source="survey", position=tent NED)``: where the tent is (the loiter's centre)."""
         if init.position is None:
             raise ValueError("CondorNavigator.initialize needs the tent's surveyed position")
+        self._version += 1
         self.target = np.asarray(init.position, float)[:3].copy()
 
     def _cmd_set_source(self, t: float, source: str) -> None:
@@ -277,6 +285,16 @@ class CondorNavigator(AutopilotNavigator):
         return self.headings[-1][1] if self.headings else math.nan
 
     def estimate(self, t: float) -> FixedWingEstimate:
+        """The estimate at ``t`` (the same object again for the same ``t`` until the next ``update``,
+        ``command`` or ``initialize``: the loop and its logger ask at the same step)."""
+        m = self._memo
+        if m is not None and m[0] == t and m[1] == self._version:
+            return m[2]
+        e = self._estimate(t)
+        self._memo = (t, self._version, e)
+        return e
+
+    def _estimate(self, t: float) -> FixedWingEstimate:
         base = self._base(t)
         pos, vel, R, Rdot, valid, gs = _NAN3, _NAN3, math.nan, 0.0, False, math.nan
         cov = _NAN66
@@ -352,7 +370,7 @@ class CondorNavigator(AutopilotNavigator):
             ok = math.isfinite(P_h[0, 0]) and math.isfinite(P_h[1, 1])
             self._assess = self.integrity.assess(t, P_h if ok else None)
             self._assess_key, self._assess_t = key, t
-        h.set_integrity(dict(self._assess))
+        h.set_integrity(self._assess)  # (copies each value into h)
         if self.source == "vision" and self.radius.stale(t):
             h.notes.append("vision radius stale")
         return h
