@@ -322,6 +322,8 @@ class FixedWingModel:
         self._k = _fast_constants(self.params, self._gam)
         self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
         self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
+        self._state_x: np.ndarray | None = None  # the x and t ``state`` was built for
+        self._state_t = math.nan
 
     @property
     def air(self) -> dict:
@@ -378,13 +380,12 @@ class FixedWingModel:
         """Truth at ``t`` (cached until the next step or until ``x`` is replaced; change ``x`` by
         assigning a new array, not in place, after reading ``state``)."""
         x = self.x
-        key = (x, self.t)  # the array itself (not its id, which a new array could reuse)
-        old = getattr(self, "_state_key", None)
-        if old is None or old[0] is not x or old[1] != self.t:
+        # (keyed on the array itself, not its id, which a new array could reuse)
+        if x is not self._state_x or self.t != self._state_t:
             C = _dcm(x[6:9])
             self._state = VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
                                        body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
-            self._state_key = key
+            self._state_x, self._state_t = x, self.t
         return self._state
 
 
