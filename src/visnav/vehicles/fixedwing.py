@@ -236,7 +236,8 @@ def _rk4_fast(k: tuple, x: list, u: tuple, wind: tuple, dt: float) -> list:
     ``x + dt / 6 (k1 + 2 k2 + 2 k3 + k4)`` (bit for bit: tests/vehicles/test_fixedwing.py), without four
     calls, four unpackings of the constants and the lists between the stages. What the derivative does
     not read is not formed for the inner stages (the positions); a product of constants and controls
-    (``C_Y_dr * dr`` ...) is rounded once per step instead of once per evaluation (the same value). Returns
+    (``C_Y_dr * dr`` ...) is rounded once per step instead of once per evaluation, a product or sum that
+    appears twice once per evaluation (the same values); ``max`` / ``min`` as comparisons. Returns
     the new state (12 floats, the heading not yet wrapped)."""
     (nM, M, a0, CL0, CLa, CDp, den, hrho, S, nCDq, CLq, nCDde, CLde, c, b, m, kt, kmot, nmG, mG,
      CY0, CYb, CYp, CYr, CYda, CYdr, Cl0, Clb, Clp, Clr, Clda, Cldr, Cm0, Cma, Cmq, Cmde,
@@ -251,38 +252,45 @@ def _rk4_fast(k: tuple, x: list, u: tuple, wind: tuple, dt: float) -> list:
     h2 = 0.5 * dt
     for i in range(4):
         cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(th), sin(th), cos(psi), sin(psi)
-        C00, C01, C02 = ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp
-        C10, C11, C12 = ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp
+        sfst, cfst = sf * st, cf * st  # (the left factor of C01 / C11 and of C02 / C12: rounded once)
+        C00, C01, C02 = ct * cp, sfst * cp - cf * sp, cfst * cp + sf * sp
+        C10, C11, C12 = ct * sp, sfst * sp + cf * cp, cfst * sp - sf * cp
         C20, C21, C22 = -st, sf * ct, cf * ct
         ur = uu - (C00 * wx + C10 * wy + C20 * wz)
         vr = vv - (C01 * wx + C11 * wy + C21 * wz)
         wr = ww - (C02 * wx + C12 * wy + C22 * wz)
         Va = sqrt(ur * ur + vr * vr + wr * wr)
-        Va_s = max(Va, 1.0)
+        Va_s = 1.0 if 1.0 > Va else Va  # max(Va, 1.0)
         alpha = atan2(wr, ur)
-        beta = asin(max(-1.0, min(1.0, vr / Va_s)))
+        sb = vr / Va_s
+        sb = sb if sb < 1.0 else 1.0  # min(1.0, sb)
+        beta = asin(sb if sb > -1.0 else -1.0)  # max(-1.0, sb)
         qbar = hrho * Va_s * Va_s * S
         ea, eb = exp(nM * (alpha - a0)), exp(M * (alpha + a0))
-        sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
+        ea1 = 1.0 + ea
+        sigma = (ea1 + eb) / (ea1 * (1.0 + eb))
         cl_lin = CL0 + CLa * alpha
         sa = sin(alpha)
         ca = cos(alpha)
         cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * copysign(1.0, alpha) * sa * sa * ca
         cd = CDp + cl_lin * cl_lin / den
-        cx = -cd * ca + cl * sa
+        ncd = -cd
+        cx = ncd * ca + cl * sa
         cxq = nCDq * ca + CLq * sa
         cxde = nCDde * ca + CLde * sa
-        cz = -cd * sa - cl * ca
+        cz = ncd * sa - cl * ca
         czq = nCDq * sa - CLq * ca
         czde = nCDde * sa - CLde * ca
-        c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
+        V2 = 2.0 * Va_s
+        c2v, b2v = c / V2, b / V2
         thrust = kt * (thr2 - Va * Va)
         fx = nmG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
         fy = mG * ct * sf + qbar * (CY0 + CYb * beta + CYp * b2v * P + CYr * b2v * R + yda + ydr)
         fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
-        l_m = qbar * b * (Cl0 + Clb * beta + Clp * b2v * P + Clr * b2v * R + lda + ldr)
+        qb = qbar * b
+        l_m = qb * (Cl0 + Clb * beta + Clp * b2v * P + Clr * b2v * R + lda + ldr)
         m_m = qbar * c * (Cm0 + Cma * alpha + Cmq * c2v * Q + mde)
-        n_m = qbar * b * (Cn0 + Cnb * beta + Cnp * b2v * P + Cnr * b2v * R + nda + ndr)
+        n_m = qb * (Cn0 + Cnb * beta + Cnp * b2v * P + Cnr * b2v * R + nda + ndr)
         tt = st / ct
         d0, d1, d2 = C00 * uu + C01 * vv + C02 * ww, C10 * uu + C11 * vv + C12 * ww, C20 * uu + C21 * vv + C22 * ww
         d3, d4, d5 = R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m
@@ -298,9 +306,10 @@ def _rk4_fast(k: tuple, x: list, u: tuple, wind: tuple, dt: float) -> list:
             s6, s7, s8, s9, s10, s11 = s6 + d6, s7 + d7, s8 + d8, s9 + d9, s10 + d10, s11 + d11
             break
         else:  # + 2 k2, + 2 k3
-            s0, s1, s2, s3, s4, s5 = s0 + 2 * d0, s1 + 2 * d1, s2 + 2 * d2, s3 + 2 * d3, s4 + 2 * d4, s5 + 2 * d5
-            s6, s7, s8 = s6 + 2 * d6, s7 + 2 * d7, s8 + 2 * d8
-            s9, s10, s11 = s9 + 2 * d9, s10 + 2 * d10, s11 + 2 * d11
+            s0, s1, s2 = s0 + 2.0 * d0, s1 + 2.0 * d1, s2 + 2.0 * d2  # (2 * k: 2.0 is the same factor)
+            s3, s4, s5 = s3 + 2.0 * d3, s4 + 2.0 * d4, s5 + 2.0 * d5
+            s6, s7, s8 = s6 + 2.0 * d6, s7 + 2.0 * d7, s8 + 2.0 * d8
+            s9, s10, s11 = s9 + 2.0 * d9, s10 + 2.0 * d10, s11 + 2.0 * d11
             h = h2 if i == 1 else dt
         uu, vv, ww, phi, th, psi = x3 + h * d3, x4 + h * d4, x5 + h * d5, x6 + h * d6, x7 + h * d7, x8 + h * d8
         P, Q, R = x9 + h * d9, x10 + h * d10, x11 + h * d11
