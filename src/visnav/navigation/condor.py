@@ -320,11 +320,14 @@ class CondorNavigator(AutopilotNavigator):
             if self.fix is not None and self.target is not None and math.isfinite(self.fix[4]):
                 tf, Rf, psi_vb, pan, head = self.fix
                 b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
-                pos = self.target + np.array([-Rf * math.cos(b), -Rf * math.sin(b), 0.0])
+                # target + (-R cos b, -R sin b), carried by va (t - tf) along the heading: per axis in floats
+                tn, te, _ = self.target.tolist()
+                pn, pe = tn + -Rf * math.cos(b), te + -Rf * math.sin(b)
                 h_now = self._heading_now()
                 if math.isfinite(self.va) and math.isfinite(h_now):
-                    pos[:2] += self.va * (t - tf) * np.array([math.cos(h_now), math.sin(h_now)])
-                pos[2] = -base["height"]
+                    k = self.va * (t - tf)
+                    pn, pe = pn + k * math.cos(h_now), pe + k * math.sin(h_now)
+                pos = np.array([pn, pe, -base["height"]])
                 cov = self._position_cov(t)
         return FixedWingEstimate(t=t, position=pos, velocity=vel, covariance=cov,
                                  valid=math.isfinite(pos[0]) and math.isfinite(pos[1]), source=self.source, ground_speed=gs,
@@ -366,7 +369,9 @@ class CondorNavigator(AutopilotNavigator):
         h = Health(source=self.source, tracking=not self.radius.stale(t))
         key = (self.radius_updates, self.source)
         if self._assess is None or key != self._assess_key or t - self._assess_t >= self.health_period_s:
-            P_h = self._position_cov(t)[:2, :2]  # what estimate(t).covariance holds, without the estimate
+            m = self._memo  # what estimate(t).covariance holds: the estimate's when it is this one's
+            P_h = (m[2].covariance if m is not None and m[0] == t and m[1] == self._version
+                   else self._position_cov(t))[:2, :2]
             ok = math.isfinite(P_h[0, 0]) and math.isfinite(P_h[1, 1])
             self._assess = self.integrity.assess(t, P_h if ok else None)
             self._assess_key, self._assess_t = key, t
