@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
 from visnav.measurements import AttitudeSample, PanSample
 from visnav.scalar import clip as _clip
 
@@ -26,7 +26,7 @@ C_CV_CB = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
 def camera_dcm(pan: float, tilt: float, roll: float) -> np.ndarray:
     """``C_n^cv``: NED -> OpenCV camera frame for a camera at (pan, tilt, roll) [rad] in NED."""
-    return C_CV_CB @ euler_to_dcm(np.array([roll, tilt, pan])).T
+    return C_CV_CB @ euler_to_dcm3(float(roll), float(tilt), float(pan)).T
 
 
 def project_points(camera, cam_pos_ned, pan: float, tilt: float, roll: float, points_ned) -> np.ndarray:
@@ -144,7 +144,7 @@ class CameraAhrs:
         pan, tilt, roll = world.gimbal.camera_attitude(s.euler)
         if self._t is not None and t > self._t:
             phi, th, psi = s.euler.tolist()
-            an, ae, _ = (euler_to_dcm(s.euler) @ s.specific_force + _G_NED).tolist()
+            an, ae, _ = (euler_to_dcm3(phi, th, psi) @ s.specific_force + _G_NED).tolist()
             _, q, r = s.body_rates.tolist()
             psidot = (q * math.sin(phi) + r * math.cos(phi)) / math.cos(th)
             k = psidot * world.airspeed(t)  # centripetal compensation across the track (N, E; D unused)

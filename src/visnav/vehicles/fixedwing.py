@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
 from visnav.vehicles.base import Environment
 from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
@@ -391,7 +391,7 @@ class FixedWingModel:
         x = self.x
         # (keyed on the array itself, not its id, which a new array could reuse)
         if x is not self._state_x or self.t != self._state_t:
-            C = _dcm(x[6:9])
+            C = euler_to_dcm3(*x[6:9].tolist())
             self._state = VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
                                        body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
             self._state_x, self._state_t = x, self.t
