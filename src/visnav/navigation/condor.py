@@ -147,6 +147,7 @@ class CondorNavigator(AutopilotNavigator):
         self._handlers: dict = {}  # message type -> update's handler
         self._version = 0  # counts what can change the estimate (update, initialize, command)
         self._memo: tuple | None = None  # (t, version, estimate) of the last estimate
+        self._fix_cov: tuple | None = None  # (fix, sigmas) -> the fix's radial / cross-bearing covariance (2, 2)
 
     # ------------------------------------------------------------------ measurements
     def update(self, m) -> None:
@@ -354,10 +355,14 @@ class CondorNavigator(AutopilotNavigator):
             tf, Rf, psi_vb, pan, head = self.fix
             b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
             # radial: sigma_R; across: R sigma_heading; rotate to NED
-            c, s = math.cos(b), math.sin(b)
-            Rot = np.array([[c, -s], [s, c]])
-            P = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
-            P = P + (self.carry_sigma * max(t - tf, 0.0)) ** 2 * _EYE2
+            key = (self.fix, self.radius_sigma, self.heading_sigma)
+            if self._fix_cov is None or self._fix_cov[0] != key:  # once per fix (read-only, shared)
+                c, s = math.cos(b), math.sin(b)
+                Rot = np.array([[c, -s], [s, c]])
+                P0 = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
+                P0.setflags(write=False)
+                self._fix_cov = (key, P0)
+            P = self._fix_cov[1] + (self.carry_sigma * max(t - tf, 0.0)) ** 2 * _EYE2
             cov = _NAN66.copy()
             cov[:2, :2] = P
             return cov

@@ -70,7 +70,7 @@ class AutopilotNavigator(CommandDispatch):
             # euler + euler_rates(euler, rates) dt per axis in floats (the same operations), yaw wrapped
             dt = min(max(t - self.att.t, 0.0), self.max_prop)
             e0, e1, e2 = np.asarray(self.att.euler, float).tolist()
-            p, q, r = (float(v) for v in rates)
+            p, q, r = np.asarray(rates, float).tolist()
             sf, cf, tt = math.sin(e0), math.cos(e0), math.tan(e1)
             a2 = e2 + (sf * q + cf * r) / math.cos(e1) * dt
             att = np.array([e0 + (p + sf * tt * q + cf * tt * r) * dt, e1 + (cf * q - sf * r) * dt,
