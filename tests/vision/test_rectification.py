@@ -175,3 +175,33 @@ def test_lut_one_point_path_equals_the_interpolator():
             n_diff += (x1[0] != ex) + (y1[0] != ey)
         assert n_diff == 0
     assert np.isnan(lut.correct(np.array([np.nan]), np.array([0.0]))[0][0])  # NaN stays NaN (array path)
+
+
+def test_one_pixel_path_equals_the_vectorised_chain_bit_for_bit():
+    """``estimate_range``'s scalar chain (``_ground_range_1``) against ``ground_range`` on arrays: the same
+    D_T, L_T, D_X, D_Y and bearing bits (NaN where it gives NaN), both methods, rays above and below the
+    horizon; ``altimeter_correction`` of one float against its array path."""
+    import math
+
+    import numpy as np
+
+    from visnav.vision.rectification import (CameraGeometry, _ground_range_1, altimeter_correction, ground_range,
+                                             vision_bearing)
+
+    geom = CameraGeometry(640, 480, math.radians(26.5), math.atan(math.tan(math.radians(26.5)) * 480 / 640))
+    rng = np.random.default_rng(3)
+    n = 4000
+    X, Y = rng.uniform(-320, 320, n), rng.uniform(-240, 240, n)
+    h, tilt, roll = rng.uniform(1.0, 300.0, n), rng.uniform(-1.6, 0.3, n), rng.normal(0.0, 0.3, n)
+    for method in ("exact", "thesis"):
+        want = ground_range(X, Y, h, tilt, roll, geom, method)
+        bearing = vision_bearing(want[2], want[3])[0]
+        for i in range(n):
+            got = _ground_range_1(float(X[i]), float(Y[i]), float(h[i]), float(tilt[i]), float(roll[i]), geom, method)
+            ref = tuple(float(w[i]) for w in want)
+            assert np.array_equal(got, ref, equal_nan=True), (i, got, ref)
+            if math.isfinite(got[0]):
+                assert float(np.arctan2(got[2], got[3])) == float(bearing[i])
+    hb = rng.uniform(0.0, 400.0, 500)
+    arr = altimeter_correction(hb, 20.0, 0.0004, 5e-06)
+    assert all(altimeter_correction(float(v), 20.0, 0.0004, 5e-06) == a for v, a in zip(hb, arr))

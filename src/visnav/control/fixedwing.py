@@ -21,6 +21,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from visnav.measurements import Controls, FixedWingEstimate, TurnReference
 from visnav.scalar import clip as _clip
 
@@ -65,9 +67,9 @@ class AirData:
     @classmethod
     def from_estimate(cls, e: FixedWingEstimate) -> "AirData":
         """The navigator's estimate: AHRS attitude, gyro rates, baro height, pitot airspeed, accelerometer y."""
-        a, w = e.attitude, e.body_rates
-        return cls(phi=float(a[0]), theta=float(a[1]), p=float(w[0]), q=float(w[1]), r=float(w[2]),
-                   h=float(e.height), Va=float(e.airspeed), ay=float(e.specific_force[1]))
+        phi, theta = np.asarray(e.attitude, float).tolist()[:2]
+        p, q, r = np.asarray(e.body_rates, float).tolist()
+        return cls(phi, theta, p, q, r, float(e.height), float(e.airspeed), float(e.specific_force[1]))
 
 
 def heading_rate(phi: float, theta: float, q: float, r: float) -> float:
@@ -101,9 +103,10 @@ class FixedWingAutopilot:
         """Controls for the two heading-rate references (aileron through the bank reference eq. 5.4,
         rudder eq. 5.6; ``psidot_ref_rud`` None = turn coordinator)."""
         g = self.g
-        for k, v in vars(m).items():
-            if not math.isfinite(v):
-                raise ValueError(f"autopilot input {k} is not finite ({v!r})")
+        if not math.isfinite(m.phi + m.theta + m.p + m.q + m.r + m.h + m.Va + m.ay):  # (finite sum: all finite)
+            for k, v in vars(m).items():
+                if not math.isfinite(v):
+                    raise ValueError(f"autopilot input {k} is not finite ({v!r})")
         phi_ref = _clip(math.atan(v_bank * psidot_ref_ail / G), -g.bank_limit, g.bank_limit)  # eq. 5.4
         psidot = heading_rate(m.phi, m.theta, m.q, m.r)
         if abs(m.phi) > g.bank_hold:

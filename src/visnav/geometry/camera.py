@@ -110,13 +110,17 @@ class PinholeCamera:
         xy = _points(xy, 2, "xy")
         if not self.has_distortion:
             return xy.copy()
-        _, _, p1, p2, *_ = self.dist
-        x, y = xy[..., 0], xy[..., 1]
+        return _pair(*self._distort_xy(xy[..., 0], xy[..., 1]))
+
+    def _distort_xy(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Eq. 5.3-5.5 on the coordinate arrays: (x'', y''). The radial factor is ``_radial``'s g (the same
+        operations) without its derivative, which only the Newton inversion needs."""
+        k1, k2, p1, p2, k3, k4, k5, k6 = self.dist
         r2 = x * x + y * y
-        g, _ = self._radial(r2)
+        g = (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1.0 + r2 * (k4 + r2 * (k5 + r2 * k6)))
         xd = x * g + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
         yd = y * g + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
-        return _pair(xd, yd)
+        return xd, yd
 
     def _distortion_jacobian(self, x: np.ndarray, y: np.ndarray):
         _, _, p1, p2, *_ = self.dist
@@ -153,8 +157,13 @@ class PinholeCamera:
 
     def normalized_to_pixel(self, xy) -> np.ndarray:
         """Pixels (u, v) of undistorted normalized coordinates (x/z, y/z), applying distortion."""
-        xd = self.distort_normalized(xy)
-        return _pair(self.fx * xd[..., 0] + self.cx, self.fy * xd[..., 1] + self.cy)
+        xy = _points(xy, 2, "xy")
+        return self._to_pixel(xy[..., 0], xy[..., 1])
+
+    def _to_pixel(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        if self.has_distortion:
+            x, y = self._distort_xy(x, y)
+        return _pair(self.fx * x + self.cx, self.fy * y + self.cy)
 
     def pixel_to_normalized(self, uv) -> np.ndarray:
         """Undistorted normalized coordinates (x/z, y/z) of pixels (u, v); inverse of the above."""
@@ -168,8 +177,7 @@ class PinholeCamera:
         z = p[..., 2]
         ok = z > 0
         zs = np.where(ok, z, 1.0)
-        xy = np.stack([p[..., 0] / zs, p[..., 1] / zs], axis=-1)
-        uv = self.normalized_to_pixel(xy)
+        uv = self._to_pixel(p[..., 0] / zs, p[..., 1] / zs)
         return np.where(ok[..., None], uv, np.nan)
 
     def unproject(self, uv) -> np.ndarray:

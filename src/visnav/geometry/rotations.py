@@ -14,6 +14,7 @@ from scipy.spatial.transform import Rotation
 
 __all__ = [
     "euler_to_dcm",
+    "euler_to_dcm3",
     "dcm_to_euler",
     "body_rates_to_euler_rates",
     "euler_rates_to_body_rates",
@@ -66,20 +67,24 @@ def cross3(a, b) -> np.ndarray:
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], dtype=float)
 
 
+def euler_to_dcm3(phi: float, theta: float, psi: float) -> np.ndarray:
+    """``euler_to_dcm`` of one (roll, pitch, yaw) given as three floats (its one-vector path)."""
+    if not (math.isfinite(phi) and math.isfinite(theta) and math.isfinite(psi)):
+        raise ValueError(f"euler must be finite, got {np.array([phi, theta, psi])}")
+    cf, sf, ct, st = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
+    cp, sp = math.cos(psi), math.sin(psi)
+    return np.array([
+        [ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp],
+        [ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp],
+        [-st, sf * ct, cf * ct],
+    ])
+
+
 def euler_to_dcm(euler) -> np.ndarray:
     """``C_b^n`` (body -> NED) from (roll, pitch, yaw) [rad], seed 002 eq. 3.2; shape (..., 3, 3)."""
     e = _vec3(euler, "euler")
     if e.shape == (3,):  # fast path for the 100 Hz loops: eq. 3.2 written out
-        phi, theta, psi = float(e[0]), float(e[1]), float(e[2])
-        if not (math.isfinite(phi) and math.isfinite(theta) and math.isfinite(psi)):
-            raise ValueError(f"euler must be finite, got {e}")
-        cf, sf, ct, st = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
-        cp, sp = math.cos(psi), math.sin(psi)
-        return np.array([
-            [ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp],
-            [ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp],
-            [-st, sf * ct, cf * ct],
-        ])
+        return euler_to_dcm3(float(e[0]), float(e[1]), float(e[2]))
     if not np.all(np.isfinite(e)):
         raise ValueError(f"euler must be finite, got {e}")
     flat = e.reshape(-1, 3)

@@ -144,31 +144,62 @@ class CondorNavigator(AutopilotNavigator):
         self._assess: dict | None = None
         self._assess_key: tuple | None = None
         self._assess_t = -math.inf
+        self._handlers: dict = {}  # message type -> update's handler
+        self._version = 0  # counts what can change the estimate (update, initialize, command)
+        self._memo: tuple | None = None  # (t, version, estimate) of the last estimate
+        self._fix_cov: tuple | None = None  # (fix, sigmas) -> the fix's radial / cross-bearing covariance (2, 2)
 
     # ------------------------------------------------------------------ measurements
     def update(self, m) -> None:
-        if isinstance(m, Frame):
-            self._frame(m)
-        elif isinstance(m, TargetRangeSample):
-            self._fix(m)
-        elif isinstance(m, AttitudeSample) and m.sensor == "camera":
+        self._version += 1
+        fn = self._handlers.get(type(m))
+        if fn is None:  # (the isinstance chain below, once per message type)
+            fn = self._handlers[type(m)] = self._handler(type(m))
+        fn(m)
+
+    def _handler(self, kind: type):
+        """What ``update`` does with a message of type ``kind``."""
+        if issubclass(kind, Frame):
+            return self._frame
+        if issubclass(kind, TargetRangeSample):
+            return self._fix
+        if issubclass(kind, AttitudeSample):
+            return self._attitude
+        if issubclass(kind, PanSample):
+            return self._pan
+        if issubclass(kind, GpsSample):
+            return self._gps
+        if issubclass(kind, HeadingSample):
+            return self._heading
+        if issubclass(kind, OperatorClick):
+            return self._click
+        return super().update  # AHRS, IMU, pitot, baro
+
+    def _attitude(self, m: AttitudeSample) -> None:
+        if m.sensor == "camera":
             self.cam_att = m
-        elif isinstance(m, PanSample):
-            self.pan = m
-        elif isinstance(m, GpsSample):
-            self._gps(m)
-        elif isinstance(m, HeadingSample):
-            self.headings.append((float(m.t), float(m.heading)))
-        elif isinstance(m, OperatorClick):
-            self.tracker.start(float(m.pixel[0]), float(m.pixel[1]))
-            self.tracker_started = True
         else:
-            super().update(m)  # AHRS, IMU, pitot, baro
+            super().update(m)
+
+    def _pan(self, m: PanSample) -> None:
+        self.pan = m
+
+    def _heading(self, m: HeadingSample) -> None:
+        self.headings.append((float(m.t), float(m.heading)))
+
+    def _click(self, m: OperatorClick) -> None:
+        self.tracker.start(float(m.pixel[0]), float(m.pixel[1]))
+        self.tracker_started = True
+
+    def command(self, request) -> None:
+        self._version += 1
+        super().command(request)
 
     def initialize(self, init: NavInit) -> None:
         """``NavInit(source="survey", position=tent NED)``: where the tent is (the loiter's centre)."""
         if init.position is None:
             raise ValueError("CondorNavigator.initialize needs the tent's surveyed position")
+        self._version += 1
         self.target = np.asarray(init.position, float)[:3].copy()
 
     def _cmd_set_source(self, t: float, source: str) -> None:
@@ -255,19 +286,34 @@ class CondorNavigator(AutopilotNavigator):
         return self.headings[-1][1] if self.headings else math.nan
 
     def estimate(self, t: float) -> FixedWingEstimate:
+        """The estimate at ``t`` (the same object again for the same ``t`` until the next ``update``,
+        ``command`` or ``initialize``: the loop and its logger ask at the same step)."""
+        m = self._memo
+        if m is not None and m[0] == t and m[1] == self._version:
+            return m[2]
+        e = self._estimate(t)
+        self._memo = (t, self._version, e)
+        return e
+
+    def _estimate(self, t: float) -> FixedWingEstimate:
         base = self._base(t)
         pos, vel, R, Rdot, valid, gs = _NAN3, _NAN3, math.nan, 0.0, False, math.nan
         cov = _NAN66
         if self.source == "gps":
             if self.gps_pos is not None:
-                pos = self.gps_pos + self.gps_vel * (t - self.gps_t)
+                # gps_pos + gps_vel (t - gps_t) per axis in floats (the same operations)
+                dt = t - self.gps_t
+                (p0, p1, p2), (v0, v1, v2) = self.gps_pos.tolist(), self.gps_vel.tolist()
+                pn, pe = p0 + v0 * dt, p1 + v1 * dt
+                pos = np.array([pn, pe, p2 + v2 * dt])
                 vel = self.gps_vel
-                gs = math.hypot(vel[0], vel[1])
+                gs = math.hypot(v0, v1)
                 cov = self._position_cov(t)
                 if self.target is not None:
-                    rn, re = pos[0] - self.target[0], pos[1] - self.target[1]
+                    tn, te, _ = self.target.tolist()
+                    rn, re = pn - tn, pe - te
                     R = math.hypot(rn, re)
-                    Rdot = (rn * vel[0] + re * vel[1]) / max(R, 1.0)
+                    Rdot = (rn * v0 + re * v1) / max(R, 1.0)
                     valid = t - self.gps_t <= self.gps_stale_s
         else:
             R, Rdot = self.radius.predict(t)
@@ -275,11 +321,14 @@ class CondorNavigator(AutopilotNavigator):
             if self.fix is not None and self.target is not None and math.isfinite(self.fix[4]):
                 tf, Rf, psi_vb, pan, head = self.fix
                 b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
-                pos = self.target + np.array([-Rf * math.cos(b), -Rf * math.sin(b), 0.0])
+                # target + (-R cos b, -R sin b), carried by va (t - tf) along the heading: per axis in floats
+                tn, te, _ = self.target.tolist()
+                pn, pe = tn + -Rf * math.cos(b), te + -Rf * math.sin(b)
                 h_now = self._heading_now()
                 if math.isfinite(self.va) and math.isfinite(h_now):
-                    pos[:2] += self.va * (t - tf) * np.array([math.cos(h_now), math.sin(h_now)])
-                pos[2] = -base["height"]
+                    k = self.va * (t - tf)
+                    pn, pe = pn + k * math.cos(h_now), pe + k * math.sin(h_now)
+                pos = np.array([pn, pe, -base["height"]])
                 cov = self._position_cov(t)
         return FixedWingEstimate(t=t, position=pos, velocity=vel, covariance=cov,
                                  valid=math.isfinite(pos[0]) and math.isfinite(pos[1]), source=self.source, ground_speed=gs,
@@ -306,10 +355,14 @@ class CondorNavigator(AutopilotNavigator):
             tf, Rf, psi_vb, pan, head = self.fix
             b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
             # radial: sigma_R; across: R sigma_heading; rotate to NED
-            c, s = math.cos(b), math.sin(b)
-            Rot = np.array([[c, -s], [s, c]])
-            P = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
-            P = P + (self.carry_sigma * max(t - tf, 0.0)) ** 2 * _EYE2
+            key = (self.fix, self.radius_sigma, self.heading_sigma)
+            if self._fix_cov is None or self._fix_cov[0] != key:  # once per fix (read-only, shared)
+                c, s = math.cos(b), math.sin(b)
+                Rot = np.array([[c, -s], [s, c]])
+                P0 = Rot @ np.diag([(self.radius_sigma * Rf) ** 2, (Rf * self.heading_sigma) ** 2]) @ Rot.T
+                P0.setflags(write=False)
+                self._fix_cov = (key, P0)
+            P = self._fix_cov[1] + (self.carry_sigma * max(t - tf, 0.0)) ** 2 * _EYE2
             cov = _NAN66.copy()
             cov[:2, :2] = P
             return cov
@@ -321,11 +374,13 @@ class CondorNavigator(AutopilotNavigator):
         h = Health(source=self.source, tracking=not self.radius.stale(t))
         key = (self.radius_updates, self.source)
         if self._assess is None or key != self._assess_key or t - self._assess_t >= self.health_period_s:
-            P_h = self._position_cov(t)[:2, :2]  # what estimate(t).covariance holds, without the estimate
+            m = self._memo  # what estimate(t).covariance holds: the estimate's when it is this one's
+            P_h = (m[2].covariance if m is not None and m[0] == t and m[1] == self._version
+                   else self._position_cov(t))[:2, :2]
             ok = math.isfinite(P_h[0, 0]) and math.isfinite(P_h[1, 1])
             self._assess = self.integrity.assess(t, P_h if ok else None)
             self._assess_key, self._assess_t = key, t
-        h.set_integrity(dict(self._assess))
+        h.set_integrity(self._assess)  # (copies each value into h)
         if self.source == "vision" and self.radius.stale(t):
             h.notes.append("vision radius stale")
         return h

@@ -67,9 +67,14 @@ class AutopilotNavigator(CommandDispatch):
         if self.att is None:
             att = np.zeros(3)
         else:
+            # euler + euler_rates(euler, rates) dt per axis in floats (the same operations), yaw wrapped
             dt = min(max(t - self.att.t, 0.0), self.max_prop)
-            att = np.asarray(self.att.euler, float) + euler_rates(self.att.euler, rates) * dt
-            att[2] = (att[2] + math.pi) % (2 * math.pi) - math.pi
+            e0, e1, e2 = np.asarray(self.att.euler, float).tolist()
+            p, q, r = np.asarray(rates, float).tolist()
+            sf, cf, tt = math.sin(e0), math.cos(e0), math.tan(e1)
+            a2 = e2 + (sf * q + cf * r) / math.cos(e1) * dt
+            att = np.array([e0 + (p + sf * tt * q + cf * tt * r) * dt, e1 + (cf * q - sf * r) * dt,
+                            (a2 + math.pi) % (2 * math.pi) - math.pi])
         return {"attitude": att, "body_rates": np.asarray(rates, float).copy(), "specific_force": np.asarray(f, float),
                 "airspeed": self.va, "height": self.h}
 

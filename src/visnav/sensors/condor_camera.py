@@ -57,11 +57,10 @@ class TargetCamera:
         """RGB frame (H, W, 3) uint8 with the target filled in where it is in view."""
         img = self.background.copy()
         uv = self.project(cam_pos, pan, tilt, roll, outline_ned)
-        if np.all(np.isfinite(uv)):
-            lim = 4.0 * max(self.camera.width, self.camera.height)
-            if np.all(np.abs(uv) < lim):
-                poly = np.round(uv * 16.0).astype(np.int32)[None]
-                cv2.fillPoly(img, poly, TARGET_RGB, lineType=cv2.LINE_AA, shift=4)
+        lim = 4.0 * max(self.camera.width, self.camera.height)
+        if (np.abs(uv) < lim).all():  # (NaN and inf compare False: every vertex finite and within the limit)
+            poly = np.round(uv * 16.0).astype(np.int32)[None]
+            cv2.fillPoly(img, poly, TARGET_RGB, lineType=cv2.LINE_AA, shift=4)
         return img
 
 

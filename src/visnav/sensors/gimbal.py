@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
 from visnav.measurements import AttitudeSample, PanSample
 from visnav.scalar import clip as _clip
 
@@ -26,7 +26,7 @@ C_CV_CB = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
 def camera_dcm(pan: float, tilt: float, roll: float) -> np.ndarray:
     """``C_n^cv``: NED -> OpenCV camera frame for a camera at (pan, tilt, roll) [rad] in NED."""
-    return C_CV_CB @ euler_to_dcm(np.array([roll, tilt, pan])).T
+    return C_CV_CB @ euler_to_dcm3(float(roll), float(tilt), float(pan)).T
 
 
 def project_points(camera, cam_pos_ned, pan: float, tilt: float, roll: float, points_ned) -> np.ndarray:
@@ -67,10 +67,14 @@ class Gimbal:
         self.pan_cmd, self.tilt_cmd = float(pan), _clip(tilt, -np.pi / 2, 0.0)
 
     def step(self, dt: float) -> None:
-        dp = _wrap(self.pan_cmd - self.pan)
-        self.pan = _wrap(self.pan + _clip(dp, -self.pan_rate * dt, self.pan_rate * dt))
-        dtl = self.tilt_cmd - self.tilt
-        self.tilt += _clip(dtl, -self.tilt_rate * dt, self.tilt_rate * dt)
+        # (_wrap and _clip written out: the same operations, without three calls a step)
+        pi, two_pi = np.pi, 2 * np.pi
+        pan = self.pan
+        dp = (self.pan_cmd - pan + pi) % two_pi - pi
+        lo, hi = -self.pan_rate * dt, self.pan_rate * dt
+        self.pan = (pan + float(min(max(dp, lo), hi)) + pi) % two_pi - pi
+        lo, hi = -self.tilt_rate * dt, self.tilt_rate * dt
+        self.tilt += float(min(max(self.tilt_cmd - self.tilt, lo), hi))
 
     def camera_attitude(self, euler_aircraft) -> tuple[float, float, float]:
         """(pan in NED, tilt, roll) [rad] of the camera for the aircraft's (roll, pitch, yaw)."""
@@ -101,6 +105,7 @@ class CameraAhrs:
         self.gm = rng.normal(0.0, noise, 2) if noise > 0 else np.zeros(2)
         self.lag_s = lag_s
         self.lagged: np.ndarray | None = None
+        self._gm_coef: dict = {}  # (dt, noise_tau, noise) -> the Gauss-Markov step's (a, noise sqrt(1 - a^2))
 
     def step(self, dt: float, accel_unexplained_ned, cam_pan: float, tilt: float | None = None,
              roll: float | None = None) -> None:
@@ -118,8 +123,17 @@ class CameraAhrs:
         self.err[0] = e0 + (g * math.atan2(fwd, 9.81) - e0) * k
         self.err[1] = e1 + (g * -math.atan2(right, 9.81) - e1) * k
         if self.noise > 0 and self.noise_tau > 0:
-            a = np.exp(-dt / self.noise_tau)
-            self.gm = a * self.gm + self.noise * np.sqrt(1.0 - a * a) * self.rng.standard_normal(2)
+            key = (dt, self.noise_tau, self.noise)
+            ak = self._gm_coef.get(key)
+            if ak is None:  # a = exp(-dt / tau) and noise sqrt(1 - a^2), as numpy computes them, per step size
+                a = np.exp(-dt / self.noise_tau)
+                if len(self._gm_coef) > 64:
+                    self._gm_coef.clear()
+                ak = self._gm_coef[key] = (float(a), float(self.noise * np.sqrt(1.0 - a * a)))
+            a, k = ak
+            g0, g1 = self.gm.tolist()
+            n0, n1 = self.rng.standard_normal(2).tolist()
+            self.gm = np.array([a * g0 + k * n0, a * g1 + k * n1])  # a gm + k n per axis
 
     def sample(self, t: float, truth_at, world) -> AttitudeSample:
         """The camera's (roll, tilt, NaN) [rad] at ``t`` (``sensor="camera"``): the unit is stepped over
@@ -130,7 +144,7 @@ class CameraAhrs:
         pan, tilt, roll = world.gimbal.camera_attitude(s.euler)
         if self._t is not None and t > self._t:
             phi, th, psi = s.euler.tolist()
-            an, ae, _ = (euler_to_dcm(s.euler) @ s.specific_force + _G_NED).tolist()
+            an, ae, _ = (euler_to_dcm3(phi, th, psi) @ s.specific_force + _G_NED).tolist()
             _, q, r = s.body_rates.tolist()
             psidot = (q * math.sin(phi) + r * math.cos(phi)) / math.cos(th)
             k = psidot * world.airspeed(t)  # centripetal compensation across the track (N, E; D unused)
@@ -146,7 +160,8 @@ class CameraAhrs:
             n = self.gm
         else:
             n = self.rng.normal(0.0, self.noise, 2) if self.noise > 0 else np.zeros(2)
-        return tilt + self.err[0] + self.bias[0] + n[0], roll + self.err[1] + self.bias[1] + n[1]
+        (e0, e1), (b0, b1), (n0, n1) = self.err.tolist(), self.bias.tolist(), n.tolist()
+        return tilt + e0 + b0 + n0, roll + e1 + b1 + n1
 
 
 class PanPotentiometer:

@@ -31,11 +31,15 @@ class WindEnvironment:
         self.height, self.airspeed = height, airspeed
         self.d = rate_divisor(20.0, dt)
         self.now = self.wind().steady.ned if initial is None else initial
+        self._env: Environment | None = None  # Environment(now), built once per new wind
 
     def __call__(self, k: int, t: float) -> Environment:
         if k % self.d == 0:
             self.now = self.wind().velocity_ned(t, self.d * self.dt, self.height(), self.airspeed())
-        return Environment(self.now)
+        env = self._env
+        if env is None or env.wind_ned is not self.now:
+            env = self._env = Environment(self.now)
+        return env
 
 
 class HoldTrim:

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
 from visnav.vehicles.base import Environment
 from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
@@ -230,6 +230,135 @@ def _derivatives_fast(k: tuple, x, u: tuple, wind: tuple, air: bool = False):
     return dx, (Va, alpha, beta, (fx / m - C20 * G, fy / m - C21 * G, fz / m - C22 * G))
 
 
+def _air_fast(k: tuple, x, u: tuple, wind: tuple) -> tuple:
+    """``_derivatives_fast(k, x, u, wind, air=True)[1]`` alone: (Va, alpha, beta, specific force) from the
+    same operations, without the moments and the state derivative (bit for bit: tests/vehicles/test_fixedwing.py)."""
+    (nM, M, a0, CL0, CLa, CDp, den, hrho, S, nCDq, CLq, nCDde, CLde, c, b, m, kt, kmot, nmG, mG,
+     CY0, CYb, CYp, CYr, CYda, CYdr, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _) = k
+    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
+    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
+    C00, C01, C02 = ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp
+    C10, C11, C12 = ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp
+    C20, C21, C22 = -st, sf * ct, cf * ct
+    wx, wy, wz = wind
+    ur = uu - (C00 * wx + C10 * wy + C20 * wz)
+    vr = vv - (C01 * wx + C11 * wy + C21 * wz)
+    wr = ww - (C02 * wx + C12 * wy + C22 * wz)
+    Va = math.sqrt(ur * ur + vr * vr + wr * wr)
+    Va_s = max(Va, 1.0)
+    alpha = math.atan2(wr, ur)
+    beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
+    qbar = hrho * Va_s * Va_s * S
+    ea, eb = math.exp(nM * (alpha - a0)), math.exp(M * (alpha + a0))
+    sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
+    cl_lin = CL0 + CLa * alpha
+    sa = math.sin(alpha)
+    ca = math.cos(alpha)
+    cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * math.copysign(1.0, alpha) * sa * sa * ca
+    cd = CDp + cl_lin * cl_lin / den
+    da, de, dr, dt = u
+    cx = -cd * ca + cl * sa
+    cxq = nCDq * ca + CLq * sa
+    cxde = nCDde * ca + CLde * sa
+    cz = -cd * sa - cl * ca
+    czq = nCDq * sa - CLq * ca
+    czde = nCDde * sa - CLde * ca
+    c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
+    thrust = kt * ((kmot * dt) ** 2 - Va * Va)
+    fx = nmG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+    fy = mG * ct * sf + qbar * (CY0 + CYb * beta + CYp * b2v * P + CYr * b2v * R + CYda * da + CYdr * dr)
+    fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
+    return Va, alpha, beta, (fx / m - C20 * G, fy / m - C21 * G, fz / m - C22 * G)
+
+
+def _rk4_fast(k: tuple, x: list, u: tuple, wind: tuple, dt: float) -> list:
+    """One RK4 step of :func:`_derivatives_fast` over ``dt`` (controls and wind held), its four evaluations
+    in one frame: the same operations in the same order as ``step``'s ``f(k, x + h k_i, ...)`` calls and
+    ``x + dt / 6 (k1 + 2 k2 + 2 k3 + k4)`` (bit for bit: tests/vehicles/test_fixedwing.py), without four
+    calls, four unpackings of the constants and the lists between the stages. What the derivative does
+    not read is not formed for the inner stages (the positions); a product of constants and controls
+    (``C_Y_dr * dr`` ...) is rounded once per step instead of once per evaluation, a product or sum that
+    appears twice once per evaluation (the same values); ``max`` / ``min`` as comparisons. Returns
+    the new state (12 floats, the heading not yet wrapped)."""
+    (nM, M, a0, CL0, CLa, CDp, den, hrho, S, nCDq, CLq, nCDde, CLde, c, b, m, kt, kmot, nmG, mG,
+     CY0, CYb, CYp, CYr, CYda, CYdr, Cl0, Clb, Clp, Clr, Clda, Cldr, Cm0, Cma, Cmq, Cmde,
+     Cn0, Cnb, Cnp, Cnr, Cnda, Cndr, Jy, g1, g2, g3, g4, g5, g6, g7, g8) = k
+    x0, x1, x2, x3, x4, x5, x6, x7, x8, x9, x10, x11 = x
+    uu, vv, ww, phi, th, psi, P, Q, R = x3, x4, x5, x6, x7, x8, x9, x10, x11
+    da, de, dr, dthr = u
+    wx, wy, wz = wind
+    thr2 = (kmot * dthr) ** 2
+    yda, ydr, lda, ldr, mde, nda, ndr = CYda * da, CYdr * dr, Clda * da, Cldr * dr, Cmde * de, Cnda * da, Cndr * dr
+    cos, sin, exp, atan2, asin, sqrt, copysign = math.cos, math.sin, math.exp, math.atan2, math.asin, math.sqrt, math.copysign
+    h2 = 0.5 * dt
+    for i in range(4):
+        cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(th), sin(th), cos(psi), sin(psi)
+        sfst, cfst = sf * st, cf * st  # (the left factor of C01 / C11 and of C02 / C12: rounded once)
+        C00, C01, C02 = ct * cp, sfst * cp - cf * sp, cfst * cp + sf * sp
+        C10, C11, C12 = ct * sp, sfst * sp + cf * cp, cfst * sp - sf * cp
+        C20, C21, C22 = -st, sf * ct, cf * ct
+        ur = uu - (C00 * wx + C10 * wy + C20 * wz)
+        vr = vv - (C01 * wx + C11 * wy + C21 * wz)
+        wr = ww - (C02 * wx + C12 * wy + C22 * wz)
+        Va = sqrt(ur * ur + vr * vr + wr * wr)
+        Va_s = 1.0 if 1.0 > Va else Va  # max(Va, 1.0)
+        alpha = atan2(wr, ur)
+        sb = vr / Va_s
+        sb = sb if sb < 1.0 else 1.0  # min(1.0, sb)
+        beta = asin(sb if sb > -1.0 else -1.0)  # max(-1.0, sb)
+        qbar = hrho * Va_s * Va_s * S
+        ea, eb = exp(nM * (alpha - a0)), exp(M * (alpha + a0))
+        ea1 = 1.0 + ea
+        sigma = (ea1 + eb) / (ea1 * (1.0 + eb))
+        cl_lin = CL0 + CLa * alpha
+        sa = sin(alpha)
+        ca = cos(alpha)
+        cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * copysign(1.0, alpha) * sa * sa * ca
+        cd = CDp + cl_lin * cl_lin / den
+        ncd = -cd
+        cx = ncd * ca + cl * sa
+        cxq = nCDq * ca + CLq * sa
+        cxde = nCDde * ca + CLde * sa
+        cz = ncd * sa - cl * ca
+        czq = nCDq * sa - CLq * ca
+        czde = nCDde * sa - CLde * ca
+        V2 = 2.0 * Va_s
+        c2v, b2v = c / V2, b / V2
+        thrust = kt * (thr2 - Va * Va)
+        fx = nmG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+        fy = mG * ct * sf + qbar * (CY0 + CYb * beta + CYp * b2v * P + CYr * b2v * R + yda + ydr)
+        fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
+        qb = qbar * b
+        l_m = qb * (Cl0 + Clb * beta + Clp * b2v * P + Clr * b2v * R + lda + ldr)
+        m_m = qbar * c * (Cm0 + Cma * alpha + Cmq * c2v * Q + mde)
+        n_m = qb * (Cn0 + Cnb * beta + Cnp * b2v * P + Cnr * b2v * R + nda + ndr)
+        tt = st / ct
+        d0, d1, d2 = C00 * uu + C01 * vv + C02 * ww, C10 * uu + C11 * vv + C12 * ww, C20 * uu + C21 * vv + C22 * ww
+        d3, d4, d5 = R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m
+        d6, d7, d8 = P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct
+        d9 = g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m
+        d10 = g5 * P * R - g6 * (P * P - R * R) + m_m / Jy
+        d11 = g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m
+        if i == 0:  # k1
+            s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11 = d0, d1, d2, d3, d4, d5, d6, d7, d8, d9, d10, d11
+            h = h2
+        elif i == 3:  # (k1 + 2 k2 + 2 k3) + k4
+            s0, s1, s2, s3, s4, s5 = s0 + d0, s1 + d1, s2 + d2, s3 + d3, s4 + d4, s5 + d5
+            s6, s7, s8, s9, s10, s11 = s6 + d6, s7 + d7, s8 + d8, s9 + d9, s10 + d10, s11 + d11
+            break
+        else:  # + 2 k2, + 2 k3
+            s0, s1, s2 = s0 + 2.0 * d0, s1 + 2.0 * d1, s2 + 2.0 * d2  # (2 * k: 2.0 is the same factor)
+            s3, s4, s5 = s3 + 2.0 * d3, s4 + 2.0 * d4, s5 + 2.0 * d5
+            s6, s7, s8 = s6 + 2.0 * d6, s7 + 2.0 * d7, s8 + 2.0 * d8
+            s9, s10, s11 = s9 + 2.0 * d9, s10 + 2.0 * d10, s11 + 2.0 * d11
+            h = h2 if i == 1 else dt
+        uu, vv, ww, phi, th, psi = x3 + h * d3, x4 + h * d4, x5 + h * d5, x6 + h * d6, x7 + h * d7, x8 + h * d8
+        P, Q, R = x9 + h * d9, x10 + h * d10, x11 + h * d11
+    h6 = dt / 6.0
+    return [x0 + h6 * s0, x1 + h6 * s1, x2 + h6 * s2, x3 + h6 * s3, x4 + h6 * s4, x5 + h6 * s5,
+            x6 + h6 * s6, x7 + h6 * s7, x8 + h6 * s8, x9 + h6 * s9, x10 + h6 * s10, x11 + h6 * s11]
+
+
 @dataclass
 class FixedWingModel:
     """RK4 integration of :func:`derivatives`; ``state`` is a :class:`VehicleState`."""
@@ -243,6 +372,8 @@ class FixedWingModel:
         self._k = _fast_constants(self.params, self._gam)
         self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
         self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
+        self._state_x: np.ndarray | None = None  # the x and t ``state`` was built for
+        self._state_t = math.nan
 
     @property
     def air(self) -> dict:
@@ -250,7 +381,7 @@ class FixedWingModel:
         evaluated when first read (a loop that reads it at its control rate skips the rest)."""
         if self._air_at is not None:
             x1, uc, w = self._air_at
-            Va, alpha, beta, sf = _derivatives_fast(self._k, x1, uc, w, air=True)[1]
+            Va, alpha, beta, sf = _air_fast(self._k, x1, uc, w)
             self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(sf)}
             self._air_at = None
         return self._air
@@ -278,15 +409,7 @@ class FixedWingModel:
         w = tuple(np.asarray(environment.wind_ned, float).tolist())
         if not math.isfinite(w[0] + w[1] + w[2]):
             raise ValueError(f"wind must be finite, got {environment.wind_ned}")
-        k, f = self._k, _derivatives_fast
-        x = self.x.tolist()
-        h2 = 0.5 * dt
-        k1 = f(k, x, uc, w)
-        k2 = f(k, [a + h2 * b for a, b in zip(x, k1)], uc, w)
-        k3 = f(k, [a + h2 * b for a, b in zip(x, k2)], uc, w)
-        k4 = f(k, [a + dt * b for a, b in zip(x, k3)], uc, w)
-        h6 = dt / 6.0
-        x1 = [a + h6 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4)]
+        x1 = _rk4_fast(self._k, self.x.tolist(), uc, w, dt)
         x1[8] = (x1[8] + math.pi) % (2 * math.pi) - math.pi
         if not all(map(math.isfinite, x1)):
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
@@ -307,13 +430,12 @@ class FixedWingModel:
         """Truth at ``t`` (cached until the next step or until ``x`` is replaced; change ``x`` by
         assigning a new array, not in place, after reading ``state``)."""
         x = self.x
-        key = (x, self.t)  # the array itself (not its id, which a new array could reuse)
-        old = getattr(self, "_state_key", None)
-        if old is None or old[0] is not x or old[1] != self.t:
-            C = _dcm(x[6:9])
+        # (keyed on the array itself, not its id, which a new array could reuse)
+        if x is not self._state_x or self.t != self._state_t:
+            C = euler_to_dcm3(*x[6:9].tolist())
             self._state = VehicleState(t=self.t, position=x[0:3].copy(), velocity=C @ x[3:6], euler=x[6:9].copy(),
                                        body_rates=x[9:12].copy(), specific_force=self.air["specific_force"])
-            self._state_key = key
+            self._state_x, self._state_t = x, self.t
         return self._state
 
 

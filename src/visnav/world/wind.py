@@ -183,14 +183,23 @@ class DrydenTurbulence:
         }
 
     def _sigmas_taus(self) -> tuple[np.ndarray, np.ndarray]:
-        p = self.parameters()
-        sig = np.array([p["sigma_u"], p["sigma_v"], p["sigma_w"]])
-        tau = np.array([p["L_u"], p["L_v"], p["L_w"]]) / p["V"]
-        return sig, tau
+        sig, tau = self._sig_tau()
+        return np.array(sig), np.array(tau)
 
-    def _output(self, sig: np.ndarray | None = None) -> np.ndarray:
+    def _sig_tau(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(sigma_u, sigma_v, sigma_w), (tau_u, tau_v, tau_w) as floats: ``parameters()``'s formulas
+        and ``L / V`` without the dict and the arrays (the same values; the 20 Hz ``step``)."""
+        h_ft = min(max(self.altitude_m / FT, MIN_ALTITUDE_FT), MAX_ALTITUDE_FT)
+        den = 0.177 + 0.000823 * h_ft
+        sig_w = self.sigma_w_20
+        sig_uv = sig_w / den**0.4
+        l_uv = h_ft / den**1.2 * FT
+        v = max(self.airspeed_mps, MIN_AIRSPEED_MPS)
+        return (sig_uv, sig_uv, sig_w), (l_uv / v, l_uv / v, h_ft * FT / v)
+
+    def _output(self, sig=None) -> np.ndarray:
         if sig is None:
-            sig, _ = self._sigmas_taus()
+            sig, _ = self._sig_tau()
         return np.array([s * float(f.c @ x) for s, f, x in zip(sig, _UNITS, self._x)])
 
     def _discrete(self, i: int, h: float) -> tuple[np.ndarray, np.ndarray]:
@@ -218,11 +227,12 @@ class DrydenTurbulence:
             self.altitude_m = _finite("altitude_m", altitude_m)
         if airspeed_mps is not None:
             self.airspeed_mps = _finite("airspeed_mps", airspeed_mps)
-        sig, tau = self._sigmas_taus()  # once a step: the output uses the same altitude and airspeed
+        sig, tau = self._sig_tau()  # once a step: the output uses the same altitude and airspeed
         if dt > 0.0:
+            xs, rng = self._x, self.rng
             for i in range(3):
                 ad, lq = self._discrete(i, dt / tau[i])
-                self._x[i] = ad @ self._x[i] + lq @ self.rng.standard_normal(lq.shape[1])
+                xs[i] = ad @ xs[i] + lq @ rng.standard_normal(lq.shape[1])
         self.gust = self._output(sig)
         return self.gust.copy()
 
@@ -282,9 +292,15 @@ class Wind:
     ) -> np.ndarray:
         """(3,) NED air velocity [m/s] at time ``t`` [s], advancing the turbulence by ``dt``."""
         _finite("t", t)
-        w = self.steady.ned
         if self.turbulence is None:
             _finite("dt", dt, nonneg=True)
-            return w
+            return self.steady.ned
         gust = self.turbulence.step(dt, altitude_m, airspeed_mps)
-        return w + to_ned(gust, self.steady.from_deg)
+        # steady.ned + to_ned(gust, from_deg), element by element in scalars (the same operations)
+        st = self.steady
+        a = math.radians(st.from_deg)
+        psi = math.radians(_finite("wind_from_deg", st.from_deg)) + math.pi  # downwind heading
+        c, s = math.cos(psi), math.sin(psi)
+        u, v, w = gust.tolist()
+        return np.array([-st.speed_mps * math.cos(a) + (c * u - s * v), -st.speed_mps * math.sin(a) + (s * u + c * v),
+                         0.0 + w])
