@@ -34,10 +34,11 @@ def find_blobs(image: np.ndarray, threshold: int = 150, min_area: int = 2, max_a
     if img.dtype != np.uint8:
         img = np.clip(img, 0, 255).astype(np.uint8)
     _, mask = cv2.threshold(img, threshold, 1, cv2.THRESH_BINARY)
-    pts = cv2.findNonZero(mask)
-    if pts is None:
+    # label only the box around the bright pixels (boundingRect of a mask: the box of its non-zero pixels,
+    # as of cv2.findNonZero's points, without listing them)
+    u0, v0, w, h = cv2.boundingRect(mask)
+    if w == 0 or h == 0:
         return np.zeros((0, 2))
-    u0, v0, w, h = cv2.boundingRect(pts)  # label only the box around the bright pixels
     sub_mask, sub = mask[v0:v0 + h, u0:u0 + w], img[v0:v0 + h, u0:u0 + w]
     n, labels, stats, _ = cv2.connectedComponentsWithStats(sub_mask, connectivity=8)
     vs, us = np.nonzero(labels)
