@@ -233,9 +233,10 @@ def light_vectors(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry):
     return s, b_h, C
 
 
-def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray):
-    """Predicted bearings (eq. 2.25) and bearing rates (eq. 2.27) of every light: (N, L, 2) each."""
-    s, b_h, C = light_vectors(sig, lights, cam)
+def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray, vectors=None):
+    """Predicted bearings (eq. 2.25) and bearing rates (eq. 2.27) of every light: (N, L, 2) each.
+    ``vectors``: ``light_vectors(sig, lights, cam)`` when the caller has it already."""
+    s, b_h, C = light_vectors(sig, lights, cam) if vectors is None else vectors
     wd = sig[:, RATE]
     w_rel = gyro - np.einsum("nji,nj->ni", C, wd)  # eq. 2.29
     pdot = sig[:, None, VEL] - _cross(w_rel[:, None, :], b_h)
@@ -250,15 +251,16 @@ def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry,
 
 
 def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray,
-                      idx: np.ndarray, rate_idx: np.ndarray) -> np.ndarray:
-    """Stacked measurement (eq. 3.10): bearings of lights ``idx``, then rates of lights ``rate_idx``."""
-    bear, rate = bearings_and_rates(sig, lights, cam, gyro)
+                      idx: np.ndarray, rate_idx: np.ndarray, vectors=None) -> np.ndarray:
+    """Stacked measurement (eq. 3.10): bearings of lights ``idx``, then rates of lights ``rate_idx``
+    (``vectors``: ``light_vectors(sig, lights, cam)`` when the caller has it already)."""
+    bear, rate = bearings_and_rates(sig, lights, cam, gyro, vectors)
     return np.concatenate([bear[:, idx, :].reshape(len(sig), -1), rate[:, rate_idx, :].reshape(len(sig), -1)], axis=1)
 
 
-def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry) -> np.ndarray:
-    """Bearings of every light (N, 2L), for data association."""
-    s, _, _ = light_vectors(sig, lights, cam)
+def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vectors=None) -> np.ndarray:
+    """Bearings of every light (N, 2L), for data association (``vectors`` as ``measurement_model``)."""
+    s, _, _ = light_vectors(sig, lights, cam) if vectors is None else vectors
     return np.stack([np.arctan(s[..., 0] / s[..., 2]), np.arctan(s[..., 1] / s[..., 2])], axis=-1).reshape(len(sig), -1)
 
 

@@ -553,11 +553,19 @@ class DeckNavigator(CommandDispatch):
 
     def expected_bearings(self):
         """Predicted bearings (L, 2) of every light and their covariances (L, 2, 2) with R."""
+        return self._expected()[:2]
+
+    def _expected(self):
+        """``expected_bearings`` and the sigma points and light vectors it was computed from (the update of
+        the same (x, P) takes them instead of drawing them again: the same arrays)."""
         L = len(self.lights)
         R = np.eye(2 * L) * self.bearing_var
-        zp, S, _, _ = self.ukf.predict_measurement(R, dm.bearings_only, lights=self.lights, cam=self.cam)
+        sig = self.ukf.sigma_points()
+        vec = dm.light_vectors(sig, self.lights, self.cam)
+        zp, S, _, _ = self.ukf.predict_measurement(R, dm.bearings_only, sigmas=sig, lights=self.lights, cam=self.cam,
+                                                   vectors=vec)
         blocks = np.stack([S[2 * j:2 * j + 2, 2 * j:2 * j + 2] for j in range(L)])
-        return zp.reshape(L, 2), blocks
+        return zp.reshape(L, 2), blocks, sig, vec
 
     def fuse_bearings(self, bearings, rates) -> int:
         """Correct at the filter's time with bearings (M, 2) and rates (M, 2) already extracted (NaN rows
@@ -590,7 +598,7 @@ class DeckNavigator(CommandDispatch):
             st.empty_frames += 1
             st.lights_used_last = 0
             return 0, 0
-        zp, S = self.expected_bearings()
+        zp, S, sig, vec = self._expected()
         assign = associate(b, zp, S, self.gate)
         rejected = int(np.sum(assign < 0))
         st.blobs_rejected += rejected
@@ -607,13 +615,14 @@ class DeckNavigator(CommandDispatch):
         has_rate = np.all(np.isfinite(r[m]), axis=1)
         ridx = idx[has_rate]
         z = np.concatenate([b[m].ravel(), r[m][has_rate].ravel()])
-        R = np.diag(np.r_[np.full(2 * idx.size, self.bearing_var), np.full(2 * ridx.size, self.rate_var)])
-        applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), lights=self.lights,
-                                  cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx)
+        R = np.diag(np.concatenate([np.full(2 * idx.size, self.bearing_var), np.full(2 * ridx.size, self.rate_var)]))
+        applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
+                                  lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
         if not applied and ridx.size:  # the rates (frame-to-frame blob matches) are the fragile part: try without
             nb = 2 * idx.size
             applied = self.ukf.update(z[:nb], R[:nb, :nb], hx=dm.measurement_model, max_nis=self._max_nis(nb),
-                                      lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx[:0])
+                                      sigmas=sig, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
+                                      rate_idx=ridx[:0], vectors=vec)
             ridx = ridx[:0]
             z = z[:nb]
         if not applied and self._lockout(len(b), replay):
