@@ -76,7 +76,7 @@ class SigmaWeights:
         d[0] = 0.0
         d[1:n + 1] = U
         np.negative(U, out=d[n + 1:])
-        return state_add(np.broadcast_to(x, d.shape), d)
+        return state_add(x[None, :], d)  # (x broadcast over the rows)
 
 
 class UnscentedKalmanFilter:
