@@ -36,6 +36,18 @@ TARGETS = [
     ("visnav.sim.deck_parts", "DeckContact.log"),
     ("visnav.mission.deck", "DeckMission.step"),
     ("visnav.control.deck", "DeckController.command"),
+    ("visnav.sensors.led_camera", "LedCamera.sample"),
+    ("visnav.sensors.imu", "AccelGyro.sample"),
+    ("visnav.sensors.imu", "RollPitchAhrs.sample"),
+    ("visnav.sensors.deck_observer", "RelativeStateSensor.sample"),
+    ("visnav.sim.parts", "VehicleTruth.advance"),
+    ("visnav.vehicles.multirotor", "Multirotor.step"),
+    ("visnav.sim.deck_parts", "DeckContact.environment"),
+    ("visnav.sim.deck_parts", "DeckContact.contact"),
+    ("visnav.world.deck", "DeckMotion.state"),
+    ("visnav.world.deck", "relative_state"),
+    ("visnav.estimation.integrity", "IntegrityMonitor.assess"),
+    ("visnav.sim.loop", "Simulation._deliver"),
 ]
 
 
@@ -87,6 +99,7 @@ def main() -> None:
     from visnav.sim.missions import make_simulation
 
     import visnav.navigation.deck  # noqa: F401  (import every target's module before wrapping)
+    import visnav.sensors.deck_observer  # noqa: F401
     import visnav.sim.deck_parts  # noqa: F401
 
     accs = install()

@@ -264,7 +264,12 @@ class DeckNavigator(CommandDispatch):
         recent = [f for f in self._frames if f[0] > t - 1.0]
         used = [f[1] for f in recent]
         rms = np.array([f[2] for f in recent], float)
-        rms_1s = float(np.sqrt(np.nanmean(rms**2))) if np.isfinite(rms).any() else float("nan")
+        rms_1s = float("nan")
+        if np.isfinite(rms).any():  # np.nanmean's own steps (NaN -> 0, sum, / count): its value, not its overhead
+            sq = rms**2
+            gone = np.isnan(sq)
+            sq[gone] = 0.0
+            rms_1s = float(np.sqrt(sq.sum() / (sq.size - int(gone.sum()))))
         conv = (len(recent) >= 5 and min(used) >= 3 and bool(rms_1s <= self.cfg.converged_bearing_rms))
         h = DeckHealth(source="camera", tracking=conv, rejected_samples=self.stats.imu_dropped,
                        lights_used=self.stats.lights_used_last, frames_1s=len(recent),
