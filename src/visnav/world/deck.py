@@ -156,6 +156,14 @@ class DeckWorld:
             return np.delete(self.lights, self.hide_light, axis=0)
         return self.lights
 
+    def relative(self, vehicle, ds: DeckState) -> np.ndarray:
+        """``relative_state(vehicle, ds)``, kept for the last pair of states (one step's motion capture sample
+        and truth log ask for the same pair; the states are never changed in place): a fresh copy each call."""
+        last = getattr(self, "_relative", None)
+        if last is None or last[0] is not vehicle or last[1] is not ds:
+            last = self._relative = (vehicle, ds, relative_state(vehicle, ds))
+        return last[2].copy()
+
     @staticmethod
     def to_ned(ds: DeckState, points: np.ndarray) -> np.ndarray:
         return ds.position + np.asarray(points, float) @ ds.C.T
