@@ -76,6 +76,7 @@ class PinholeCamera:
                 f"dist must hold 8 finite coefficients (k1, k2, p1, p2, k3, k4, k5, k6), got {self.dist!r}"
             )
         object.__setattr__(self, "dist", tuple(float(c) for c in d))
+        object.__setattr__(self, "_distorted", any(c != 0.0 for c in self.dist))  # (has_distortion, once)
 
     @classmethod
     def ideal(cls, width: int = 640, height: int = 480, f: float = 1073.0) -> PinholeCamera:
@@ -89,7 +90,7 @@ class PinholeCamera:
 
     @property
     def has_distortion(self) -> bool:
-        return any(c != 0.0 for c in self.dist)
+        return self._distorted
 
     # --- distortion (seed 003 eq. 5.3-5.5) -----------------------------------------------
 
@@ -114,7 +115,8 @@ class PinholeCamera:
         _, _, p1, p2, *_ = self.dist
         x, y = xy[..., 0], xy[..., 1]
         r2 = x * x + y * y
-        g, _ = self._radial(r2)
+        k1, k2, _, _, k3, k4, k5, k6 = self.dist  # g(r^2) of ``_radial`` (the same arithmetic, no derivative)
+        g = (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1.0 + r2 * (k4 + r2 * (k5 + r2 * k6)))
         xd = x * g + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
         yd = y * g + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
         return _pair(xd, yd)

@@ -99,8 +99,8 @@ class LedCamera:
         box = None
         if okc.sum() >= 3:  # the deck polygon, rasterised into the mask over its bounding box (the same pixels)
             poly = np.round(uvc[okc]).astype(np.int32)
-            x0, y0 = max(int(poly[:, 0].min()), 0), max(int(poly[:, 1].min()), 0)
-            x1, y1 = min(int(poly[:, 0].max()) + 1, w), min(int(poly[:, 1].max()) + 1, h)
+            us, vs = zip(*poly.tolist())
+            x0, y0, x1, y1 = max(min(us), 0), max(min(vs), 0), min(max(us) + 1, w), min(max(vs) + 1, h)
             if x1 > x0 and y1 > y0:
                 box = (slice(y0, y1), slice(x0, x1))
                 cv2.fillPoly(mask[box], [poly], 1, offset=(-x0, -y0))
