@@ -27,6 +27,6 @@ class RelativeStateSensor:
 
     def sample(self, t: float, truth_at: TruthAt, world) -> RelativeStateSample:
         x = world.relative(truth_at(t), world.motion.state(t))
-        if np.any(self.sigma > 0):
+        if (self.sigma > 0).any():
             x = wrap_state(x + self.sigma * self.rng.standard_normal(12))
         return RelativeStateSample(t=t, state=x, sigma=self.sigma.copy(), source=self.source)

@@ -83,16 +83,17 @@ class BearingTracker:
 
     def from_pixels(self, t: float, uv: np.ndarray) -> BearingFrame:
         uv = np.asarray(uv, float).reshape(-1, 2)
-        uv = uv[np.all(np.isfinite(uv), axis=1)]
+        uv = uv[np.isfinite(uv).all(axis=1)]
         bear = pixels_to_bearings(uv, self.camera)
-        ok = np.all(np.isfinite(bear), axis=1)
+        ok = np.isfinite(bear).all(axis=1)
         uv, bear = uv[ok], bear[ok]
         rates = np.full_like(bear, np.nan)
         if self._prev is not None and len(uv) and len(self._prev[1]):
             t0, uv0, b0 = self._prev
             dt = t - t0
             if dt > 0:
-                d = np.linalg.norm(uv[:, None, :] - uv0[None, :, :], axis=-1)
+                dd = uv[:, None, :] - uv0[None, :, :]
+                d = np.sqrt((dd * dd).sum(axis=-1))  # (np.linalg.norm's own steps along the last axis)
                 rows, cols = linear_sum_assignment(d)
                 for r, c in zip(rows, cols):
                     if d[r, c] <= self.max_jump_px:

@@ -95,8 +95,8 @@ class DeckMotion:
     def displacement(self, t: float):
         """(d, d_dot) of the six axes at time t (eq. 5.11 and its derivative)."""
         arg = self.w * t + self.ph
-        d = np.sum(self.a * np.sin(arg), axis=1)
-        dd = np.sum(self.a * self.w * np.cos(arg), axis=1)
+        d = (self.a * np.sin(arg)).sum(axis=1)
+        dd = (self.a * self.w * np.cos(arg)).sum(axis=1)
         return d, dd
 
     def state(self, t: float) -> DeckState:
