@@ -327,15 +327,15 @@ class DeckNavigator(CommandDispatch):
         process noise cannot hold (it does not accumulate) and that ``P`` therefore lacks. It adds
         ``[r]x Sigma_gyro [r]x^T`` to the velocity block (``v = (v + w x r) - w x r``, d/dw = ``[r]x``).
         """
-        r = self.ukf.x[0:3]
-        S = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+        r0, r1, r2 = self.ukf.x[0:3].tolist()
+        S = np.array([[0.0, -r2, r1], [r2, 0.0, -r0], [-r1, r0, 0.0]])
         P = self.ukf.P.copy()
         P[6:9, 6:9] += S @ self.imu_cov[3:6, 3:6] @ S.T
         return P
 
     def _attitude(self, m: AttitudeSample) -> None:
         rp = np.asarray(m.euler, float)[:2]
-        if np.all(np.isfinite(rp)):
+        if np.isfinite(rp).all():
             self._rp = rp
 
     def _drop_imu(self, reason: str, t: float) -> None:
