@@ -149,7 +149,7 @@ class UnscentedKalmanFilter:
         dx = self.residual_x(sig, self.x)
         Pxz = (dx * self.weights.wc_col).T @ dz
         y = self.residual_z(z[None, :], zp[None, :])[0]
-        sol = np.linalg.solve(S, np.column_stack([Pxz.T, y]))  # S^-1 [Pxz^T y]
+        sol = np.linalg.solve(S, np.concatenate([Pxz.T, y[:, None]], axis=1))  # S^-1 [Pxz^T y]
         if max_nis is not None and float(y @ sol[:, -1]) > max_nis:
             self.S, self.y, self.nis = S, y, float(y @ sol[:, -1])
             return False

@@ -610,7 +610,7 @@ class DeckNavigator(CommandDispatch):
         assign = associate(b, zp, S, self.gate)
         rejected = int((assign < 0).sum())
         st.blobs_rejected += rejected
-        m = np.nonzero(assign >= 0)[0]
+        m = (assign >= 0).nonzero()[0]
         if m.size == 0 and self._lockout(len(b), replay):
             return self._refuse(b, r, n_ok, gyro)
         if m.size == 0:
@@ -618,7 +618,7 @@ class DeckNavigator(CommandDispatch):
             if not replay:
                 self.integrity.record(self._t, "bearing", float("nan"), 0, False)
             return 0, rejected
-        m = m[np.argsort(assign[m])]
+        m = m[assign[m].argsort()]
         idx = assign[m]
         has_rate = np.isfinite(r[m]).all(axis=1)
         ridx = idx[has_rate]
@@ -649,7 +649,7 @@ class DeckNavigator(CommandDispatch):
         self.last_nis, self.last_dof = self.ukf.nis, int(z.size)
         nb = 2 * idx.size
         yb = self.ukf.y[:nb]
-        self.last_bearing_rms = float(np.sqrt(np.mean(yb * yb)))
+        self.last_bearing_rms = float(np.sqrt((yb * yb).mean()))
         # the bearing and rate parts' own NIS (marginal blocks of S) for the integrity monitor
         S_all, y = self.ukf.S, self.ukf.y
         self.integrity.record(self._t, "bearing", float(yb @ np.linalg.solve(S_all[:nb, :nb], yb)), nb, True)

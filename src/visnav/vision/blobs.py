@@ -95,8 +95,8 @@ class BearingTracker:
                 dd = uv[:, None, :] - uv0[None, :, :]
                 d = np.sqrt((dd * dd).sum(axis=-1))  # (np.linalg.norm's own steps along the last axis)
                 rows, cols = linear_sum_assignment(d)
-                for r, c in zip(rows, cols):
-                    if d[r, c] <= self.max_jump_px:
-                        rates[r] = (bear[r] - b0[c]) / dt
+                near = d[rows, cols] <= self.max_jump_px  # (each row once: the matches' rates at once)
+                rows, cols = rows[near], cols[near]
+                rates[rows] = (bear[rows] - b0[cols]) / dt
         self._prev = (t, uv, bear)
         return BearingFrame(t=t, bearings=bear, rates=rates, pixels=uv)
