@@ -299,7 +299,10 @@ def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vect
 
 def wrap_state(sig: np.ndarray) -> np.ndarray:
     """Keep the relative Euler angles' roll and yaw in (-pi, pi]."""
-    out = np.array(sig, dtype=float, copy=True)
+    return _wrap_in_place(np.array(sig, dtype=float, copy=True))
+
+
+def _wrap_in_place(out: np.ndarray) -> np.ndarray:
     out[..., 3:6:2] = np.mod(out[..., 3:6:2] + np.pi, 2 * np.pi) - np.pi  # indices 3 and 5, a view
     return out
 
@@ -311,7 +314,7 @@ def residual_x(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def state_add(x: np.ndarray, dx: np.ndarray) -> np.ndarray:
-    return wrap_state(x + dx)
+    return _wrap_in_place(np.asarray(x + dx, dtype=float))  # (wrap_state on the fresh sum: no second copy)
 
 
 def initial_state_static(position=(1.0, 0.0, 1.0), sigma_pos_m: float = 0.5, sigma_att_rad: float = np.radians(20),
