@@ -572,7 +572,8 @@ class DeckNavigator(CommandDispatch):
         vec = dm.light_vectors(sig, self.lights, self.cam)
         zp, S, _, _ = self.ukf.predict_measurement(R, dm.bearings_only, sigmas=sig, lights=self.lights, cam=self.cam,
                                                    vectors=vec)
-        blocks = np.stack([S[2 * j:2 * j + 2, 2 * j:2 * j + 2] for j in range(L)])
+        j = np.arange(L)
+        blocks = S.reshape(L, 2, L, 2)[j, :, j, :]  # the 2x2 diagonal blocks (L, 2, 2), a fresh array
         return zp.reshape(L, 2), blocks, sig, vec
 
     def fuse_bearings(self, bearings, rates) -> int:
@@ -649,7 +650,7 @@ class DeckNavigator(CommandDispatch):
         self.last_nis, self.last_dof = self.ukf.nis, int(z.size)
         nb = 2 * idx.size
         yb = self.ukf.y[:nb]
-        self.last_bearing_rms = float(np.sqrt((yb * yb).mean()))
+        self.last_bearing_rms = float(np.sqrt((yb * yb).sum() / yb.size))  # (the mean's own steps)
         # the bearing and rate parts' own NIS (marginal blocks of S) for the integrity monitor
         S_all, y = self.ukf.S, self.ukf.y
         self.integrity.record(self._t, "bearing", float(yb @ np.linalg.solve(S_all[:nb, :nb], yb)), nb, True)
