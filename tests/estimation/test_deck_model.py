@@ -108,3 +108,48 @@ def test_batch_helpers_match_the_reference_forms():
     np.testing.assert_array_equal(np.delete(w, [3, 5], axis=1), np.delete(x, [3, 5], axis=1))
     assert np.all(np.abs(w[:, [3, 5]]) <= np.pi)
     np.testing.assert_allclose(np.cos(w[:, [3, 5]]), np.cos(x[:, [3, 5]]), atol=1e-12)
+
+
+def _process_noise_reference(x, dt, u, imu_cov, ship_cov):
+    """process_noise as it was before speed round 4 (batches of one, np.outer, np.eye / np.zeros each call)."""
+    from visnav.geometry.rotations import skew
+
+    r, e, v = x[dm.POS], x[dm.ATT], x[dm.VEL]
+    w = u.gyro
+    C = dm.euler_dcm_batch(e[None, :])[0]
+    E = dm.euler_rate_matrix(e[None, :])[0]
+    I3 = np.eye(3)
+    dt2 = 0.5 * dt * dt
+    Fz = np.zeros((12, 6))
+    Fz[dm.POS, 0:3] = -dt2 * I3
+    Fz[dm.VEL, 0:3] = -dt * I3
+    dvdw = 2.0 * skew(v) + 2.0 * np.outer(r, w) - np.dot(w, r) * I3 - np.outer(w, r)
+    Fz[dm.VEL, 3:6] = dt * dvdw
+    Fz[dm.POS, 3:6] = dt2 * dvdw
+    Fz[dm.ATT, 3:6] = dt * E
+    Fs = np.zeros((12, 6))
+    Fs[dm.POS, 0:3] = dt2 * C.T
+    Fs[dm.VEL, 0:3] = dt * C.T
+    Fs[dm.ATT, 3:6] = -dt2 * E @ C.T
+    Fs[dm.RATE, 3:6] = dt * I3
+    return Fz @ imu_cov @ Fz.T + Fs @ ship_cov @ Fs.T
+
+
+def test_process_noise_is_the_reference_bit_for_bit():
+    """process_noise builds C and E of the one mean state from the same numpy cos / sin / tan values in Python
+    floats and copies its dt-only blocks from templates: the same Q to the last bit (speed round 4)."""
+    rng = np.random.default_rng(8)
+    imu = np.diag(rng.uniform(1e-6, 1e-2, 6))
+    imu[0, 1] = imu[1, 0] = 1e-5
+    ship = np.diag(rng.uniform(1e-4, 1.0, 6))
+    for k in range(400):
+        x = rng.normal(size=12) * rng.choice([0.1, 1.0, 3.0])
+        if k % 7 == 0:
+            x[4] = np.pi / 2 * rng.choice([-1, 1]) + rng.normal(0, 1e-9)  # near the pitch singularity
+        u = dm.ImuInput(rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=3))
+        dt = float(rng.choice([0.01, 0.005, 0.0033333333333333335, rng.uniform(1e-4, 0.02)]))
+        got, ref = dm.process_noise(x, dt, u, imu, ship), _process_noise_reference(x, dt, u, imu, ship)
+        assert np.array_equal(got.view(np.int64), ref.view(np.int64))
+        C, E = dm._dcm_and_rate_matrix(x[None, 3:6])
+        assert np.array_equal(C, dm.euler_dcm_batch(x[None, 3:6])[0])
+        assert np.array_equal(E, dm.euler_rate_matrix(x[None, 3:6])[0])

@@ -111,3 +111,22 @@ def test_an_update_beyond_max_nis_is_not_applied():
     assert ukf.update([3.0], R, max_nis=nis + 1e-6)
     np.testing.assert_allclose(ukf.x, [3.0 * 4.0 / 5.0, 0.0], atol=1e-12)
     np.testing.assert_allclose(ukf.P, np.diag([4.0 - 16.0 / 5.0, 1.0]), atol=1e-12)
+
+
+def test_sigma_points_are_the_stacked_reference_bits_and_layout():
+    """SigmaWeights.points fills [0; U; -U] in place: the same values and the same column-major layout as
+    the ``np.vstack`` of U = L^T it replaced (the layout decides the rounding of the products downstream:
+    a row-major copy changed the deck runs in the last bits)."""
+    w = SigmaWeights(12, alpha=0.1, beta=2.0)
+    rng = np.random.default_rng(4)
+    for k in range(200):
+        A = rng.normal(size=(12, 12))
+        P = np.diag(rng.uniform(1e-6, 1.0, 12)) if k % 2 else A @ A.T + 1e-3 * np.eye(12)
+        x = rng.normal(size=12) * 3
+        U = np.linalg.cholesky((w.lam + 12) * P).T
+        d = np.vstack([np.zeros((1, 12)), U, -U])
+        for add in (dm.state_add, lambda a, b: a + b):
+            ref = add(np.broadcast_to(x, d.shape), d)
+            got = w.points(x, P, add)
+            assert got.strides == ref.strides
+            assert np.array_equal(got.view(np.int64), ref.view(np.int64))

@@ -154,3 +154,33 @@ def test_invalid_parameters_name_the_field(kwargs, name):
 def test_bad_point_shape_raises():
     with pytest.raises(ValueError, match="p_cam"):
         PinholeCamera.ideal().project(np.zeros((4, 2)))
+
+
+@pytest.mark.parametrize("dist", [BLUEFOX_DIST, RANDOM_DIST, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1e-3)])
+def test_undistortion_of_few_points_is_the_array_path_bit_for_bit(dist, monkeypatch):
+    """Up to 16 points the Newton iteration runs in Python floats: the same values, bit for bit, as the
+    array path on the same batch (converged, not converged, beyond the fold, NaN, off-image points)."""
+    import visnav.geometry.camera as camera_mod
+
+    cam = PinholeCamera(752, 480, 420.0, 421.0, 375.5, 239.5, dist)
+    rng = np.random.default_rng(7)
+    batches = []
+    for _ in range(400):
+        n = int(rng.integers(1, 17))
+        uv = np.column_stack([rng.uniform(-400, 1150, n), rng.uniform(-300, 780, n)])
+        if rng.uniform() < 0.3:
+            uv[: n // 2] = rng.uniform([0, 0], [752, 480], (n // 2, 2))
+        if rng.uniform() < 0.05:
+            uv[0] = np.nan
+        batches.append(uv)
+    batches.append(np.zeros((0, 2)))
+    with np.errstate(all="ignore"):  # (diverging points overflow in the array path)
+        few = [cam.pixel_to_normalized(uv) for uv in batches]
+        monkeypatch.setattr(camera_mod, "_UNDISTORT_SCALAR_MAX", 0)
+        ref = [cam.pixel_to_normalized(uv) for uv in batches]
+    n_nan = 0
+    for a, b in zip(few, ref):
+        assert a.shape == b.shape
+        assert np.array_equal(a.view(np.int64), b.view(np.int64))  # the same bits, NaN included
+        n_nan += int(np.isnan(a).any())
+    assert 10 < n_nan < 390  # both converged and rejected points were compared

@@ -29,9 +29,11 @@ def mahalanobis_costs(z_meas: np.ndarray, z_pred: np.ndarray, S: np.ndarray) -> 
 def cost_matrix(costs: np.ndarray, gate: float) -> np.ndarray:
     """The full matrix of eq. 3.12: [C | gate on the diagonal, 2 gate off it]."""
     m = costs.shape[0]
-    dummy = np.full((m, m), 2.0 * gate)
-    np.fill_diagonal(dummy, gate)
-    return np.hstack([costs, dummy])
+    out = np.empty((m, costs.shape[1] + m))
+    out[:, :costs.shape[1]] = costs
+    out[:, costs.shape[1]:] = 2.0 * gate
+    out[:, costs.shape[1]:].flat[::m + 1] = gate  # (np.fill_diagonal's own step)
+    return out
 
 
 def associate(z_meas: np.ndarray, z_pred: np.ndarray, S: np.ndarray, gate: float) -> np.ndarray:

@@ -184,6 +184,43 @@ def ship_acceleration_bound(amplitude, omega, sigma_amplitude=0.0, sigma_omega=0
     return a * w * w
 
 
+_I3 = np.eye(3)
+_I3.flags.writeable = False
+_NOISE_TEMPLATES: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _noise_templates(dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Fresh F_z, F_ship of ``process_noise`` with the blocks that depend on ``dt`` alone filled in (copies
+    of templates kept for the last few step lengths)."""
+    t = _NOISE_TEMPLATES.get(dt)
+    if t is None:
+        if len(_NOISE_TEMPLATES) >= 16:
+            _NOISE_TEMPLATES.clear()
+        dt2 = 0.5 * dt * dt
+        Fz = np.zeros((N_STATE, 6))
+        Fz[POS, 0:3] = -dt2 * _I3
+        Fz[VEL, 0:3] = -dt * _I3
+        Fs = np.zeros((N_STATE, 6))
+        Fs[RATE, 3:6] = dt * _I3
+        t = _NOISE_TEMPLATES[dt] = (Fz, Fs)
+    return t[0].copy(), t[1].copy()
+
+
+def _dcm_and_rate_matrix(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``euler_dcm_batch(e)[0]`` and ``euler_rate_matrix(e)[0]`` of one state's angles ``e`` (1, 3): the same
+    numpy cos / sin / tan calls, the products and quotients in Python floats (the same IEEE operations),
+    without building batches of one."""
+    (cf, ct, cp), (sf, st, sp) = np.cos(e).tolist()[0], np.sin(e).tolist()[0]
+    stcp, stsp = st * cp, st * sp
+    C = np.array([[ct * cp, sf * stcp - cf * sp, sf * sp + cf * stcp],
+                  [ct * sp, cf * cp + sf * stsp, cf * stsp - sf * cp],
+                  [-st, sf * ct, cf * ct]])
+    (cf1,), (sf1,) = np.cos(e[:, 0]).tolist(), np.sin(e[:, 0]).tolist()
+    (ct1,), (tt1,) = np.cos(e[:, 1]).tolist(), np.tan(e[:, 1]).tolist()
+    E = np.array([[1.0, sf1 * tt1, cf1 * tt1], [0.0, cf1, -sf1], [0.0, sf1 / ct1, cf1 / ct1]])
+    return C, E
+
+
 def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, ship_cov: np.ndarray) -> np.ndarray:
     """Q = F_z Sigma_imu F_z^T + F_ship Sigma_ship F_ship^T (eq. 3.8) at the mean ``x``.
 
@@ -195,22 +232,18 @@ def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, sh
     """
     r, e, v = x[POS], x[ATT], x[VEL]
     w = u.gyro
-    C = euler_dcm_batch(e[None, :])[0]  # C_h^d
-    E = euler_rate_matrix(e[None, :])[0]
-    I3 = np.eye(3)
+    C, E = _dcm_and_rate_matrix(e[None, :])  # C_h^d, E(e)
+    I3 = _I3
     dt2 = 0.5 * dt * dt
-    Fz = np.zeros((N_STATE, 6))
-    Fz[POS, 0:3] = -dt2 * I3
-    Fz[VEL, 0:3] = -dt * I3
-    dvdw = 2.0 * skew(v) + 2.0 * np.outer(r, w) - np.dot(w, r) * I3 - np.outer(w, r)
+    Fz, Fs = _noise_templates(dt)
+    dvdw = 2.0 * skew(v) + 2.0 * np.multiply(r[:, None], w[None, :]) - np.dot(w, r) * I3 - np.multiply(
+        w[:, None], r[None, :])  # 2 [v]x + 2 r w^T - (w.r) I - w r^T
     Fz[VEL, 3:6] = dt * dvdw
     Fz[POS, 3:6] = dt2 * dvdw
     Fz[ATT, 3:6] = dt * E
-    Fs = np.zeros((N_STATE, 6))
     Fs[POS, 0:3] = dt2 * C.T
     Fs[VEL, 0:3] = dt * C.T
     Fs[ATT, 3:6] = -dt2 * E @ C.T
-    Fs[RATE, 3:6] = dt * I3
     return Fz @ imu_cov @ Fz.T + Fs @ ship_cov @ Fs.T
 
 
@@ -233,9 +266,10 @@ def light_vectors(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry):
     return s, b_h, C
 
 
-def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray):
-    """Predicted bearings (eq. 2.25) and bearing rates (eq. 2.27) of every light: (N, L, 2) each."""
-    s, b_h, C = light_vectors(sig, lights, cam)
+def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray, vectors=None):
+    """Predicted bearings (eq. 2.25) and bearing rates (eq. 2.27) of every light: (N, L, 2) each.
+    ``vectors``: ``light_vectors(sig, lights, cam)`` when the caller has it already."""
+    s, b_h, C = light_vectors(sig, lights, cam) if vectors is None else vectors
     wd = sig[:, RATE]
     w_rel = gyro - np.einsum("nji,nj->ni", C, wd)  # eq. 2.29
     pdot = sig[:, None, VEL] - _cross(w_rel[:, None, :], b_h)
@@ -250,21 +284,25 @@ def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry,
 
 
 def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray,
-                      idx: np.ndarray, rate_idx: np.ndarray) -> np.ndarray:
-    """Stacked measurement (eq. 3.10): bearings of lights ``idx``, then rates of lights ``rate_idx``."""
-    bear, rate = bearings_and_rates(sig, lights, cam, gyro)
+                      idx: np.ndarray, rate_idx: np.ndarray, vectors=None) -> np.ndarray:
+    """Stacked measurement (eq. 3.10): bearings of lights ``idx``, then rates of lights ``rate_idx``
+    (``vectors``: ``light_vectors(sig, lights, cam)`` when the caller has it already)."""
+    bear, rate = bearings_and_rates(sig, lights, cam, gyro, vectors)
     return np.concatenate([bear[:, idx, :].reshape(len(sig), -1), rate[:, rate_idx, :].reshape(len(sig), -1)], axis=1)
 
 
-def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry) -> np.ndarray:
-    """Bearings of every light (N, 2L), for data association."""
-    s, _, _ = light_vectors(sig, lights, cam)
+def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vectors=None) -> np.ndarray:
+    """Bearings of every light (N, 2L), for data association (``vectors`` as ``measurement_model``)."""
+    s, _, _ = light_vectors(sig, lights, cam) if vectors is None else vectors
     return np.stack([np.arctan(s[..., 0] / s[..., 2]), np.arctan(s[..., 1] / s[..., 2])], axis=-1).reshape(len(sig), -1)
 
 
 def wrap_state(sig: np.ndarray) -> np.ndarray:
     """Keep the relative Euler angles' roll and yaw in (-pi, pi]."""
-    out = np.array(sig, dtype=float, copy=True)
+    return _wrap_in_place(np.array(sig, dtype=float, copy=True))
+
+
+def _wrap_in_place(out: np.ndarray) -> np.ndarray:
     out[..., 3:6:2] = np.mod(out[..., 3:6:2] + np.pi, 2 * np.pi) - np.pi  # indices 3 and 5, a view
     return out
 
@@ -276,7 +314,7 @@ def residual_x(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def state_add(x: np.ndarray, dx: np.ndarray) -> np.ndarray:
-    return wrap_state(x + dx)
+    return _wrap_in_place(np.asarray(x + dx, dtype=float))  # (wrap_state on the fresh sum: no second copy)
 
 
 def initial_state_static(position=(1.0, 0.0, 1.0), sigma_pos_m: float = 0.5, sigma_att_rad: float = np.radians(20),

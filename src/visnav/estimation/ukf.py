@@ -60,6 +60,7 @@ class SigmaWeights:
         self.wc = np.full(2 * n + 1, c)
         self.wm[0] = self.lam / (n + self.lam)
         self.wc[0] = self.lam / (n + self.lam) + (1.0 - self.alpha**2 + self.beta)
+        self.wc_col = self.wc[:, None]  # (the column the covariances are weighted with, made once)
 
     def points(self, x: np.ndarray, P: np.ndarray, state_add=_add) -> np.ndarray:
         """The 2n+1 sigma points: x, x + rows of U, x - rows of U with U^T U = (n + lambda) P."""
@@ -71,8 +72,11 @@ class SigmaWeights:
             U = np.linalg.cholesky(A).T  # upper factor, U^T U = A (as scipy.linalg.cholesky)
         except np.linalg.LinAlgError as exc:
             raise np.linalg.LinAlgError(f"UKF covariance is not positive definite: {exc}") from None
-        d = np.vstack([np.zeros((1, n)), U, -U])
-        return state_add(np.broadcast_to(x, d.shape), d)
+        d = np.empty((2 * n + 1, n), order="F")  # [0; U; -U], column-major as np.vstack made it of U = L^T
+        d[0] = 0.0
+        d[1:n + 1] = U
+        np.negative(U, out=d[n + 1:])
+        return state_add(x[None, :], d)  # (x broadcast over the rows)
 
 
 class UnscentedKalmanFilter:
@@ -111,7 +115,7 @@ class UnscentedKalmanFilter:
         w = self.weights
         m = mean_fn(sigmas, w.wm)
         d = residual_fn(sigmas, m)
-        cov = (d * w.wc[:, None]).T @ d
+        cov = (d * w.wc_col).T @ d
         if noise is not None:
             cov = cov + noise
         return m, cov, d
@@ -123,26 +127,29 @@ class UnscentedKalmanFilter:
         self.x, P, _ = self.unscented_transform(sig, self.x_mean, self.residual_x, Q)
         self.P = 0.5 * (P + P.T)
 
-    def predict_measurement(self, R=None, hx: Callable | None = None, **hx_args):
-        """Predicted measurement mean, innovation covariance S (with R) and the pieces of the gain."""
+    def predict_measurement(self, R=None, hx: Callable | None = None, sigmas: np.ndarray | None = None, **hx_args):
+        """Predicted measurement mean, innovation covariance S (with R) and the pieces of the gain.
+        ``sigmas``: the sigma points of the current (x, P) when the caller already has them."""
         h = hx or self.hx
-        sig = self.sigma_points()
+        sig = self.sigma_points() if sigmas is None else sigmas
         zs = np.atleast_2d(h(sig, **hx_args))
         zp, S, dz = self.unscented_transform(zs, self.z_mean, self.residual_z, R)
         return zp, S, sig, dz
 
-    def update(self, z, R, hx: Callable | None = None, max_nis: float | None = None, **hx_args) -> bool:
+    def update(self, z, R, hx: Callable | None = None, max_nis: float | None = None, sigmas: np.ndarray | None = None,
+               **hx_args) -> bool:
         """Correct (x, P) with measurement ``z`` of noise covariance ``R``. With ``max_nis`` an update whose
         normalised innovation squared is above it is not applied (x, P unchanged; ``S``, ``y``, ``nis`` are
-        still those of the measurement): returns whether it was applied."""
+        still those of the measurement): returns whether it was applied. ``sigmas``: the sigma points of the
+        current (x, P) when the caller already has them (``sigma_points()``; not recomputed)."""
         z = np.asarray(z, dtype=float).ravel()
         if z.size == 0:
             return False
-        zp, S, sig, dz = self.predict_measurement(np.asarray(R, dtype=float), hx, **hx_args)
+        zp, S, sig, dz = self.predict_measurement(np.asarray(R, dtype=float), hx, sigmas, **hx_args)
         dx = self.residual_x(sig, self.x)
-        Pxz = (dx * self.weights.wc[:, None]).T @ dz
+        Pxz = (dx * self.weights.wc_col).T @ dz
         y = self.residual_z(z[None, :], zp[None, :])[0]
-        sol = np.linalg.solve(S, np.column_stack([Pxz.T, y]))  # S^-1 [Pxz^T y]
+        sol = np.linalg.solve(S, np.concatenate([Pxz.T, y[:, None]], axis=1))  # S^-1 [Pxz^T y]
         if max_nis is not None and float(y @ sol[:, -1]) > max_nis:
             self.S, self.y, self.nis = S, y, float(y @ sol[:, -1])
             return False

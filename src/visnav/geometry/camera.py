@@ -24,6 +24,7 @@ BLUEFOX_DIST: tuple[float, ...] = (-0.188, -0.1631, 0.00136, 0.001605, 0.1631, 0
 
 _UNDISTORT_ITERS = 30
 _UNDISTORT_TOL = 1e-14  # normalized units
+_UNDISTORT_SCALAR_MAX = 16  # up to this many points the Newton iteration runs in Python floats (same bits)
 
 
 def _points(x, dim: int, name: str) -> np.ndarray:
@@ -75,6 +76,7 @@ class PinholeCamera:
                 f"dist must hold 8 finite coefficients (k1, k2, p1, p2, k3, k4, k5, k6), got {self.dist!r}"
             )
         object.__setattr__(self, "dist", tuple(float(c) for c in d))
+        object.__setattr__(self, "_distorted", any(c != 0.0 for c in self.dist))  # (has_distortion, once)
 
     @classmethod
     def ideal(cls, width: int = 640, height: int = 480, f: float = 1073.0) -> PinholeCamera:
@@ -88,7 +90,7 @@ class PinholeCamera:
 
     @property
     def has_distortion(self) -> bool:
-        return any(c != 0.0 for c in self.dist)
+        return self._distorted
 
     # --- distortion (seed 003 eq. 5.3-5.5) -----------------------------------------------
 
@@ -137,6 +139,10 @@ class PinholeCamera:
         target = _points(xy_distorted, 2, "xy_distorted")
         if not self.has_distortion:
             return target.copy()
+        if target.ndim == 2 and target.shape[0] <= _UNDISTORT_SCALAR_MAX:
+            out = self._undistort_few(target)
+            if out is not None:
+                return out
         xy = target.copy()
         for _ in range(_UNDISTORT_ITERS):
             res = target - self.distort_normalized(xy)
@@ -152,6 +158,54 @@ class PinholeCamera:
         # Reject non-convergence and roots beyond the fold of the lens model (det J <= 0).
         bad = ~(res < 1e-9 / max(self.fx, self.fy)) | ~(a * d - b * c > 0)
         return np.where(bad[..., None], np.nan, xy)
+
+    def _undistort_few(self, target: np.ndarray) -> np.ndarray | None:
+        """:meth:`undistort_normalized` of a few points (N, 2) in Python floats: the array path's arithmetic
+        operation for operation (the same Newton steps, the same stop when every point has converged, the
+        same rejection), so the same bits without numpy's per-call cost. None where a division by zero would
+        raise (numpy gives inf / NaN there): the caller takes the array path."""
+        k1, k2, p1, p2, k3, k4, k5, k6 = self.dist
+        tp1, tp2, sp1, sp2, tk2, hk3, tk5, hk6 = 2.0 * p1, 2.0 * p2, 6.0 * p1, 6.0 * p2, 2.0 * k2, 3.0 * k3, 2.0 * k5, 3.0 * k6
+        tol = _UNDISTORT_TOL
+
+        def residual(tx, ty, x, y):  # target - distort_normalized(x, y)
+            r2 = x * x + y * y
+            g = (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1.0 + r2 * (k4 + r2 * (k5 + r2 * k6)))
+            return (tx - (x * g + tp1 * x * y + p2 * (r2 + 2.0 * x * x)),
+                    ty - (y * g + p1 * (r2 + 2.0 * y * y) + tp2 * x * y))
+
+        def jacobian(x, y):  # _distortion_jacobian
+            r2 = x * x + y * y
+            num = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+            den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6))
+            dnum = k1 + r2 * (tk2 + hk3 * r2)
+            dden = k4 + r2 * (tk5 + hk6 * r2)
+            g, dg = num / den, (dnum * den - num * dden) / (den * den)
+            b = 2.0 * x * y * dg + tp1 * x + tp2 * y
+            return g + 2.0 * x * x * dg + tp1 * y + sp2 * x, b, b, g + 2.0 * y * y * dg + sp1 * y + tp2 * x
+
+        tgt = target.tolist()
+        pts = [list(p) for p in tgt]
+        try:
+            for _ in range(_UNDISTORT_ITERS):
+                res = [residual(tx, ty, p[0], p[1]) for (tx, ty), p in zip(tgt, pts)]
+                if all(not (abs(rx) > tol or abs(ry) > tol) for rx, ry in res):
+                    break
+                for p, (rx, ry) in zip(pts, res):
+                    a, b, c, d = jacobian(p[0], p[1])
+                    det = a * d - b * c
+                    p[0], p[1] = p[0] + (d * rx - b * ry) / det, p[1] + (a * ry - c * rx) / det
+            lim = 1e-9 / max(self.fx, self.fy)
+            nan = float("nan")
+            out = []
+            for (tx, ty), (x, y) in zip(tgt, pts):
+                rx, ry = residual(tx, ty, x, y)
+                a, b, c, d = jacobian(x, y)
+                ok = abs(rx) < lim and abs(ry) < lim and a * d - b * c > 0
+                out.append((x, y) if ok else (nan, nan))
+        except ZeroDivisionError:
+            return None
+        return np.array(out, float).reshape(target.shape)
 
     # --- projection ------------------------------------------------------------------------
 

@@ -139,15 +139,26 @@ def level_deck_geometry(x: np.ndarray, gyro: np.ndarray, roll: float, pitch: flo
 
     Returns (p, v) of the vehicle relative to the deck in the heading-free level frame, the deck's attitude
     there ``Cd0``, the level-deck yaw ``psi_d`` (so ``rot_z(psi_d).T @ p`` is the level-deck position), and
-    the deck's body rates.
+    the deck's body rates. The last call's result is kept and returned again for the same ``x`` and ``gyro``
+    arrays (identity) and the same roll and pitch: the results' arrays must not be changed in place.
     """
+    last = _LEVEL_LAST[0]  # the mission and the controller ask for the same estimate's in one step
+    if last is not None and last[0] is x and last[1] is gyro and last[2] == roll and last[3] == pitch:
+        return last[4]
     Ch0 = euler_to_dcm([roll, pitch, 0.0])
     r, e, v, wd = x[0:3], x[3:6], x[6:9], x[9:12]
     p = -Ch0 @ r
     vel = -Ch0 @ (v + cross3(gyro, r))
     Cd0 = Ch0 @ euler_to_dcm(e).T
     psi_d = float(dcm_to_euler(Cd0)[2])
-    return p, vel, Cd0, psi_d, wd
+    out = p, vel, Cd0, psi_d, wd
+    _LEVEL_LAST[0] = (x, gyro, roll, pitch, out)
+    return out
+
+
+#: the last ``level_deck_geometry`` call: (x, gyro, roll, pitch, result); its arrays are read, never changed in
+#: place, by its callers (the deck mission and controller)
+_LEVEL_LAST: list = [None]
 
 
 def touchdown_target(Cd0: np.ndarray, wd: np.ndarray, psi_d: float, t_go: float, landing_point: np.ndarray,

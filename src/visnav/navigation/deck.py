@@ -36,6 +36,7 @@ Tuning comes from :class:`DeckNavConfig` alone: the ship process noise from ``fi
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field, replace
 
@@ -52,6 +53,8 @@ from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
 
 G = 9.81
+_GRAVITY_NED = np.array([0.0, 0.0, G])
+_GRAVITY_NED.flags.writeable = False
 DIVERGED_SIGMA_M, DIVERGED_SIGMA_MPS = 0.5, 0.5  # the restart's least position / velocity sigma per axis
 #: centroid error of the rendered spots alone, found by ``find_blobs`` (measured: 0.0033 deg at f = 420 px)
 RENDER_CENTROID_PX = 0.025
@@ -264,7 +267,12 @@ class DeckNavigator(CommandDispatch):
         recent = [f for f in self._frames if f[0] > t - 1.0]
         used = [f[1] for f in recent]
         rms = np.array([f[2] for f in recent], float)
-        rms_1s = float(np.sqrt(np.nanmean(rms**2))) if np.isfinite(rms).any() else float("nan")
+        rms_1s = float("nan")
+        if np.isfinite(rms).any():  # np.nanmean's own steps (NaN -> 0, sum, / count): its value, not its overhead
+            sq = rms**2
+            gone = np.isnan(sq)
+            sq[gone] = 0.0
+            rms_1s = float(np.sqrt(sq.sum() / (sq.size - int(gone.sum()))))
         conv = (len(recent) >= 5 and min(used) >= 3 and bool(rms_1s <= self.cfg.converged_bearing_rms))
         h = DeckHealth(source="camera", tracking=conv, rejected_samples=self.stats.imu_dropped,
                        lights_used=self.stats.lights_used_last, frames_1s=len(recent),
@@ -319,15 +327,15 @@ class DeckNavigator(CommandDispatch):
         process noise cannot hold (it does not accumulate) and that ``P`` therefore lacks. It adds
         ``[r]x Sigma_gyro [r]x^T`` to the velocity block (``v = (v + w x r) - w x r``, d/dw = ``[r]x``).
         """
-        r = self.ukf.x[0:3]
-        S = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+        r0, r1, r2 = self.ukf.x[0:3].tolist()
+        S = np.array([[0.0, -r2, r1], [r2, 0.0, -r0], [-r1, r0, 0.0]])
         P = self.ukf.P.copy()
         P[6:9, 6:9] += S @ self.imu_cov[3:6, 3:6] @ S.T
         return P
 
     def _attitude(self, m: AttitudeSample) -> None:
         rp = np.asarray(m.euler, float)[:2]
-        if np.all(np.isfinite(rp)):
+        if np.isfinite(rp).all():
             self._rp = rp
 
     def _drop_imu(self, reason: str, t: float) -> None:
@@ -338,7 +346,7 @@ class DeckNavigator(CommandDispatch):
     def _imu(self, m: ImuSample) -> None:
         t = float(m.t)
         accel, gyro = np.asarray(m.accel, float), np.asarray(m.gyro, float)
-        if not (np.isfinite(t) and np.all(np.isfinite(accel)) and np.all(np.isfinite(gyro))):
+        if not (math.isfinite(t) and np.isfinite(accel).all() and np.isfinite(gyro).all()):
             return self._drop_imu("not finite", t)
         if self._rp is None:
             return self._drop_imu("no attitude yet", t)
@@ -352,7 +360,7 @@ class DeckNavigator(CommandDispatch):
         raw = (gyro - self._gyro) / dt_imu
         a = dt_imu / (self.cfg.gyro_dot_tau + dt_imu)
         self._gyro_dot = self._gyro_dot + a * (raw - self._gyro_dot)
-        gb = euler_to_dcm([self._rp[0], self._rp[1], 0.0]).T @ np.array([0.0, 0.0, G])
+        gb = euler_to_dcm([self._rp[0], self._rp[1], 0.0]).T @ _GRAVITY_NED
         u = dm.ImuInput(accel=accel, gyro=gyro, gyro_dot=self._gyro_dot, gravity_body=gb)
         prev_accel, prev_gyro = self._accel, self._gyro
         self._t_imu, self._gyro, self.last_gyro, self._accel, self._u = t, gyro, gyro, accel, u
@@ -553,11 +561,20 @@ class DeckNavigator(CommandDispatch):
 
     def expected_bearings(self):
         """Predicted bearings (L, 2) of every light and their covariances (L, 2, 2) with R."""
+        return self._expected()[:2]
+
+    def _expected(self):
+        """``expected_bearings`` and the sigma points and light vectors it was computed from (the update of
+        the same (x, P) takes them instead of drawing them again: the same arrays)."""
         L = len(self.lights)
         R = np.eye(2 * L) * self.bearing_var
-        zp, S, _, _ = self.ukf.predict_measurement(R, dm.bearings_only, lights=self.lights, cam=self.cam)
-        blocks = np.stack([S[2 * j:2 * j + 2, 2 * j:2 * j + 2] for j in range(L)])
-        return zp.reshape(L, 2), blocks
+        sig = self.ukf.sigma_points()
+        vec = dm.light_vectors(sig, self.lights, self.cam)
+        zp, S, _, _ = self.ukf.predict_measurement(R, dm.bearings_only, sigmas=sig, lights=self.lights, cam=self.cam,
+                                                   vectors=vec)
+        j = np.arange(L)
+        blocks = S.reshape(L, 2, L, 2)[j, :, j, :]  # the 2x2 diagonal blocks (L, 2, 2), a fresh array
+        return zp.reshape(L, 2), blocks, sig, vec
 
     def fuse_bearings(self, bearings, rates) -> int:
         """Correct at the filter's time with bearings (M, 2) and rates (M, 2) already extracted (NaN rows
@@ -572,7 +589,7 @@ class DeckNavigator(CommandDispatch):
         r = np.asarray(rates, float).reshape(-1, 2)
         if r.shape != b.shape:
             raise ValueError(f"bearings {b.shape} and rates {r.shape} differ in shape")
-        ok = np.all(np.isfinite(b), axis=1)
+        ok = np.isfinite(b).all(axis=1)
         b, r = b[ok], r[ok]
         try:
             return self._correct_checked(b, r, int(ok.sum()), gyro, replay)
@@ -590,11 +607,11 @@ class DeckNavigator(CommandDispatch):
             st.empty_frames += 1
             st.lights_used_last = 0
             return 0, 0
-        zp, S = self.expected_bearings()
+        zp, S, sig, vec = self._expected()
         assign = associate(b, zp, S, self.gate)
-        rejected = int(np.sum(assign < 0))
+        rejected = int((assign < 0).sum())
         st.blobs_rejected += rejected
-        m = np.nonzero(assign >= 0)[0]
+        m = (assign >= 0).nonzero()[0]
         if m.size == 0 and self._lockout(len(b), replay):
             return self._refuse(b, r, n_ok, gyro)
         if m.size == 0:
@@ -602,18 +619,19 @@ class DeckNavigator(CommandDispatch):
             if not replay:
                 self.integrity.record(self._t, "bearing", float("nan"), 0, False)
             return 0, rejected
-        m = m[np.argsort(assign[m])]
+        m = m[assign[m].argsort()]
         idx = assign[m]
-        has_rate = np.all(np.isfinite(r[m]), axis=1)
+        has_rate = np.isfinite(r[m]).all(axis=1)
         ridx = idx[has_rate]
         z = np.concatenate([b[m].ravel(), r[m][has_rate].ravel()])
-        R = np.diag(np.r_[np.full(2 * idx.size, self.bearing_var), np.full(2 * ridx.size, self.rate_var)])
-        applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), lights=self.lights,
-                                  cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx)
+        R = np.diag(np.concatenate([np.full(2 * idx.size, self.bearing_var), np.full(2 * ridx.size, self.rate_var)]))
+        applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
+                                  lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
         if not applied and ridx.size:  # the rates (frame-to-frame blob matches) are the fragile part: try without
             nb = 2 * idx.size
             applied = self.ukf.update(z[:nb], R[:nb, :nb], hx=dm.measurement_model, max_nis=self._max_nis(nb),
-                                      lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx[:0])
+                                      sigmas=sig, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
+                                      rate_idx=ridx[:0], vectors=vec)
             ridx = ridx[:0]
             z = z[:nb]
         if not applied and self._lockout(len(b), replay):
@@ -632,7 +650,7 @@ class DeckNavigator(CommandDispatch):
         self.last_nis, self.last_dof = self.ukf.nis, int(z.size)
         nb = 2 * idx.size
         yb = self.ukf.y[:nb]
-        self.last_bearing_rms = float(np.sqrt(np.mean(yb * yb)))
+        self.last_bearing_rms = float(np.sqrt((yb * yb).sum() / yb.size))  # (the mean's own steps)
         # the bearing and rate parts' own NIS (marginal blocks of S) for the integrity monitor
         S_all, y = self.ukf.S, self.ukf.y
         self.integrity.record(self._t, "bearing", float(yb @ np.linalg.solve(S_all[:nb, :nb], yb)), nb, True)

@@ -15,7 +15,6 @@ import numpy as np
 from visnav.estimation.deck import wrap_state
 from visnav.measurements import RelativeStateSample
 from visnav.sensors.base import TruthAt
-from visnav.world.deck import relative_state
 
 
 class RelativeStateSensor:
@@ -27,7 +26,7 @@ class RelativeStateSensor:
             raise ValueError("a noisy relative-state sensor needs a random generator")
 
     def sample(self, t: float, truth_at: TruthAt, world) -> RelativeStateSample:
-        x = relative_state(truth_at(t), world.motion.state(t))
-        if np.any(self.sigma > 0):
+        x = world.relative(truth_at(t), world.motion.state(t))
+        if (self.sigma > 0).any():
             x = wrap_state(x + self.sigma * self.rng.standard_normal(12))
         return RelativeStateSample(t=t, state=x, sigma=self.sigma.copy(), source=self.source)

@@ -33,7 +33,7 @@ from visnav.sim.streams import DECK_STREAMS
 from visnav.vehicles.base import Environment
 from visnav.vehicles.multirotor import Multirotor, MultirotorParams
 from visnav.world.wind import SteadyWind, Wind
-from visnav.world.deck import DeckMotion, DeckWorld, relative_state
+from visnav.world.deck import DeckMotion, DeckWorld
 
 #: the mission and controller rate [Hz]
 CONTROL_HZ = 50.0
@@ -61,6 +61,7 @@ class DeckContact:
         self.params, self.cfg, self.record = params, cfg, record
         self.landing_point = np.asarray(cfg.guidance.landing_point_m, float)
         self._t, self._ds = None, None
+        self._gear_h = None
         self.status = IntegrityStatus(record)
 
     def deck(self, t: float):
@@ -69,8 +70,13 @@ class DeckContact:
         return self._ds
 
     def gear_height(self, ds) -> float:
-        """Height of the gear above the deck plane, along the deck normal."""
-        return float(-(ds.C[:, 2] @ (self.vehicle.gear_point() - ds.position)))
+        """Height of the gear above the deck plane, along the deck normal (kept for the last vehicle and deck
+        states: the log, the contact check and the environment ask for the same step's)."""
+        s = self.vehicle.state
+        last = self._gear_h
+        if last is None or last[0] is not s or last[1] is not ds:
+            last = self._gear_h = (s, ds, float(-(ds.C[:, 2] @ (self.vehicle.gear_point() - ds.position))))
+        return last[2]
 
     def environment(self, k: int, t: float) -> Environment:
         p = self.params
@@ -100,7 +106,7 @@ class DeckContact:
     def log(self, step) -> None:
         t, cmd = step.t, step.command
         ds = self.deck(t)
-        x_true = relative_state(self.truth.latest, ds)
+        x_true = self.world.relative(self.truth.latest, ds)
         est = self.nav.estimate(t)
         x, P = est.state, est.covariance
         err = dm.residual_x(x_true[None, :], x[None, :])[0]

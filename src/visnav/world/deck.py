@@ -95,8 +95,8 @@ class DeckMotion:
     def displacement(self, t: float):
         """(d, d_dot) of the six axes at time t (eq. 5.11 and its derivative)."""
         arg = self.w * t + self.ph
-        d = np.sum(self.a * np.sin(arg), axis=1)
-        dd = np.sum(self.a * self.w * np.cos(arg), axis=1)
+        d = (self.a * np.sin(arg)).sum(axis=1)
+        dd = (self.a * self.w * np.cos(arg)).sum(axis=1)
         return d, dd
 
     def state(self, t: float) -> DeckState:
@@ -155,6 +155,14 @@ class DeckWorld:
         if 0 <= self.hide_light < len(self.lights) and t >= self.hide_after_s:
             return np.delete(self.lights, self.hide_light, axis=0)
         return self.lights
+
+    def relative(self, vehicle, ds: DeckState) -> np.ndarray:
+        """``relative_state(vehicle, ds)``, kept for the last pair of states (one step's motion capture sample
+        and truth log ask for the same pair; the states are never changed in place): a fresh copy each call."""
+        last = getattr(self, "_relative", None)
+        if last is None or last[0] is not vehicle or last[1] is not ds:
+            last = self._relative = (vehicle, ds, relative_state(vehicle, ds))
+        return last[2].copy()
 
     @staticmethod
     def to_ned(ds: DeckState, points: np.ndarray) -> np.ndarray:
