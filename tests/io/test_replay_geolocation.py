@@ -2,8 +2,8 @@
 
 A 20 s mav-geolocation flight (the operator's click, frames and 5 Hz telemetry) is recorded; the
 replay's navigator must make the same samples and the same recursive-least-squares target estimate
-after each (<= 1e-6 m: OpenCV's correlation scatters ~1e-8..1e-7 m between identical feeds, see
-tests/navigation/test_geolocation_from_a_list.py), and end on the closed loop's final estimate.
+after each, bit for bit (see tests/navigation/test_geolocation_from_a_list.py), and end on the closed
+loop's final estimate.
 Control: the same recording without every other frame gives other samples and another estimate.
 """
 
@@ -39,10 +39,13 @@ def test_geolocation_replay_reproduces_the_closed_loop(geo_rec):
     ea, eb = np.asarray(a["est_reg"], float), np.asarray(b["est_reg"], float)
     ok = np.isfinite(ea[:, 0])
     assert ok.sum() >= 5 and np.array_equal(ok, np.isfinite(eb[:, 0]))
-    assert np.max(np.abs(ea[ok] - eb[ok])) <= 1e-6
+    np.testing.assert_array_equal(eb, ea)
+    for k in ("reg", "quality", "peak"):
+        np.testing.assert_array_equal(b[k], a[k], err_msg=k)
     final = np.asarray(rec.run.log.get("geoloc_result")["est_reg"], float).reshape(-1)
     e = res.log.get("estimate")
-    assert e["valid"][-1] and np.max(np.abs(np.asarray(e["position"])[-1, :2] - final)) <= 1e-6
+    assert e["valid"][-1]
+    np.testing.assert_array_equal(np.asarray(e["position"])[-1, :2], final)
     m = res.metrics
     assert m["frames_used"] == rec.counts["frames"] == 100 and m["frames_dropped"] == 0
     assert 0 < m["ate_rmse_m"] < 10.0  # target estimate against the true target (truth.csv)

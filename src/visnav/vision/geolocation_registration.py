@@ -32,11 +32,19 @@ __all__ = ["GeoRegistration", "GeoMatch", "sobel_edges", "map_based_target", "na
 
 
 def sobel_edges(gray: np.ndarray) -> np.ndarray:
-    """Sobel gradient magnitude (float32) of a grey image (Fig. 7.3 'Sobel edge detector')."""
+    """Sobel gradient magnitude (float32) of a grey image (Fig. 7.3 'Sobel edge detector').
+
+    The magnitude is ``sqrt(gx*gx + gy*gy)`` in float32 by numpy (each operation correctly rounded),
+    not ``cv2.magnitude``: OpenCV hands that to IPP where it has it, whose result (within 2 ulp)
+    depends on the address of the output buffer (mod 64 bytes), i.e. on the heap of the process,
+    which made the same seed give other registrations in another process."""
     g = np.asarray(gray, np.float32)
     gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3)
-    return cv2.magnitude(gx, gy)
+    np.multiply(gx, gx, out=gx)
+    np.multiply(gy, gy, out=gy)
+    np.add(gx, gy, out=gx)
+    return np.sqrt(gx, out=gx)
 
 
 def nadir_dcm(heading: float) -> np.ndarray:
