@@ -4,10 +4,14 @@ maps of ../shared/data (20 seeds each), the one-frame case, and the Hough-alignm
 is built from it by hand.
 
     PYTHONPATH=src nice -n 10 python scripts/geolocation_campaign.py --out runs/geoloc-campaign.json \
-        [--seeds 20] [--hough-seeds 10] [--single-seeds 5] [--workers 2] [--parts main,hough,single,thesis]
+        [--seeds 20] [--hough-seeds 10] [--single-seeds 5] [--workers 2] [--parts main,hough,single,thesis] \
+        [--set KEY=VALUE ...]
+
+``--set`` applies to every flight, e.g. the airframe of rounds 1-4: ``--set vehicle.span_m=1.1 --set
+vehicle.airspeed_mps=13 --set mission.control.half_length_m=80 --set mission.control.l1_m=30``.
 
 Target placement (documented in docs/geolocation.md): the real maps are small (199 x 519 m and
-596 x 173 m) against a 70 x 56 m footprint at 70 m, so the figure-eight (half length 80 m) runs along
+596 x 173 m) against a 70 x 56 m footprint at 70 m, so the figure-eight (half length 160 m) runs along
 the map's long side and the truck sits where a frame around it lies on the map: on the gravel road of
 the column map, in the forest clearing behind the shore of the strip map, on a road of the rural map.
 """
@@ -47,16 +51,16 @@ def one(job):
             **{k: r.metrics.get(k) for k in KEYS}}
 
 
-def jobs(parts, seeds, hough_seeds, single_seeds):
-    maps = {k: v for k, v in MAPS.items() if k == "rural" or DATA.is_dir()}
+def jobs(parts, seeds, hough_seeds, single_seeds, extra=()):
+    maps = {k: v + list(extra) for k, v in MAPS.items() if k == "rural" or DATA.is_dir()}
     if len(maps) < len(MAPS):
         print(f"real maps skipped: {DATA} not found", file=sys.stderr)
     out = []
     if "main" in parts:
         out += [("main", name, s, ov, "mav-geolocation") for s in seeds for name, ov in maps.items()]
     if "hough" in parts:  # Algorithm 1 against the telemetry heading alone, +-30 deg of heading error
-        out += [(f"hough-{h}", "rural", s, ["mission.telemetry.extra_heading_deg=30", f"mission.registration.hough={h}"],
-                 "mav-geolocation") for s in hough_seeds for h in ("true", "false")]
+        out += [(f"hough-{h}", "rural", s, ["mission.telemetry.extra_heading_deg=30", f"mission.registration.hough={h}",
+                                            *extra], "mav-geolocation") for s in hough_seeds for h in ("true", "false")]
     if "single" in parts:
         out += [("single", name, s, ov, "mav-geolocation-single") for s in single_seeds for name, ov in maps.items()]
     if "thesis" in parts:  # Fig. 7.3 as printed: no scale / rotation refinement, no gating, no quality gate
@@ -75,9 +79,11 @@ def main() -> None:
     ap.add_argument("--hough-seeds", type=int, default=10)
     ap.add_argument("--single-seeds", type=int, default=5)
     ap.add_argument("--parts", default="main,hough,single")
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                    help="override for every flight (repeatable)")
     a = ap.parse_args()
     todo = jobs(a.parts.split(","), list(range(1, a.seeds + 1)), list(range(1, a.hough_seeds + 1)),
-                list(range(1, a.single_seeds + 1)))
+                list(range(1, a.single_seeds + 1)), a.overrides)
     out = Path(a.out)
     done = json.loads(out.read_text()) if out.exists() else []
     seen = {(d["part"], d["map"], d["seed"]) for d in done}

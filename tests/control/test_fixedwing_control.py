@@ -85,3 +85,42 @@ def test_scalar_clip_equals_numpy_clip():
                 got = clip(x, lo, hi)
                 assert (math.isnan(got) and math.isnan(want)) or (got == want and math.copysign(1, got)
                                                                    == math.copysign(1, want))
+
+
+def test_scaled_gains_carry_the_loops_to_the_pingwing():
+    """The geo-location MAV's gains: the CONDOR gains tuned on the 1.1 m airframe at 13 m/s, scaled by the
+    control power; exactly the same gains on the reference itself."""
+    from dataclasses import replace
+
+    from visnav.control.fixedwing import control_power, scaled_gains
+    from visnav.vehicles.fixedwing import micro_params
+
+    ref, ping = micro_params(0.434, 1.1, 13.0), micro_params()
+    g = InnerGains()
+    assert scaled_gains(g, ref, 13.0, ref, 13.0) == g
+    s = scaled_gains(g, ping, 19.0, ref, 13.0)
+    (a0, e0, r0), (a1, e1, r1) = control_power(ref, 13.0), control_power(ping, 19.0)
+    assert a1 > 4 * a0 and e1 > 30 * e0  # the small, fast airframe
+    assert s.kp_phi * a1 == pytest.approx(g.kp_phi * a0) and s.kd_theta * e1 == pytest.approx(g.kd_theta * e0)
+    assert s.kp_psi * r1 == pytest.approx(g.kp_psi * r0) and s.kp_theta == g.kp_theta
+
+    def fly(gains, seconds=20.0):
+        """A 35 deg-bank turn at 19 m/s and 70 m on the autopilot at 50 Hz, dynamics 50 Hz (the scenario's)."""
+        tr = trim(ping, 19.0)
+        m = FixedWingModel.from_trim(ping, tr, [0, 0, -70.0], 0.0)
+        ap = FixedWingAutopilot(gains, tr.controls)
+        out = []
+        for _ in range(int(seconds / 0.02)):
+            x = m.x
+            air = AirData(x[6], x[7], x[9], x[10], x[11], -x[2], m.air["Va"] or 19.0, float(m.air["specific_force"][1]))
+            u, _ = ap.law(0.02, air, 1.0, None, 19.0, 70.0, 19.0)
+            m.step(u, 0.02, Environment(np.zeros(3)))
+            out.append((x[6], -x[2], m.air["Va"]))
+        return np.array(out)
+
+    h = fly(s)
+    last = h[-250:]
+    assert np.degrees(np.abs(last[:, 0] - math.radians(35.0))).max() < 2.0  # the bank limit, held
+    assert np.abs(last[:, 1] - 70.0).max() < 2.0 and np.abs(last[:, 2] - 19.0).max() < 0.5
+    with pytest.raises((FloatingPointError, ValueError, OverflowError)):  # the unscaled gains: the 50 Hz roll and pitch loops diverge
+        fly(replace(g))

@@ -163,3 +163,45 @@ def test_air_data_alone_is_bit_identical_to_the_derivative_call():
         slow[3:6] = (rng.normal(0, 0.6), rng.normal(0, 0.6), rng.normal(0, 0.6))  # Va below 1 m/s
         assert _air_fast(m._k, slow, uc, w) == _derivatives_fast(m._k, slow, uc, w, air=True)[1]
         m.step(u, 0.01, Environment(np.asarray(w, float)))
+
+
+def test_micro_params_is_the_pingwing_and_trims_at_its_cruise_speed():
+    """Seed 002 §7.4.1: 0.41 m span, 434 g, 19 m/s cruise; the wing area (not documented) kept at 0.079 m^2."""
+    from visnav.vehicles.fixedwing import micro_params
+
+    p = micro_params()
+    assert (p.b, p.mass) == (0.41, 0.434)
+    # the chord is the area over the span (the Aerosonde table's c = 0.18994 m is its S / b to 2e-5)
+    assert p.S == pytest.approx(0.0794, abs=1e-4) and p.c == pytest.approx(p.S / p.b, rel=1e-4)
+    tr = trim(p, 19.0)
+    assert tr.residual < 1e-9
+    assert -3.0 < math.degrees(tr.alpha) < 5.0  # a moderate angle of attack (Aerosonde camber: -0.9 deg)
+    assert 0.45 < tr.controls.throttle < 0.65  # the motor constant follows the cruise speed
+    assert abs(math.degrees(tr.controls.elevator)) < 10.0
+    # a coordinated turn at the autopilot's 35 deg bank limit: 53 m radius at 19 m/s
+    R = 19.0**2 / (9.81 * math.tan(math.radians(35.0)))
+    tt = trim(p, 19.0, turn_radius=R)
+    assert tt.residual < 1e-9 and math.degrees(tt.state[6]) == pytest.approx(35.0, abs=1.0)
+    assert tt.controls.throttle < 0.7 and max(abs(tt.controls.aileron), abs(tt.controls.rudder)) < math.radians(5)
+    # why the area is kept: the Aerosonde scaled geometrically to 0.41 m (0.011 m^2) needs C_L 1.7 at 19 m/s
+    from dataclasses import replace
+
+    k = 0.41 / P.b
+    geometric = replace(p, S=P.S * k * k, c=P.c * k, S_prop=P.S_prop * k * k)
+    assert math.degrees(trim(geometric, 19.0).alpha) > 15.0
+
+
+def test_micro_params_reference_is_the_airframe_of_rounds_1_to_4():
+    """span 1.1 m at 13 m/s is, to the bit, the geometrically scaled Aerosonde the mission flew before."""
+    from dataclasses import replace
+
+    from visnav.vehicles.fixedwing import micro_params
+
+    base = FixedWingParams()
+    k = 1.1 / base.b
+    sm = 0.434 / 13.5 * k * k
+    old = replace(base, mass=0.434, Jx=0.8244 * sm, Jy=1.135 * sm, Jz=1.759 * sm, Jxz=0.1204 * sm,
+                  S=base.S * k * k, b=1.1, c=base.c * k, S_prop=base.S_prop * k * k, k_motor=25.0)
+    assert micro_params(0.434, 1.1, 13.0) == old
+    tr = trim(old, 13.0)
+    assert math.degrees(tr.alpha) == pytest.approx(3.1, abs=0.05) and tr.controls.throttle == pytest.approx(0.55, abs=0.01)

@@ -19,7 +19,7 @@ pitches down) are ``delta_a = -Delta A``, ``delta_r = -Delta R``, ``delta_e = De
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -137,3 +137,28 @@ class FixedWingAutopilot:
                      rudder=-dR + self.trim.rudder, throttle=_clip(thr, 0.0, 1.0))
         info = {"phi_ref": phi_ref, "theta_ref": theta_ref, "psidot": psidot, "bank_hold": self.bank_hold_active}
         return u, info
+
+
+def control_power(params, airspeed_mps: float) -> tuple[float, float, float]:
+    """Angular acceleration [rad/s^2] per radian of aileron, elevator and rudder at ``airspeed_mps``
+    (Beard & McLain eq. 4.15-4.16 with the deflection terms alone, the cross inertia ignored):
+    q S b C_l_da / Jx, q S c C_m_de / Jy, q S b C_n_dr / Jz (magnitudes)."""
+    p = params
+    qs = 0.5 * p.rho * airspeed_mps * airspeed_mps * p.S
+    return (abs(qs * p.b * p.C_l_da / p.Jx), abs(qs * p.c * p.C_m_de / p.Jy), abs(qs * p.b * p.C_n_dr / p.Jz))
+
+
+def scaled_gains(gains: InnerGains, params, airspeed_mps: float, ref_params, ref_airspeed_mps: float) -> InnerGains:
+    """``gains`` (tuned on ``ref_params`` at ``ref_airspeed_mps``) carried to another airframe: each surface's
+    gains times the ratio of the reference's control power to this airframe's (``control_power``), so that
+    an error commands the same angular acceleration as on the reference: aileron (``kp_phi``, ``kd_phi``),
+    rudder (``kp_psi``, ``kp_ay``, ``ki_ay``), elevator damping (``kd_theta``). The elevator's proportional
+    gain ``kp_theta`` stays: the pitch is held by the airframe's own static stability, so an elevator
+    deflection sets an angle of attack (``C_m_de / C_m_alpha``, dimensionless) whatever the control power,
+    and the same gain asks the same angle of attack per degree of pitch error (scaled with the rest, the
+    pitch loop of the 0.41 m PingWing answers ~30x slower and the altitude hold sinks it). The ratios are
+    exactly 1 for the reference itself; the outer loops (altitude, airspeed, heading rate) are unchanged."""
+    a, e, r = (x0 / x1 for x0, x1 in zip(control_power(ref_params, ref_airspeed_mps),
+                                          control_power(params, airspeed_mps)))
+    return replace(gains, kp_phi=gains.kp_phi * a, kd_phi=gains.kd_phi * a, kp_psi=gains.kp_psi * r,
+                   kp_ay=gains.kp_ay * r, ki_ay=gains.ki_ay * r, kd_theta=gains.kd_theta * e)

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from visnav.control.fixedwing import FixedWingAutopilot, InnerGains
+from visnav.control.fixedwing import FixedWingAutopilot, InnerGains, scaled_gains
 from visnav.geometry.camera import PinholeCamera
 from visnav.guidance.figure_eight import FigureEight
 from visnav.measurements import Frame, OperatorClick, TelemetrySample, TurnReference
@@ -34,7 +34,7 @@ from visnav.sim.condor_parts import floor
 from visnav.sim.parts import MissionParts, VehicleTruth
 from visnav.sim.rmax_parts import WindEnvironment
 from visnav.sim.streams import GEOLOC_STREAMS
-from visnav.vehicles.fixedwing import micro_params, trim
+from visnav.vehicles.fixedwing import MICRO_REFERENCE_SPAN_M, micro_params, trim
 from visnav.world.appearance import another_day
 from visnav.world.maps import GeoImage, degrade_reference
 from visnav.world.scene import World
@@ -269,10 +269,13 @@ def build(ctx) -> MissionParts:
     if ctx.navigator_wrapper is not None:
         nav = ctx.navigator_wrapper(nav)
     mission = GeolocationMission(cfg, path, airspeed_mps=va, recorder=record)
-    params = micro_params(sc.vehicle.mass_kg, sc.vehicle.span_m)
+    params = micro_params(sc.vehicle.mass_kg, sc.vehicle.span_m, va)
     start, heading = path.start_pose()
     vehicle = trimmed_aircraft(params, va, np.array([start[0], start[1], -ctl.altitude_m]), heading, wind)
-    gains = InnerGains(bank_limit=math.radians(ctl.bank_limit_deg))
+    # the CONDOR inner-loop gains, tuned on the 1.1 m airframe at 13 m/s (rounds 1-4), carried to this one by
+    # its control power (the PingWing's surfaces move it 6-40x faster; unscaled, the 50 Hz loops diverge)
+    gains = scaled_gains(InnerGains(bank_limit=math.radians(ctl.bank_limit_deg)), params, va,
+                         micro_params(sc.vehicle.mass_kg, MICRO_REFERENCE_SPAN_M, 13.0), 13.0)
     autopilot = FixedWingAutopilot(gains, trim(params, va).controls, rate_hz=50.0)
     # the autopilot flies on its own sensors (AHRS, gyros, accelerometers, pitot) and its telemetry's baro height
     ap_sensors = build_autopilot_sensors(sc.sensors, rng[8:11])
