@@ -34,7 +34,7 @@ from visnav.sim.condor_parts import floor
 from visnav.sim.parts import MissionParts, VehicleTruth
 from visnav.sim.rmax_parts import WindEnvironment
 from visnav.sim.streams import GEOLOC_STREAMS
-from visnav.vehicles.fixedwing import MICRO_REFERENCE_SPAN_M, micro_params, trim
+from visnav.vehicles.fixedwing import MICRO_REFERENCE_AIRSPEED_MPS, MICRO_REFERENCE_SPAN_M, micro_params, trim
 from visnav.world.appearance import another_day
 from visnav.world.maps import GeoImage, degrade_reference
 from visnav.world.scene import World
@@ -274,8 +274,9 @@ def build(ctx) -> MissionParts:
     vehicle = trimmed_aircraft(params, va, np.array([start[0], start[1], -ctl.altitude_m]), heading, wind)
     # the CONDOR inner-loop gains, tuned on the 1.1 m airframe at 13 m/s (rounds 1-4), carried to this one by
     # its control power (the PingWing's surfaces move it 6-40x faster; unscaled, the 50 Hz loops diverge)
-    gains = scaled_gains(InnerGains(bank_limit=math.radians(ctl.bank_limit_deg)), params, va,
-                         micro_params(sc.vehicle.mass_kg, MICRO_REFERENCE_SPAN_M, 13.0), 13.0)
+    ref = micro_params(sc.vehicle.mass_kg, MICRO_REFERENCE_SPAN_M, MICRO_REFERENCE_AIRSPEED_MPS)
+    gains = scaled_gains(InnerGains(bank_limit=math.radians(ctl.bank_limit_deg)), params, va, ref,
+                         MICRO_REFERENCE_AIRSPEED_MPS)
     autopilot = FixedWingAutopilot(gains, trim(params, va).controls, rate_hz=50.0)
     # the autopilot flies on its own sensors (AHRS, gyros, accelerometers, pitot) and its telemetry's baro height
     ap_sensors = build_autopilot_sensors(sc.sensors, rng[8:11])

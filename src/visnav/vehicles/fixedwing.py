@@ -504,9 +504,10 @@ def default_trim(Va: float = 17.0) -> tuple[FixedWingParams, Trim]:
 __all__ = ["FixedWingParams", "Controls", "FixedWingModel", "Trim", "trim", "derivatives", "default_trim"]
 
 
-#: span [m] of the airframe whose wing area and propeller disc ``micro_params`` keeps (rounds 1-4 of the
-#: geo-location mission flew this Aerosonde scaled geometrically to 1.1 m span, 13 m/s)
+#: span [m] and cruise speed [m/s] of the airframe whose wing area and propeller disc ``micro_params`` keeps
+#: (rounds 1-4 of the geo-location mission flew this Aerosonde scaled geometrically to 1.1 m span, at 13 m/s)
 MICRO_REFERENCE_SPAN_M = 1.1
+MICRO_REFERENCE_AIRSPEED_MPS = 13.0
 
 
 def micro_params(mass: float = 0.434, span: float = 0.41, cruise_mps: float = 19.0) -> FixedWingParams:
@@ -536,4 +537,4 @@ def micro_params(mass: float = 0.434, span: float = 0.41, cruise_mps: float = 19
     sm = mass / 13.5 * k * k  # inertia scale from the original Aerosonde (13.5 kg, span 2.8956 m)
     return replace(base, mass=mass, Jx=0.8244 * sm, Jy=1.135 * sm, Jz=1.759 * sm, Jxz=0.1204 * sm,
                    S=base.S * kr * kr, b=span, c=base.c * kr * (kr / k), S_prop=base.S_prop * kr * kr,
-                   k_motor=25.0 * cruise_mps / 13.0)
+                   k_motor=25.0 * cruise_mps / MICRO_REFERENCE_AIRSPEED_MPS)
