@@ -50,10 +50,11 @@ class MavTargetConfig(_M):
 class MavAirframeConfig(_M):
     kind: Literal["mav"] = "mav"
     mass_kg: float = Field(0.434, ge=0.2, le=2.0, description="PingWing, Table 7.1")
-    span_m: float = Field(0.41, ge=0.3, le=3.0, description="PingWing, §7.4.1 (wing area 0.079 m^2 kept for any "
-                          "span: vehicles/fixedwing.py micro_params); 1.1 with airspeed_mps 13: rounds 1-4")
-    airspeed_mps: float = Field(19.0, ge=11.0, le=25.0, description="PingWing cruise, §7.4.1; the motor constant "
-                                "follows it (about 55 % throttle in cruise)")
+    span_m: float = Field(1.1, ge=0.3, le=3.0, description="the issue's 12-15 m/s airframe (wing area 0.079 m^2 "
+                          "kept for any span: vehicles/fixedwing.py micro_params); 0.41: the PingWing of §7.4.1 "
+                          "(scenario mav-geolocation-pingwing)")
+    airspeed_mps: float = Field(13.0, ge=11.0, le=25.0, description="cruise; the motor constant follows it (about "
+                                "55 % throttle in cruise); 19: the PingWing's, §7.4.1")
 
 
 class MavCameraConfig(_M):
@@ -109,13 +110,13 @@ class MavTelemetryConfig(_M):
 
 class MavControlConfig(_M):
     altitude_m: float = Field(70.0, ge=30.0, le=300.0)
-    half_length_m: float = Field(160.0, ge=40.0, le=400.0, description="figure-eight half length = each lobe's "
-                                 "width: the turn diameter at the bank limit downwind (19 + 4 m/s at 35 deg: 154 m); "
-                                 "80 with the 13 m/s airframe of rounds 1-4")
+    half_length_m: float = Field(80.0, ge=40.0, le=400.0, description="figure-eight half length = each lobe's "
+                                 "width, at least the turn diameter at the bank limit downwind (13 + 4 m/s at 35 deg: "
+                                 "84 m; the PingWing's 19 + 4 m/s: 154 m, 160 in mav-geolocation-pingwing)")
     axis_deg: Optional[float] = Field(None, ge=-180.0, le=180.0, description="long axis from north; none: "
                                       "along the map's longer side")
-    l1_m: float = Field(45.0, ge=10.0, le=150.0, description="L1 guidance distance: 2.4 s ahead at 19 m/s (30 m "
-                        "at 13 m/s in rounds 1-4)")
+    l1_m: float = Field(30.0, ge=10.0, le=150.0, description="L1 guidance distance: 2.3 s ahead at 13 m/s (45 m, "
+                        "2.4 s at the PingWing's 19 m/s)")
     bank_limit_deg: float = Field(35.0, ge=10.0, le=50.0)
 
 
