@@ -107,23 +107,30 @@ def test_klt_worked_out_on_the_render_thread_flies_the_same_flight():
 
     sets = ["run.duration_s=16", "mission.gps_loss_s=3", "mission.settle_s=1"]
     where = {"main": 0, "worker": 0}
-    track = klt.KltTracker._track
+    flow, detect = klt.KltTracker._flow, klt.KltTracker._detect
+    detected = {"main": 0, "worker": 0}
 
     def counted(self, *a):
         where["main" if threading.current_thread() is threading.main_thread() else "worker"] += 1
-        return track(self, *a)
+        return flow(self, *a)
 
-    klt.KltTracker._track = counted
+    def counted_detect(self, *a):
+        detected["main" if threading.current_thread() is threading.main_thread() else "worker"] += 1
+        return detect(self, *a)
+
+    klt.KltTracker._flow, klt.KltTracker._detect = counted, counted_detect
     try:
         a = make_simulation(load_scenario("witas-homing", sets)).run()
-        with_prework = dict(where)
+        with_prework, detected_with = dict(where), dict(detected)
         sim = make_simulation(load_scenario("witas-homing", sets))
         sim.nav.frame_prework = None  # (the loop asks getattr: no work ahead)
         b = sim.run()
     finally:
-        klt.KltTracker._track = track
+        klt.KltTracker._flow, klt.KltTracker._detect = flow, detect
     assert a.error is None and b.error is None
     assert with_prework["worker"] >= 40 and with_prework["main"] <= 1
+    # the top-up detections too ran on the render thread, after their frames were delivered
+    assert detected_with["worker"] >= 40 and detected_with["main"] <= 2
     assert where["main"] - with_prework["main"] >= 40  # without it every frame was tracked on delivery
     for s in ("estimate", "odometry", "truth"):
         ea, eb = a.log.get(s), b.log.get(s)

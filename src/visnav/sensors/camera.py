@@ -241,7 +241,8 @@ class Camera:
         noise draws stay reproducible); the frame is planned here (its Python part) and rendered there by
         OpenCV, which releases the GIL, so it renders on the second core while the simulation steps on
         through the camera's latency. ``then(image)``, when given, runs there too, right after the frame
-        is rendered (a navigator's ``frame_prework``: work on the image ahead of its delivery)."""
+        is rendered (a navigator's ``frame_prework``: work on the image ahead of its delivery); a function it
+        returns runs there after the frame is handed over."""
         s = truth_at(t - self.delay_s)
         cam_pos, C_cn = self.mount.camera_pose(s.position, euler_to_dcm(s.euler))
         self.frames += 1
@@ -249,13 +250,20 @@ class Camera:
         if then is None:
             fut = executor.submit(self.renderer.execute, plan)
         else:
-            fut = executor.submit(_render_then, self.renderer.execute, plan, then)
+            fut = executor.submit(_render_then, self.renderer.execute, plan, then, executor)
         return PendingFrame(t=t, future=fut, index=self.frames * self.decimation)
 
 
-def _render_then(execute, plan, then) -> np.ndarray:
+def _render_then(execute, plan, then, executor) -> np.ndarray:
+    """Render, run ``then`` on the image; what ``then`` returns (more work on the frame that its delivery does
+    not wait for) is queued behind it on the same thread."""
     img = execute(plan)
-    then(img)
+    after = then(img)
+    if after is not None:
+        try:
+            executor.submit(after)
+        except RuntimeError:  # the run is ending (the pool shut down): whoever needs it works it out
+            pass
     return img
 
 

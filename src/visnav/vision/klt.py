@@ -6,6 +6,7 @@ away from the ones still tracked, so the set stays spread over the image.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import cv2
@@ -39,12 +40,21 @@ class KltTracker:
         self.min_eig = min_eigenvalue
         self.refill_below = 0.8
         self.prev_img: np.ndarray | None = None
-        self.pts: np.ndarray = np.zeros((0, 2), np.float32)
+        self._pts: np.ndarray | _TopUp = np.zeros((0, 2), np.float32)  # the features of prev_img
         self._ready: dict[int, tuple] = {}  # id(image) -> (image, state it started from, result): ``prework``
+
+    @property
+    def pts(self) -> np.ndarray:
+        """The features of the previous frame (its top-up detection done, here if not yet)."""
+        return _features(self._pts)
+
+    @pts.setter
+    def pts(self, value) -> None:
+        self._pts = value
 
     def reset(self) -> None:
         self.prev_img = None
-        self.pts = np.zeros((0, 2), np.float32)
+        self._pts = np.zeros((0, 2), np.float32)
 
     def _detect(self, img: np.ndarray, keep: np.ndarray) -> np.ndarray:
         need = self.max_features - len(keep)
@@ -63,37 +73,45 @@ class KltTracker:
         return np.vstack([keep, new])
 
     def track(self, img: np.ndarray) -> KltPairs:
-        """Track the features of the previous frame into ``img``; then top the set up from ``img``."""
+        """Track the features of the previous frame into ``img``; then top the set up from ``img`` (the top-up
+        detection runs when the features are next needed: it serves the next frame only)."""
         if img.ndim != 2 or img.dtype != np.uint8:
             raise ValueError(f"KltTracker needs a uint8 grey image, got {img.dtype} {img.shape}")
         ready = self._ready.pop(id(img), None)
         if len(self._ready) > 8:  # frames worked on but never tracked (a fault changed them)
             self._ready.clear()
-        if ready is not None and ready[0] is img and ready[1] is self.prev_img and ready[2] is self.pts:
-            pairs, pts = ready[3]  # worked out by ``prework`` from this very state and image
+        if ready is not None and ready[0] is img and ready[1] is self.prev_img and ready[2] is self._pts:
+            pairs, topup = ready[3], ready[4]  # worked out by ``prework`` from this very state and image
         else:
-            pairs, pts = self._track(self.prev_img, self.pts, img)
-        self.prev_img, self.pts = img, pts
+            pairs, kept = self._flow(self.prev_img, self._pts, img)
+            topup = _TopUp(self, img, kept)
+        self.prev_img, self._pts = img, topup
         return pairs
 
     def prework(self):
         """A function of the next image that tracks into it from the tracker's state now, off the caller's
         thread (the render thread, right after the frame is rendered); ``track`` takes its result when it is
         given that image while the state is still the one it started from, and otherwise works it out
-        itself (the same function of the same inputs: the result never depends on which thread did it)."""
-        prev, pts, ready = self.prev_img, self.pts, self._ready
+        itself (the same function of the same inputs: the result never depends on which thread did it).
+        It returns the frame's top-up detection, for the same thread to run after the frame is delivered."""
+        prev, pts, ready = self.prev_img, self._pts, self._ready
 
-        def work(img: np.ndarray) -> None:
+        def work(img: np.ndarray):
             if img.ndim == 2 and img.dtype == np.uint8:
-                ready[id(img)] = (img, prev, pts, self._track(prev, pts, img))  # (one atomic store)
+                pairs, kept = self._flow(prev, pts, img)
+                topup = _TopUp(self, img, kept)
+                ready[id(img)] = (img, prev, pts, pairs, topup)  # (one atomic store)
+                return topup.resolve
+            return None
 
         return work
 
-    def _track(self, prev_img: np.ndarray | None, pts: np.ndarray, img: np.ndarray) -> tuple[KltPairs, np.ndarray]:
-        """(pairs, the next feature set) from a state (previous image, its features) and a new image; pure."""
+    def _flow(self, prev_img: np.ndarray | None, pts, img: np.ndarray) -> tuple[KltPairs, np.ndarray]:
+        """(pairs, the features kept) from a state (previous image, its features) and a new image; pure."""
         empty = np.zeros((0, 2))
+        pts = _features(pts)
         if prev_img is None or len(pts) == 0:
-            return KltPairs(empty, empty, 0), self._detect(img, np.zeros((0, 2), np.float32))
+            return KltPairs(empty, empty, 0), np.zeros((0, 2), np.float32)
         p0 = pts.reshape(-1, 1, 2)
         p1, st, _ = cv2.calcOpticalFlowPyrLK(prev_img, img, p0, None, **self.lk)
         ok = st.ravel() == 1
@@ -105,4 +123,25 @@ class KltTracker:
         q = p1.reshape(-1, 2)
         ok &= (q[:, 0] >= 0) & (q[:, 0] < w) & (q[:, 1] >= 0) & (q[:, 1] < h)
         prev, curr = pts[ok].astype(float), q[ok].astype(float)
-        return KltPairs(prev, curr, len(pts)), self._detect(img, q[ok].astype(np.float32))
+        return KltPairs(prev, curr, len(pts)), q[ok].astype(np.float32)
+
+
+class _TopUp:
+    """A frame's feature set: the features kept plus the top-up detection on that frame, worked out once, by
+    whoever needs it first (the render thread after the delivery, or the next ``track``)."""
+
+    def __init__(self, tracker: KltTracker, img: np.ndarray, kept: np.ndarray):
+        self._tracker, self._img, self._kept = tracker, img, kept
+        self._lock = threading.Lock()
+        self._pts: np.ndarray | None = None
+
+    def resolve(self) -> np.ndarray:
+        with self._lock:
+            if self._pts is None:
+                self._pts = self._tracker._detect(self._img, self._kept)
+                self._img = self._kept = None
+            return self._pts
+
+
+def _features(pts) -> np.ndarray:
+    return pts.resolve() if isinstance(pts, _TopUp) else pts
