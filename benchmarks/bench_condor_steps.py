@@ -21,14 +21,8 @@ import time
 from pathlib import Path
 
 
-def _min_block(fn, n: int, blocks: int) -> float:
-    best = float("inf")
-    for _ in range(blocks):
-        t0 = time.thread_time()
-        for i in range(n):
-            fn(i)
-        best = min(best, (time.thread_time() - t0) / n)
-    return best * 1e6
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_steps import _min_block  # noqa: E402  (thread CPU per call, minimum over blocks)
 
 
 def measure(blocks: int, at_s: float) -> dict:

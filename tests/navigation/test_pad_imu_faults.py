@@ -26,8 +26,8 @@ class _Ptu:
     mount = _Mount()
     head_offset = (0.0, 0.0, 0.0)
 
-    def point_at(self, t, pan, tilt):
-        pass
+    def point_at(self, t, pan, tilt):  # (a head that does not move: the command is only kept)
+        self.commanded = (t, pan, tilt)
 
 
 class _Detector:

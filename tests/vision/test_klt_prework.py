@@ -60,3 +60,20 @@ def test_prework_gives_the_pairs_of_tracking_on_delivery_and_stale_work_is_redon
     th.join()
     b, a = pre.track(img), ref.track(img)
     assert _same(a, b) and calls["main"] == 2
+
+
+def test_render_then_queues_the_follow_up_behind_the_frame_and_not_on_a_closed_pool():
+    """``Camera.sample_async``'s worker job: the image, then what ``then`` hands back queued on the same pool
+    (run after the frame is handed over); at the end of a run (pool shut down) it is not queued, and no error."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from visnav.sensors.camera import _render_then
+
+    ran = []
+    pool = ThreadPoolExecutor(1)
+    img = pool.submit(_render_then, lambda p: p * 2, 3, lambda i: (lambda: ran.append(i)), pool).result()
+    pool.shutdown(wait=True)
+    assert img == 6 and ran == [6]
+    assert _render_then(lambda p: p + 1, 1, lambda i: (lambda: ran.append(i)), pool) == 2
+    assert ran == [6]
+    assert _render_then(lambda p: p + 1, 1, lambda i: None, pool) == 2  # nothing handed back

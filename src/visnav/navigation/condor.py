@@ -159,20 +159,11 @@ class CondorNavigator(AutopilotNavigator):
 
     def _handler(self, kind: type):
         """What ``update`` does with a message of type ``kind``."""
-        if issubclass(kind, Frame):
-            return self._frame
-        if issubclass(kind, TargetRangeSample):
-            return self._fix
-        if issubclass(kind, AttitudeSample):
-            return self._attitude
-        if issubclass(kind, PanSample):
-            return self._pan
-        if issubclass(kind, GpsSample):
-            return self._gps
-        if issubclass(kind, HeadingSample):
-            return self._heading
-        if issubclass(kind, OperatorClick):
-            return self._click
+        for base, fn in ((Frame, self._frame), (TargetRangeSample, self._fix), (AttitudeSample, self._attitude),
+                         (PanSample, self._pan), (GpsSample, self._gps), (HeadingSample, self._heading),
+                         (OperatorClick, self._click)):
+            if issubclass(kind, base):
+                return fn
         return super().update  # AHRS, IMU, pitot, baro
 
     def _attitude(self, m: AttitudeSample) -> None:

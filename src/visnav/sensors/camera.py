@@ -8,6 +8,7 @@ A frame is the plane-induced homography from map pixels to image pixels, applied
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import cv2
@@ -260,10 +261,8 @@ def _render_then(execute, plan, then, executor) -> np.ndarray:
     img = execute(plan)
     after = then(img)
     if after is not None:
-        try:
-            executor.submit(after)
-        except RuntimeError:  # the run is ending (the pool shut down): whoever needs it works it out
-            pass
+        with contextlib.suppress(RuntimeError):  # the run is ending (the pool shut down): whoever needs it
+            executor.submit(after)  # works it out (``vision/klt._TopUp``)
     return img
 
 

@@ -231,44 +231,9 @@ def _derivatives_fast(k: tuple, x, u: tuple, wind: tuple, air: bool = False):
 
 
 def _air_fast(k: tuple, x, u: tuple, wind: tuple) -> tuple:
-    """``_derivatives_fast(k, x, u, wind, air=True)[1]`` alone: (Va, alpha, beta, specific force) from the
-    same operations, without the moments and the state derivative (bit for bit: tests/vehicles/test_fixedwing.py)."""
-    (nM, M, a0, CL0, CLa, CDp, den, hrho, S, nCDq, CLq, nCDde, CLde, c, b, m, kt, kmot, nmG, mG,
-     CY0, CYb, CYp, CYr, CYda, CYdr, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _) = k
-    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
-    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
-    C00, C01, C02 = ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp
-    C10, C11, C12 = ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp
-    C20, C21, C22 = -st, sf * ct, cf * ct
-    wx, wy, wz = wind
-    ur = uu - (C00 * wx + C10 * wy + C20 * wz)
-    vr = vv - (C01 * wx + C11 * wy + C21 * wz)
-    wr = ww - (C02 * wx + C12 * wy + C22 * wz)
-    Va = math.sqrt(ur * ur + vr * vr + wr * wr)
-    Va_s = max(Va, 1.0)
-    alpha = math.atan2(wr, ur)
-    beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
-    qbar = hrho * Va_s * Va_s * S
-    ea, eb = math.exp(nM * (alpha - a0)), math.exp(M * (alpha + a0))
-    sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
-    cl_lin = CL0 + CLa * alpha
-    sa = math.sin(alpha)
-    ca = math.cos(alpha)
-    cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * math.copysign(1.0, alpha) * sa * sa * ca
-    cd = CDp + cl_lin * cl_lin / den
-    da, de, dr, dt = u
-    cx = -cd * ca + cl * sa
-    cxq = nCDq * ca + CLq * sa
-    cxde = nCDde * ca + CLde * sa
-    cz = -cd * sa - cl * ca
-    czq = nCDq * sa - CLq * ca
-    czde = nCDde * sa - CLde * ca
-    c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
-    thrust = kt * ((kmot * dt) ** 2 - Va * Va)
-    fx = nmG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
-    fy = mG * ct * sf + qbar * (CY0 + CYb * beta + CYp * b2v * P + CYr * b2v * R + CYda * da + CYdr * dr)
-    fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
-    return Va, alpha, beta, (fx / m - C20 * G, fy / m - C21 * G, fz / m - C22 * G)
+    """(Va, alpha, beta, specific force) of a state: what the air-data sensors read (``_derivatives_fast``'s
+    ``air`` part; at the sensors' 50 Hz its moments and state derivative cost little)."""
+    return _derivatives_fast(k, x, u, wind, air=True)[1]
 
 
 def _rk4_fast(k: tuple, x: list, u: tuple, wind: tuple, dt: float) -> list:
