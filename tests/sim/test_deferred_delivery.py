@@ -61,6 +61,50 @@ def test_deferred_deliveries_give_the_same_run(slow_render, monkeypatch):
     assert len(now.log.get("tracker")["t"]) >= 20  # frames were tracked
 
 
+def _backlog_at_sampling(sim, monkeypatch) -> list[int]:
+    """The frames still waiting in the loop's backlog each time the camera is sampled."""
+    from visnav.sensors.camera import Camera, PendingFrame
+
+    seen = []
+    sample_async = Camera.sample_async
+
+    def spy(self, *a, **k):
+        seen.append(sum(isinstance(m, PendingFrame) for _, m in sim._backlog))
+        return sample_async(self, *a, **k)
+
+    monkeypatch.setattr(Camera, "sample_async", spy)
+    return seen
+
+
+def test_a_truth_only_camera_renders_while_the_frame_before_is_delivered(slow_render, monkeypatch):
+    """At 10 Hz the mission reads the navigator at the next frame's instant: the palace camera (a function of the
+    truth under a gate that reads the mission's mode only) is sampled before the frame still rendering is
+    delivered, and the run is still, to the last bit, the run of the loop that waits for every frame."""
+    sets = ["run.duration_s=6"]
+    sim = Simulation(load_scenario("palace-landing", SHORT + sets, seed=2))
+    seen = _backlog_at_sampling(sim, monkeypatch)
+    late = sim.run()
+    monkeypatch.undo()
+    now, _ = _run(sets, False)
+    assert late.error is None and now.error is None
+    assert sum(1 for n in seen if n) >= 20  # frames were sampled with the one before still in the backlog
+    for s in now.log.streams():
+        a, b = late.log.get(s), now.log.get(s)
+        for k in b:
+            same = list(a[k]) == list(b[k]) if b[k].dtype == object else np.array_equal(a[k], b[k], equal_nan=True)
+            assert same, f"{s}.{k}"
+
+
+def test_a_gate_that_reads_the_navigator_is_asked_after_the_backlog_is_delivered(slow_render, monkeypatch):
+    """A gate not marked ``mode_gate`` may read what the deliveries change: the loop delivers first."""
+    sim = Simulation(load_scenario("palace-landing", SHORT + ["run.duration_s=3"], seed=2))
+    mission = sim.mission
+    sim.parts.gates["camera"] = lambda t: mission.camera_wanted(t)  # (an unmarked gate)
+    seen = _backlog_at_sampling(sim, monkeypatch)
+    assert sim.run().error is None
+    assert len(seen) >= 20 and not any(seen)
+
+
 def test_a_navigator_error_names_the_step_its_measurement_was_due_at(slow_render, monkeypatch):
     update = PalaceNavigator.update
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
-from visnav.mission.base import NavigatorRequests
+from visnav.mission.base import NavigatorRequests, mode_gate
 
 AXES = {"lateral": 0, "longitudinal": 1}  # index into (ail, ele, rud, thr)
 
@@ -109,6 +109,7 @@ class HoverMission(NavigatorRequests):
                                                                      c.sweep_duration_s))
         return u
 
+    @mode_gate
     def camera_wanted(self, t: float) -> bool:
         """The tracker runs for the whole hover."""
         return True

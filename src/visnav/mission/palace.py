@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.measurements import Health, NavEstimate, PositionReference
-from visnav.mission.base import NavigatorRequests
+from visnav.mission.base import NavigatorRequests, mode_gate
 from visnav.mission.integrity import IntegrityWatch
 from visnav.log_schema import register_stream
 
@@ -237,6 +237,7 @@ class PalaceMission(NavigatorRequests):
         self.abort_hold = self._last_pos + np.array([0.0, 0.0, -self.cfg.abort_climb_m])
         self._set("abort", t, why)
 
+    @mode_gate
     def camera_wanted(self, t: float) -> bool:
         """Frames are needed until MPE ends (below 1 m: inertial + sonar), and not during an abort."""
         return self.mode not in ("final", "landed", "abort")

@@ -209,6 +209,10 @@ class Camera:
     """Camera sensor on a mount: captures at ``capture_hz``; the vision pipeline consumes every
     ``decimation``-th frame, and only those are rendered (the others would be discarded)."""
 
+    #: a frame is a function of the truth, the world and the camera's own noise draws only (not of the
+    #: navigator or the mission): the loop may sample it before it delivers what was due earlier
+    samples_truth_only = True
+
     def __init__(
         self,
         camera: PinholeCamera,

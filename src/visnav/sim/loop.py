@@ -144,11 +144,22 @@ class Simulation:
                 sample = lambda t, s=s: s.sample_async(t, h, w, self._render_pool)  # noqa: E731
             else:
                 sample = lambda t, s=s: s.sample(t, h, w)  # noqa: E731
-            if gate is not None or rendered:  # a gate reads the mission, a frame's fault wrapper its sensor:
-                def fn(t, s=s, gate=gate, sample=sample):  # what was due before is delivered first
+            # a gate reads the mission, a navigator's prework its state now, a pan-tilt camera the head the
+            # navigator points: what was due before is delivered first. A camera that reads nothing but the
+            # truth and the world (``samples_truth_only``), under no gate or one that reads only the mission's
+            # mode (``mission/base.mode_gate``), is sampled without it: its frame renders while the loop
+            # delivers the one before (the navigator gets the same measurements in the same order)
+            independent = (prework is None and getattr(s, "samples_truth_only", False)
+                           and (gate is None or not getattr(gate, "reads_deliveries", True)))
+            if (gate is not None or rendered) and not independent:
+                def fn(t, s=s, gate=gate, sample=sample):
                     if self._backlog:
                         self.settle()
                     if gate is None or gate(t):
+                        self._emit(sample(t), s.latency_s)
+            elif gate is not None:
+                def fn(t, s=s, gate=gate, sample=sample):
+                    if gate(t):
                         self._emit(sample(t), s.latency_s)
             else:
                 fn = lambda t, s=s, sample=sample: self._emit(sample(t), s.latency_s)  # noqa: E731
