@@ -80,3 +80,16 @@ def test_noise_is_the_bank_added_with_saturation():
     want = np.clip(clean.astype(int) + r._noise[k, dy:dy + 480, dx:dx + 640], 0, 255).astype(np.uint8)
     assert noisy.dtype == np.uint8 and np.array_equal(noisy, want)
     assert (noisy == 0).sum() > 100 and (noisy == 255).sum() > 100 and (r._noise < -50).any()
+
+
+def test_blended_levels_are_the_two_levels_weighted_whatever_the_order_they_are_asked_in():
+    """Trilinear sampling: level L blended with level L + 1 (upsampled) at q/8; the upsampled level is made once
+    per L and shared by the weights, each blend equal to the blend made from scratch."""
+    rng = np.random.default_rng(3)
+    ground = GeoImage(rng.integers(0, 256, (256, 256), dtype=np.uint8), 12.8, -12.8, resolution_m=0.1)
+    r = CameraRenderer(PinholeCamera.ideal(), 0.0, rng)
+    for L, q in [(0, 3), (1, 5), (0, 7), (1, 1), (0, 3)]:
+        lo = ground.level(L)
+        up = cv2.resize(ground.level(L + 1), (lo.shape[1], lo.shape[0]), interpolation=cv2.INTER_LINEAR)
+        assert np.array_equal(r._blended_level(ground, L, q), cv2.addWeighted(lo, 1 - q / 8, up, q / 8, 0.0))
+    assert r._blended_level(ground, 1, 0) is ground.level(1)

@@ -128,7 +128,11 @@ class CameraRenderer:
         img = self._blend_cache.get(key)
         if img is None:
             lo = ground.level(L)
-            up = cv2.resize(ground.level(L + 1), (lo.shape[1], lo.shape[0]), interpolation=cv2.INTER_LINEAR)
+            up_key = (id(ground), L, "up")  # level L + 1 upsampled: one resize for all the weights of level L
+            up = self._blend_cache.get(up_key)
+            if up is None:
+                up = self._blend_cache[up_key] = cv2.resize(ground.level(L + 1), (lo.shape[1], lo.shape[0]),
+                                                            interpolation=cv2.INTER_LINEAR)
             img = self._blend_cache[key] = cv2.addWeighted(lo, 1.0 - q / 8.0, up, q / 8.0, 0.0)
         return img
 
