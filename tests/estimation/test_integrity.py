@@ -131,3 +131,40 @@ def test_assess_between_updates_reuses_the_windows_and_sees_every_change():
         assert a["rejected_share"] == {s: x.rejected_share for s, x in tests.items()}
         want = "degraded" if any(x.over_confident or x.rejected_share > 0.3 for x in tests.values()) else "ok"
         assert a["integrity"] == want
+
+
+def _windows_reference(m: IntegrityMonitor) -> tuple:
+    """``IntegrityMonitor._windows`` before the per-stream memo (issue #19): every test and k^2 from the windows."""
+    c = m.config
+    tests = [m.test(s) for s in m._streams]
+    state, reason = "ok", ""
+    bad = [x for x in tests if x.over_confident]
+    rej = [x for x in tests if x.rejected_share > c.max_rejected_share]
+    if bad:
+        state = "degraded"
+        reason = "; ".join(f"{x.stream} NIS {x.mean_nis_per_dof:.2f}/dof over {x.updates} updates "
+                           f"(chi2 bound {x.upper / x.dof:.2f})" for x in bad)
+    elif rej:
+        state = "degraded"
+        reason = "; ".join(f"{x.stream} rejected {100 * x.rejected_share:.0f} %" for x in rej)
+    return (m.inflation(), state, reason, {x.stream: x.mean_nis_per_dof for x in tests},
+            {x.stream: x.rejected_share for x in tests})
+
+
+@pytest.mark.parametrize("only", [("gps", "vision"), None])
+def test_per_stream_memo_equals_the_windows_recomputed_bit_for_bit(only):
+    """The per-stream tests and k^2 kept until their own stream changes (a baro update recomputes the baro
+    test alone, and not k^2 when baro does not inflate) equal the full recomputation, to the bit."""
+    rng = np.random.default_rng(11)
+    m = IntegrityMonitor(IntegrityConfig(window=7, max_rejected_share=0.3, inflation_streams=only))
+    P = np.diag([1.0, 2.0])
+    for k in range(3000):
+        r = rng.uniform()
+        if r < 0.5:
+            s = str(rng.choice(["gps", "vision", "baro", "heading"]))
+            m.record(0.01 * k, s, float(rng.chisquare(2) * rng.choice([1, 8]) * rng.uniform(0.1, 3.0)),
+                     int(rng.choice([1, 2])), bool(rng.uniform() < 0.8))
+        elif r < 0.51:
+            m.clear()
+        m.assess(0.01 * k, P)
+        assert repr(m._windows()) == repr(_windows_reference(m))  # repr: floats to the bit, NaN equal to NaN

@@ -152,3 +152,30 @@ def test_arc_length_of_one_pair_equals_the_vector_path():
             assert type(one) is float and one == ref
             n += 1
     assert n > 500
+
+
+def _frame_at_reference(sg: HermiteSegment, s: float):
+    """``HermiteSegment.frame_at`` before issue #19's scalar form: the numpy expressions on the coefficient rows."""
+    A, B, C, D = sg.coeffs
+    p = ((A * s + B) * s + C) * s + D
+    t = (3.0 * A * s + 2.0 * B) * s + C
+    q = 6.0 * A * s + 2.0 * B
+    tx, ty, tz = t
+    qx, qy, qz = q
+    cx, cy, cz = ty * qz - tz * qy, tz * qx - tx * qz, tx * qy - ty * qx
+    n2 = tx * tx + ty * ty + tz * tz
+    k = np.array([cy * tz - cz * ty, cz * tx - cx * tz, cx * ty - cy * tx]) / (n2 * n2)
+    return p, t, k
+
+
+def test_frame_at_equals_the_array_expressions_bit_for_bit():
+    rng = np.random.default_rng(19)
+    for _ in range(300):
+        p0, p1, t0, t1 = rng.normal(0, 1, (4, 3)) * rng.choice([0.01, 1.0, 30.0, 1e4], size=(4, 1))
+        try:
+            sg = HermiteSegment(p0, p1, t0, t1)
+        except ValueError:  # a cusp: not a segment
+            continue
+        for s in [0.0, 1.0, 0.5, *rng.uniform(0, 1, 8).tolist(), np.float64(rng.uniform()), 1.3, -0.2]:
+            for got, want in zip(sg.frame_at(s), _frame_at_reference(sg, s)):
+                assert np.array_equal(got, want) and got.dtype == want.dtype and got.shape == (3,)

@@ -237,25 +237,27 @@ class PathFollowingController:
         xb, yb = C[0], C[1]  # body x and y axes in NED (rows of the NED -> heading rotation)
         dp = C @ (np.asarray(r.position, float) - np.asarray(nav.position, float))
         dv = C @ (np.asarray(r.velocity, float) - np.asarray(nav.velocity, float))
+        dp0, dp1, dp2 = dp.tolist()  # the scalar arithmetic below in Python floats (the same IEEE operations)
+        dv0, dv1, dv2 = dv.tolist()
         if not k.world_integrators:  # body-frame integrators: re-express the stored ones on the new axes
             self._i_lon = xb * (xb @ self._i_lon)
             self._i_lat = yb * (yb @ self._i_lat)
         # d δv_x/dt, first-order low-pass
         if self._dvx_prev is not None and dt > 0:
             a = dt / (k.derivative_tau + dt)
-            self._dvx_rate += a * ((dv[0] - self._dvx_prev) / dt - self._dvx_rate)
-        self._dvx_prev = float(dv[0])
+            self._dvx_rate += a * ((dv0 - self._dvx_prev) / dt - self._dvx_rate)
+        self._dvx_prev = dv0
         # pitch and roll (accelerations), eq. 4.25 (+ the lateral integral)
         i_x, i_y = float(xb @ self._i_lon), float(yb @ self._i_lat)
-        a_x = k.k1p * dp[0] + k.k2p * dv[0] + k.k3p * self._dvx_rate + k.k4p * i_x
-        a_y = k.k1r * dp[1] + k.k2r * dv[1] + k.k3r * i_y
+        a_x = k.k1p * dp0 + k.k2p * dv0 + k.k3p * self._dvx_rate + k.k4p * i_x
+        a_y = k.k1r * dp1 + k.k2r * dv1 + k.k3r * i_y
         theta_ff = (k.drag_xu * r.v_target - r.accel_target) / G if k.pitch_feedforward else 0.0
         theta_raw = theta_ff - a_x / G
         phi_raw = r.phi_ff + a_y / G
         theta_c = _clip(theta_raw, -k.max_pitch, k.max_pitch)
         phi_c = _clip(phi_raw, -k.max_roll, k.max_roll)
         # throttle: climb-rate command [m/s] (h up = −z)
-        dh, dhd = -dp[2], -dv[2]
+        dh, dhd = -dp2, -dv2
         climb_ff = -float(r.velocity[2]) if k.climb_feedforward else 0.0
         if k.load_factor_feedforward:  # T_ff of eq. 4.14 as the climb rate the YACS must hold
             climb_ff += G * (1.0 / math.cos(r.phi_ff) - 1.0) / k.heave_damping
@@ -281,9 +283,9 @@ class PathFollowingController:
         # integrators: conditional integration (anti-windup) and clamping
         if dt > 0:
             if not sat[1]:
-                self._i_lon = self._clamp(self._i_lon + xb * (dv[0] * dt), k.k4p, k.integral_limit)
+                self._i_lon = self._clamp(self._i_lon + xb * (dv0 * dt), k.k4p, k.integral_limit)
             if not sat[0]:
-                self._i_lat = self._clamp(self._i_lat + yb * (dp[1] * dt), k.k3r, k.integral_limit)
+                self._i_lat = self._clamp(self._i_lat + yb * (dp1 * dt), k.k3r, k.integral_limit)
             if not sat[3] and k.k3t > 0:
                 self._i_z = _clip(self._i_z + dhd * dt, -k.max_climb_rate / k.k3t, k.max_climb_rate / k.k3t)
             if any(sat):

@@ -60,10 +60,7 @@ def quat_mult(p, q) -> np.ndarray:
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
     if p.shape == (4,) and q.shape == (4,):  # fast path for the per-sample loops
-        pw, px, py, pz = p.tolist()
-        qw, qx, qy, qz = q.tolist()
-        return np.array([pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
-                         pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw])
+        return np.array(_quat_mult4(*p.tolist(), *q.tolist()))
     pw, px, py, pz = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
     qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     return np.stack(
@@ -77,6 +74,12 @@ def quat_mult(p, q) -> np.ndarray:
     )
 
 
+def _quat_mult4(pw, px, py, pz, qw, qx, qy, qz) -> list[float]:
+    """``quat_mult`` of two quaternions given as floats, the product's components as floats."""
+    return [pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw]
+
+
 def quat_conj(q) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     return q * np.array([1.0, -1.0, -1.0, -1.0])
@@ -86,10 +89,7 @@ def quat_from_rotvec(rv) -> np.ndarray:
     """Exact exponential map: rotation vector (..., 3) [rad] -> unit quaternion (..., 4)."""
     rv = np.asarray(rv, dtype=float)
     if rv.shape == (3,):
-        x, y, z = rv.tolist()
-        a = math.sqrt(x * x + y * y + z * z)
-        k = 0.5 - a * a / 48.0 if a < 1e-8 else math.sin(0.5 * a) / a
-        return np.array([math.cos(0.5 * a), x * k, y * k, z * k])
+        return np.array(_quat_from_rotvec3(*rv.tolist()))
     ang = np.linalg.norm(rv, axis=-1)
     half = 0.5 * ang
     # sin(a/2)/a with its Taylor series near zero
@@ -98,20 +98,18 @@ def quat_from_rotvec(rv) -> np.ndarray:
     return np.concatenate([np.cos(half)[..., None], rv * s[..., None]], axis=-1)
 
 
+def _quat_from_rotvec3(x: float, y: float, z: float) -> list[float]:
+    """``quat_from_rotvec`` of one rotation vector given as floats, the quaternion as floats."""
+    a = math.sqrt(x * x + y * y + z * z)
+    k = 0.5 - a * a / 48.0 if a < 1e-8 else math.sin(0.5 * a) / a
+    return [math.cos(0.5 * a), x * k, y * k, z * k]
+
+
 def quat_to_dcm(q) -> np.ndarray:
     """``C_b^n`` (..., 3, 3) from unit quaternion(s) (..., 4) (normalised here)."""
     q = np.asarray(q, dtype=float)
     if q.shape == (4,):
-        w, x, y, z = q.tolist()
-        n2 = w * w + x * x + y * y + z * z
-        if not n2 > 0.0:
-            raise ValueError(f"quaternion must be non-zero and finite, got {q}")
-        s = 2.0 / n2
-        return np.array([
-            [1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
-            [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
-            [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)],
-        ])
+        return np.array(_quat_to_dcm4(*q.tolist()))
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     return np.stack(
@@ -122,6 +120,19 @@ def quat_to_dcm(q) -> np.ndarray:
         ],
         axis=-2,
     )
+
+
+def _quat_to_dcm4(w: float, x: float, y: float, z: float) -> list[list[float]]:
+    """``quat_to_dcm`` of one quaternion given as floats, the rows as lists of floats."""
+    n2 = w * w + x * x + y * y + z * z
+    if not n2 > 0.0:
+        raise ValueError(f"quaternion must be non-zero and finite, got {[w, x, y, z]}")
+    s = 2.0 / n2
+    return [
+        [1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
+        [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
+        [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)],
+    ]
 
 
 def dcm_to_quat(C) -> np.ndarray:
@@ -304,6 +315,8 @@ class StrapdownINS:
         [m/s^2], body rates [rad/s]) held over the interval; returns a new state."""
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"IMU interval dt must be positive and finite, got {dt}")
+        if not self.earth_rotation and self._g_const is not None:
+            return self._propagate_flat(s, accel, gyro, dt)
         f = _check_finite(accel, "accel") - s.accel_bias
         w = _check_finite(gyro, "gyro") - s.gyro_bias
         if self.earth_rotation:
@@ -328,6 +341,30 @@ class StrapdownINS:
         v_new = s.velocity + acc * dt
         p_new = s.position + 0.5 * (s.velocity + v_new) * dt
         return NavState(s.t + dt, p_new, v_new, q_new, s.accel_bias.copy(), s.gyro_bias.copy())
+
+    def _propagate_flat(self, s: NavState, accel, gyro, dt: float) -> NavState:
+        """``propagate`` on a flat non-rotating Earth with constant gravity, its element operations in Python
+        floats (the same IEEE operations in the same order); the DCM product and the quaternion's norm stay
+        numpy's (BLAS: their sums are not a Python sum's)."""
+        a0, a1, a2 = _check_finite(accel, "accel").tolist()
+        w0, w1, w2 = _check_finite(gyro, "gyro").tolist()
+        ba0, ba1, ba2 = s.accel_bias.tolist()
+        bg0, bg1, bg2 = s.gyro_bias.tolist()
+        f = np.array([a0 - ba0, a1 - ba1, a2 - ba2])
+        w0, w1, w2 = w0 - bg0, w1 - bg1, w2 - bg2
+        q = s.quat.tolist()
+        h = 0.5 * dt
+        q_mid = _quat_mult4(*q, *_quat_from_rotvec3(w0 * h, w1 * h, w2 * h))
+        q_new = np.array(_quat_mult4(*q, *_quat_from_rotvec3(w0 * dt, w1 * dt, w2 * dt)))
+        q_new /= math.sqrt(q_new.dot(q_new))  # np.linalg.norm's own formula, without its overhead
+        c0, c1, c2 = (np.array(_quat_to_dcm4(*q_mid)) @ f).tolist()
+        g0, g1, g2 = self._g_const.tolist()
+        c0, c1, c2 = c0 + g0, c1 + g1, c2 + g2
+        v0, v1, v2 = s.velocity.tolist()
+        n0, n1, n2 = v0 + c0 * dt, v1 + c1 * dt, v2 + c2 * dt
+        p0, p1, p2 = s.position.tolist()
+        p_new = np.array([p0 + 0.5 * (v0 + n0) * dt, p1 + 0.5 * (v1 + n1) * dt, p2 + 0.5 * (v2 + n2) * dt])
+        return NavState(s.t + dt, p_new, np.array([n0, n1, n2]), q_new, s.accel_bias.copy(), s.gyro_bias.copy())
 
     def run(self, s0: NavState, t, accel, gyro) -> dict[str, np.ndarray]:
         """Free inertial run over sample arrays (N,), (N,3), (N,3): over [t_k, t_{k+1}] the mean

@@ -94,12 +94,18 @@ class IntegrityMonitor:
         self.transitions: list[tuple[float, str, str]] = []  # (t, state, reason)
         self._state = "ok"
         self._memo: tuple | None = None  # what ``assess`` derives from the windows alone, until they change
+        # per-stream tests and k^2 kept until their own windows change (a baro update leaves the other
+        # streams' tests and the horizontal k^2 as they were)
+        self._tests: dict[str, StreamTest] = {}
+        self._k2: float | None = None
 
     def clear(self) -> None:
         """Empty every stream's window (a filter re-initialised: its predecessor's innovations say nothing)."""
         for q in self._streams.values():
             q.clear()
         self._memo = None
+        self._tests.clear()
+        self._k2 = None
 
     def record(self, t: float, stream: str, nis: float, dof: int, accepted: bool) -> None:
         """One update: its NIS, its dimension, and whether the filter's gate accepted it."""
@@ -108,6 +114,10 @@ class IntegrityMonitor:
             q = self._streams[stream] = deque(maxlen=self.config.window)
         q.append((float(nis), int(dof), bool(accepted)))
         self._memo = None
+        self._tests.pop(stream, None)
+        only = self.config.inflation_streams
+        if only is None or stream in only:
+            self._k2 = None
         if accepted:
             self._last_accept = max(self._last_accept, float(t))
 
@@ -145,7 +155,12 @@ class IntegrityMonitor:
         navigators assess at every step, the windows change at each update)."""
         if self._memo is None:
             c = self.config
-            tests = [self.test(s) for s in self._streams]
+            tests = []
+            for name in self._streams:
+                x = self._tests.get(name)
+                if x is None:
+                    x = self._tests[name] = self.test(name)
+                tests.append(x)
             state, reason = "ok", ""
             bad = [x for x in tests if x.over_confident]
             rej = [x for x in tests if x.rejected_share > c.max_rejected_share]
@@ -156,7 +171,9 @@ class IntegrityMonitor:
             elif rej:
                 state = "degraded"
                 reason = "; ".join(f"{x.stream} rejected {100 * x.rejected_share:.0f} %" for x in rej)
-            self._memo = (self.inflation(), state, reason, {x.stream: x.mean_nis_per_dof for x in tests},
+            if self._k2 is None:
+                self._k2 = self.inflation()
+            self._memo = (self._k2, state, reason, {x.stream: x.mean_nis_per_dof for x in tests},
                           {x.stream: x.rejected_share for x in tests})
         return self._memo
 

@@ -102,17 +102,30 @@ class HermiteSegment:
         return np.cross(np.cross(t, q), t) / (n2 * n2)
 
     def frame_at(self, s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """p(s), t(s) and k(s) (eq. 4.1-4.5) at one scalar s, without the vector overhead."""
-        A, B, C, D = self.coeffs
-        p = ((A * s + B) * s + C) * s + D
-        t = (3.0 * A * s + 2.0 * B) * s + C
-        q = 6.0 * A * s + 2.0 * B
-        tx, ty, tz = t
-        qx, qy, qz = q
+        """p(s), t(s) and k(s) (eq. 4.1-4.5) at one scalar s, without the vector overhead: per component in
+        Python floats, the array expressions' element operations in their order (3.0 * A * s is (3A) s)."""
+        s = float(s)
+        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2), (d0, d1, d2), (u0, u1, u2), (v0, v1, v2), (w0, w1, w2) = \
+            self._frame_rows  # A, B, C, D, 3A, 2B, 6A
+        p = np.array([((a0 * s + b0) * s + c0) * s + d0, ((a1 * s + b1) * s + c1) * s + d1,
+                      ((a2 * s + b2) * s + c2) * s + d2])
+        tx, ty, tz = (u0 * s + v0) * s + c0, (u1 * s + v1) * s + c1, (u2 * s + v2) * s + c2
+        qx, qy, qz = w0 * s + v0, w1 * s + v1, w2 * s + v2
         cx, cy, cz = ty * qz - tz * qy, tz * qx - tx * qz, tx * qy - ty * qx  # t × q
         n2 = tx * tx + ty * ty + tz * tz
-        k = np.array([cy * tz - cz * ty, cz * tx - cx * tz, cx * ty - cy * tx]) / (n2 * n2)  # (t × q) × t
-        return p, t, k
+        n4 = n2 * n2
+        k = np.array([(cy * tz - cz * ty) / n4, (cz * tx - cx * tz) / n4, (cx * ty - cy * tx) / n4])  # (t × q) × t
+        return p, np.array([tx, ty, tz]), k
+
+    @property
+    def _frame_rows(self) -> tuple:
+        """(A, B, C, D, 3A, 2B, 6A) as tuples of floats, built once (``frame_at``)."""
+        rows = self.__dict__.get("_frows")
+        if rows is None:
+            A, B, C, D = self.coeffs
+            rows = tuple(tuple(r.tolist()) for r in (A, B, C, D, 3.0 * A, 2.0 * B, 6.0 * A))
+            object.__setattr__(self, "_frows", rows)
+        return rows
 
     def arc_length(self, s: ArrayLike = 1.0, s0: ArrayLike = 0.0) -> np.ndarray | float:
         """Arc length from s0 to s [m] (16-point Gauss-Legendre per call, vectorized over s)."""

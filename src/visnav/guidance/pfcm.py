@@ -33,6 +33,7 @@ z down): the YACS attitude commands act there, and with |φ|, |θ| <= 15° the d
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from dataclasses import dataclass
 
 import numpy as np
@@ -190,13 +191,20 @@ class PfcmGuidance(_LiveReference):
         self.profile_table = {"l": l, "v_targ2": v2, "v_targ3": v3, "envelope2": envelope(v2),
                               "envelope3": envelope(v3), "lateral_curvature": k_lat}
         self._rows = np.column_stack([envelope(v2), envelope(v3), k_lat])
+        self._l_list, self._rows_list = l.tolist(), self._rows.tolist()  # for ``_row``'s scalar arithmetic
 
-    def _row(self, l: float) -> np.ndarray:
-        """The table row (envelope2, envelope3, lateral curvature) at arc length l, interpolated."""
-        L = self.profile_table["l"]
-        j = min(max(int(L.searchsorted(l)) - 1, 0), len(L) - 2)
+    def _row(self, l: float) -> list[float]:
+        """The table row (envelope2, envelope3, lateral curvature) at arc length l, interpolated: per element
+        in Python floats (the row expression's own element operations); ``bisect_left`` is ``searchsorted``."""
+        L = self._l_list
+        if l != l:  # NaN: where searchsorted puts it (past the end)
+            j = len(L) - 2
+        else:
+            j = min(max(bisect_left(L, l) - 1, 0), len(L) - 2)
         f = min(max((l - L[j]) / (L[j + 1] - L[j]), 0.0), 1.0)
-        return self._rows[j] * (1.0 - f) + self._rows[j + 1] * f
+        g = 1.0 - f
+        (a0, a1, a2), (b0, b1, b2) = self._rows_list[j], self._rows_list[j + 1]
+        return [a0 * g + b0 * f, a1 * g + b1 * f, a2 * g + b2 * f]
 
     def _u_max(self, ky: float, phi: float) -> float:
         """Scalar eq. 4.15-4.16 for |k_y^b| and a roll limit φ (inf on a straight)."""
@@ -209,22 +217,27 @@ class PfcmGuidance(_LiveReference):
         """The horizontal acceleration [m/s², N/E] the outer loop's integrators spend against the
         wind; the roll it costs is taken off φ_max for v_targ2 (see ``step``)."""
         a = np.asarray(accel_ne, float)[:2]
-        if not np.all(np.isfinite(a)):
+        if not all(map(math.isfinite, a.ravel().tolist())):
             raise ValueError(f"accel_ne must be finite, got {accel_ne!r}")
         self.lateral_bias_ne = a
 
     # -- eq. 4.6-4.10 ----------------------------------------------------------------------------
     def update_control_point(self, p_heli: ArrayLike) -> tuple[int, float]:
         """Advance (segment, s) by the local feedback of eq. 4.7-4.10."""
-        p = np.asarray(p_heli, float)
+        p0, p1, p2 = np.asarray(p_heli, float).tolist()
         segs = self.path.segments
         for _ in range(self.iterations):
             while True:
-                A, B, C, D = segs[self.segment].coeffs
+                # the array expressions per component in Python floats (3.0 * A * u is (3A) u); the two dot
+                # products stay numpy's (BLAS may fuse them: not the same bits as a Python sum)
+                (a0, a1, a2), (b0, b1, b2), (c0, c1, c2), (d0, d1, d2), (u0, u1, u2), (v0, v1, v2), _ = \
+                    segs[self.segment]._frame_rows  # A, B, C, D, 3A, 2B, 6A
                 u = self.s
-                t = (3.0 * A * u + 2.0 * B) * u + C
+                t = np.array([(u0 * u + v0) * u + c0, (u1 * u + v1) * u + c1, (u2 * u + v2) * u + c2])
                 nt = math.sqrt(t @ t)
-                e_f = float((((A * u + B) * u + C) * u + D - p) @ t) / nt  # eq. 4.7-4.8
+                e = np.array([((a0 * u + b0) * u + c0) * u + d0 - p0, ((a1 * u + b1) * u + c1) * u + d1 - p1,
+                              ((a2 * u + b2) * u + c2) * u + d2 - p2])
+                e_f = float(e @ t) / nt  # eq. 4.7-4.8
                 s = u - e_f / nt  # eq. 4.10
                 if s > 1.0 and self.segment < len(segs) - 1:
                     self.segment += 1  # next segment: the parameter restarts at 0 (§4.3.3 item 1)
@@ -270,7 +283,9 @@ class PfcmGuidance(_LiveReference):
         i, s = self.update_control_point(pos)
         sg = self.path.segments[i]
         p_cp, t_n, k_n = sg.frame_at(s)
-        tau = t_n / math.sqrt(t_n @ t_n)
+        n_t = math.sqrt(t_n @ t_n)
+        tau = t_n / n_t
+        tau0, tau1, tau2 = tau.tolist()
         l_now = self.path.arc_position(i, s)
         l_total = self.path.length
         l_left = max(l_total - l_now, 0.0)
@@ -278,28 +293,30 @@ class PfcmGuidance(_LiveReference):
         tau_b, k_b = C @ tau, C @ k_n  # eq. 4.24
         # v_targ2 (eq. 4.21) with R_y^b = 1/k_y^b, and v_targ3 (eq. 4.23)
         ky = float(k_b[1])
+        tb0 = float(tau_b[0])
         # roll headroom: the bank the wind correction adds in this turn's direction is not available
         # for turning (the remedy §3.5 suggests when the roll input saturates, Fig. 3.8)
         lim_phi = lim.phi_max
         if self.roll_headroom:
-            bias = float(C[1, 0] * self.lateral_bias_ne[0] + C[1, 1] * self.lateral_bias_ne[1]) / G
+            bn, be = self.lateral_bias_ne.tolist()
+            c10, c11 = C[1].tolist()[:2]
+            bias = (c10 * bn + c11 * be) / G
             lim_phi = max(lim.phi_max - max(math.copysign(1.0, ky) * bias, 0.0), 0.5 * lim.phi_max)
-            env_scale = math.sqrt(max(lim.phi_max - math.hypot(*self.lateral_bias_ne) / G, 0.5 * lim.phi_max)
-                                  / lim.phi_max)
+            env_scale = math.sqrt(max(lim.phi_max - math.hypot(bn, be) / G, 0.5 * lim.phi_max) / lim.phi_max)
         else:
             env_scale = 1.0
         u_max = self._u_max(abs(ky), lim_phi)
-        v2 = u_max / tau_b[0] if tau_b[0] > 1e-3 else math.inf
+        v2 = u_max / tb0 if tb0 > 1e-3 else math.inf
         v3 = math.inf
-        if tau[2] > 1e-9:  # eq. 4.23
-            gamma = math.atan2(tau[2], math.hypot(tau[0], tau[1]))
-            v3 = (lim.w_descent_steep if gamma >= lim.vrs_steep_angle else lim.w_descent_shallow) / tau[2]
+        if tau2 > 1e-9:  # eq. 4.23
+            gamma = math.atan2(tau2, math.hypot(tau0, tau1))
+            v3 = (lim.w_descent_steep if gamma >= lim.vrs_steep_angle else lim.w_descent_shallow) / tau2
         u = max(float(vel @ tau), 0.0)
         l_brake = min(l_now + u * self.brake_lead_s, l_total)  # braking lead: the pitch lag
         if lim.anticipate:
             env = self._row(l_brake)
-            v2 = min(v2, env_scale * float(env[0]) if env[0] < 1e5 else math.inf)
-            v3 = min(v3, float(env[1]) if env[1] < 1e5 else math.inf)
+            v2 = min(v2, env_scale * env[0] if env[0] < 1e5 else math.inf)
+            v3 = min(v3, env[1] if env[1] < 1e5 else math.inf)
         v1 = self._v_targ1(dt, self._v_brake(l_brake))
         v = min(v1, v2, v3)
         v = min(v, self.v_prev + lim.accel * dt)  # rises at most at Acc, also after a limit ends
@@ -312,15 +329,16 @@ class PfcmGuidance(_LiveReference):
         accel = self._accel
         self.v_prev = v
         # heading (§4.3.3 item 3) and feed-forward (eq. 4.14, 4.24), u = along-path speed
-        horiz = math.hypot(t_n[0], t_n[1])
-        yaw = math.atan2(t_n[1], t_n[0]) if horiz > 1e-6 * math.sqrt(t_n @ t_n) else psi
+        tn0, tn1, _ = t_n.tolist()
+        horiz = math.hypot(tn0, tn1)
+        yaw = math.atan2(tn1, tn0) if horiz > 1e-6 * n_t else psi
         d_psi = (yaw - psi + math.pi) % (2 * math.pi) - math.pi
         # the curvature a channel lag ahead (roll, yaw); the roll's lateral acceleration u² k_y is
         # rate-limited (a curvature step at a joint becomes a ramp)
         def k_ahead(lead: float) -> float:
             if lead <= 0:
                 return ky
-            return float(self._row(min(l_now + u * lead, l_total))[2])  # in the path's own frame there
+            return self._row(min(l_now + u * lead, l_total))[2]  # in the path's own frame there
 
         a_ff = u * u * k_ahead(self.roll_lead_s)
         if self.ff_jerk > 0 and dt > 0:
