@@ -135,21 +135,38 @@ def _process_noise_reference(x, dt, u, imu_cov, ship_cov):
     return Fz @ imu_cov @ Fz.T + Fs @ ship_cov @ Fs.T
 
 
+def test_numpy_cos_and_sin_are_maths_bit_for_bit():
+    """process_noise takes cos / sin from ``math`` where the array form took numpy's: the same libm values (numpy's
+    tan is another implementation here and stays numpy's)."""
+    import math
+
+    rng = np.random.default_rng(9)
+    for scale in (1e-6, 0.01, 0.3, 1.0, 1.6, 3.2, 100.0):
+        a = rng.normal(size=20000) * scale
+        assert np.array_equal(np.cos(a), [math.cos(v) for v in a.tolist()])
+        assert np.array_equal(np.sin(a), [math.sin(v) for v in a.tolist()])
+        assert np.array_equal(np.cos(a[:, None]), np.cos(a)[:, None])
+
+
 def test_process_noise_is_the_reference_bit_for_bit():
-    """process_noise builds C and E of the one mean state from the same numpy cos / sin / tan values in Python
-    floats and copies its dt-only blocks from templates: the same Q to the last bit (speed round 4)."""
+    """process_noise builds C, E and dv/dw of the one mean state in Python floats (math's cos / sin, numpy's tan)
+    and copies its dt-only blocks from templates: the same Q to the last bit, signs of zero included (speed
+    rounds 4 and 5)."""
     rng = np.random.default_rng(8)
     imu = np.diag(rng.uniform(1e-6, 1e-2, 6))
     imu[0, 1] = imu[1, 0] = 1e-5
     ship = np.diag(rng.uniform(1e-4, 1.0, 6))
-    for k in range(400):
+    for k in range(3000):
         x = rng.normal(size=12) * rng.choice([0.1, 1.0, 3.0])
         if k % 7 == 0:
             x[4] = np.pi / 2 * rng.choice([-1, 1]) + rng.normal(0, 1e-9)  # near the pitch singularity
+        if k % 5 == 1:  # exact zeros (the signs of zero products and sums)
+            x[rng.choice(12, 4, replace=False)] = rng.choice([0.0, -0.0])
+        if k % 11 == 3:
+            x[4] = rng.uniform(-1.6, 1.6)  # pitch over its whole range
         u = dm.ImuInput(rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=3))
+        if k % 9 == 2:
+            u = dm.ImuInput(u.accel, np.array([0.0, -0.0, rng.normal()]), u.gyro_dot, u.gravity_body)
         dt = float(rng.choice([0.01, 0.005, 0.0033333333333333335, rng.uniform(1e-4, 0.02)]))
         got, ref = dm.process_noise(x, dt, u, imu, ship), _process_noise_reference(x, dt, u, imu, ship)
         assert np.array_equal(got.view(np.int64), ref.view(np.int64))
-        C, E = dm._dcm_and_rate_matrix(x[None, 3:6])
-        assert np.array_equal(C, dm.euler_dcm_batch(x[None, 3:6])[0])
-        assert np.array_equal(E, dm.euler_rate_matrix(x[None, 3:6])[0])
