@@ -47,7 +47,7 @@ from visnav.estimation import deck as dm
 from visnav.estimation.association import associate
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
 from visnav.estimation.ukf import UnscentedKalmanFilter
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm3
 from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavInit
 from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
@@ -378,7 +378,7 @@ class DeckNavigator(CommandDispatch):
         raw = (gyro - self._gyro) / dt_imu
         a = dt_imu / (self.cfg.gyro_dot_tau + dt_imu)
         self._gyro_dot = self._gyro_dot + a * (raw - self._gyro_dot)
-        gb = euler_to_dcm([self._rp[0], self._rp[1], 0.0]).T @ _GRAVITY_NED
+        gb = euler_to_dcm3(*self._rp.tolist(), 0.0).T @ _GRAVITY_NED  # (euler_to_dcm's one-vector path)
         u = dm.ImuInput(accel=accel, gyro=gyro, gyro_dot=self._gyro_dot, gravity_body=gb)
         prev_accel, prev_gyro = self._accel, self._gyro
         self._t_imu, self._gyro, self.last_gyro, self._accel, self._u = t, gyro, gyro, accel, u
