@@ -103,8 +103,9 @@ def camera_rotation(depression: float, yaw: float) -> np.ndarray:
     return np.vstack([xc, np.cross(zc, xc), zc])
 
 
-def euler_dcm_batch(e: np.ndarray) -> np.ndarray:
-    """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3)."""
+def euler_dcm_batch(e: np.ndarray, rate: bool = False):
+    """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3); with ``rate`` also
+    E(e) of eq. 2.13 (body rates -> Euler angle rates, (N, 3, 3)) from the same cos / sin values: ``(C, E)``."""
     c, s = np.cos(e), np.sin(e)  # one call each for the three angles (the batches are small)
     cf, ct, cp = c[:, 0], c[:, 1], c[:, 2]
     sf, st, sp = s[:, 0], s[:, 1], s[:, 2]
@@ -119,13 +120,11 @@ def euler_dcm_batch(e: np.ndarray) -> np.ndarray:
     C[:, 2, 0] = -st
     C[:, 2, 1] = sf * ct
     C[:, 2, 2] = cf * ct
-    return C
-
-
-def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
-    """E(e) of eq. 2.13 (body rates -> Euler angle rates) for a batch (N, 3) -> (N, 3, 3)."""
-    cf, sf = np.cos(e[:, 0]), np.sin(e[:, 0])
-    ct, tt = np.cos(e[:, 1]), np.tan(e[:, 1])
+    if not rate:
+        return C
+    # (numpy's cos / sin of a column equal those of the whole batch, element by element: the same values the
+    # separate euler_rate_matrix form took; tests/estimation/test_deck_model.py compares them)
+    tt = np.tan(e[:, 1])
     E = np.zeros((e.shape[0], 3, 3))
     E[:, 0, 0] = 1.0
     E[:, 0, 1] = sf * tt
@@ -134,7 +133,12 @@ def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
     E[:, 1, 2] = -sf
     E[:, 2, 1] = sf / ct
     E[:, 2, 2] = cf / ct
-    return E
+    return C, E
+
+
+def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
+    """E(e) of eq. 2.13 (body rates -> Euler angle rates) for a batch (N, 3) -> (N, 3, 3)."""
+    return euler_dcm_batch(e, rate=True)[1]
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -167,9 +171,9 @@ def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
     # eq. 3.5: -a_h - wdot x r - 2 w x v - w x (w x r), the rate terms as two 3x3 products for the batch
     Sw = skew(w)
     vdot = -a_h - r @ (skew(wdot) + Sw @ Sw).T - v @ (2.0 * Sw).T
-    C = euler_dcm_batch(e)  # C_h^d
+    C, E = euler_dcm_batch(e, rate=True)  # C_h^d, E(e)
     w_rel = w - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
-    edot = np.einsum("nij,nj->ni", euler_rate_matrix(e), w_rel)
+    edot = np.einsum("nij,nj->ni", E, w_rel)
     out = np.empty_like(sig)
     out[:, POS] = r + v * dt + 0.5 * vdot * dt * dt
     out[:, ATT] = e + edot * dt
