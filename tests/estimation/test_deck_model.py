@@ -135,21 +135,75 @@ def _process_noise_reference(x, dt, u, imu_cov, ship_cov):
     return Fz @ imu_cov @ Fz.T + Fs @ ship_cov @ Fs.T
 
 
+def test_numpy_cos_and_sin_are_maths_bit_for_bit():
+    """process_noise takes cos / sin from ``math`` where the array form took numpy's: the same libm values (numpy's
+    tan is another implementation here and stays numpy's)."""
+    import math
+
+    rng = np.random.default_rng(9)
+    for scale in (1e-6, 0.01, 0.3, 1.0, 1.6, 3.2, 100.0):
+        a = rng.normal(size=20000) * scale
+        assert np.array_equal(np.cos(a), [math.cos(v) for v in a.tolist()])
+        assert np.array_equal(np.sin(a), [math.sin(v) for v in a.tolist()])
+        assert np.array_equal(np.cos(a[:, None]), np.cos(a)[:, None])
+
+
 def test_process_noise_is_the_reference_bit_for_bit():
-    """process_noise builds C and E of the one mean state from the same numpy cos / sin / tan values in Python
-    floats and copies its dt-only blocks from templates: the same Q to the last bit (speed round 4)."""
+    """process_noise builds C, E and dv/dw of the one mean state in Python floats (math's cos / sin, numpy's tan)
+    and copies its dt-only blocks from templates: the same Q to the last bit, signs of zero included (speed
+    rounds 4 and 5)."""
     rng = np.random.default_rng(8)
     imu = np.diag(rng.uniform(1e-6, 1e-2, 6))
     imu[0, 1] = imu[1, 0] = 1e-5
     ship = np.diag(rng.uniform(1e-4, 1.0, 6))
-    for k in range(400):
+    for k in range(3000):
         x = rng.normal(size=12) * rng.choice([0.1, 1.0, 3.0])
         if k % 7 == 0:
             x[4] = np.pi / 2 * rng.choice([-1, 1]) + rng.normal(0, 1e-9)  # near the pitch singularity
+        if k % 5 == 1:  # exact zeros (the signs of zero products and sums)
+            x[rng.choice(12, 4, replace=False)] = rng.choice([0.0, -0.0])
+        if k % 11 == 3:
+            x[4] = rng.uniform(-1.6, 1.6)  # pitch over its whole range
         u = dm.ImuInput(rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=3))
+        if k % 9 == 2:
+            u = dm.ImuInput(u.accel, np.array([0.0, -0.0, rng.normal()]), u.gyro_dot, u.gravity_body)
         dt = float(rng.choice([0.01, 0.005, 0.0033333333333333335, rng.uniform(1e-4, 0.02)]))
         got, ref = dm.process_noise(x, dt, u, imu, ship), _process_noise_reference(x, dt, u, imu, ship)
         assert np.array_equal(got.view(np.int64), ref.view(np.int64))
-        C, E = dm._dcm_and_rate_matrix(x[None, 3:6])
-        assert np.array_equal(C, dm.euler_dcm_batch(x[None, 3:6])[0])
-        assert np.array_equal(E, dm.euler_rate_matrix(x[None, 3:6])[0])
+
+
+def _euler_rate_matrix_reference(e):
+    """E(e) as euler_rate_matrix computed it before speed round 5 (its own cos / sin / tan of the columns)."""
+    cf, sf = np.cos(e[:, 0]), np.sin(e[:, 0])
+    ct, tt = np.cos(e[:, 1]), np.tan(e[:, 1])
+    E = np.zeros((e.shape[0], 3, 3))
+    E[:, 0, 0] = 1.0
+    E[:, 0, 1] = sf * tt
+    E[:, 0, 2] = cf * tt
+    E[:, 1, 1] = cf
+    E[:, 1, 2] = -sf
+    E[:, 2, 1] = sf / ct
+    E[:, 2, 2] = cf / ct
+    return E
+
+
+def test_dcm_and_rate_matrix_from_shared_trig_equal_the_separate_forms_bit_for_bit():
+    """process_model takes C and E of its sigma points from one euler_dcm_batch(e, rate=True) (the cos / sin of
+    the batch shared): the same arrays, C-contiguous, as euler_dcm_batch(e) and the separate E (the einsums
+    downstream read their layout), on sigma-point-like batches (column-major views of 25 x 12, rows of 1)."""
+    rng = np.random.default_rng(17)
+    for k in range(3000):
+        n = int(rng.choice([25, 1, int(rng.integers(2, 40))]))
+        sig = rng.normal(size=(n, 12)) * rng.choice([0.01, 0.5, 2.0, 10.0])
+        if k % 2:
+            sig = np.asfortranarray(sig)
+        if k % 7 == 0:
+            sig[:, 4] = np.pi / 2 * rng.choice([-1, 1], n) + rng.normal(0, 1e-9, n)  # near the pitch singularity
+        if k % 5 == 1:
+            sig[:, 3:6][rng.random((n, 3)) < 0.3] = rng.choice([0.0, -0.0])
+        e = sig[:, dm.ATT]
+        C, E = dm.euler_dcm_batch(e, rate=True)
+        C0, E0 = dm.euler_dcm_batch(e), _euler_rate_matrix_reference(e)
+        assert np.array_equal(C.view(np.int64), C0.view(np.int64)) and C.flags.c_contiguous
+        assert np.array_equal(E.view(np.int64), E0.view(np.int64)) and E.flags.c_contiguous
+        assert np.array_equal(dm.euler_rate_matrix(e).view(np.int64), E0.view(np.int64))

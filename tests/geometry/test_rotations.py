@@ -184,3 +184,23 @@ def test_single_vector_fast_paths_equal_the_batch_arithmetic_to_the_ulp():
     a, b = rng.normal(0.0, 10.0, (2, 300, 3))
     assert np.array_equal(np.array([cross3(x, y) for x, y in zip(a, b)]), np.cross(a, b))
     assert np.array_equal(cross3([1.0, 0.0, 0.0], (0.0, 1.0, 0.0)), [0.0, 0.0, 1.0])
+
+
+def test_the_level_attitude_from_three_floats_is_euler_to_dcm_of_the_list_bit_for_bit():
+    """The deck's 50 / 100 Hz code takes ``euler_to_dcm3(roll, pitch, 0.0)`` where it took
+    ``euler_to_dcm([roll, pitch, 0.0])``: the same matrix to the bit (signs of zero included) and the same
+    refusal of a NaN attitude."""
+    from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
+
+    rng = np.random.default_rng(12)
+    for k in range(3000):
+        r, p = (float(v) for v in rng.normal(0, [0.3, 1.2][k % 2], 2))
+        if k % 10 == 0:
+            r, p = float(rng.choice([0.0, -0.0])), float(rng.choice([0.0, -0.0, p]))
+        a, b = euler_to_dcm([np.float64(r), p, 0.0]), euler_to_dcm3(r, p, 0.0)
+        assert np.array_equal(a.view(np.int64), b.view(np.int64))
+    for bad in ((np.nan, 0.1), (0.1, np.inf)):
+        with pytest.raises(ValueError, match="finite"):
+            euler_to_dcm([bad[0], bad[1], 0.0])
+        with pytest.raises(ValueError, match="finite"):
+            euler_to_dcm3(bad[0], bad[1], 0.0)

@@ -73,3 +73,17 @@ def test_straight_approach_is_a_line():
         p, v, _ = s.desired(t)
         assert np.linalg.norm(np.cross(p, [-1.2, 0.4, -1.5])) < 1e-12
     np.testing.assert_allclose(s.desired(15.0)[0], 0.0)
+
+
+def test_rot_z_with_math_trig_equals_numpys_bit_for_bit():
+    """rot_z takes math's cos / sin of the yaw where it took numpy's (of a Python float): the same matrix."""
+    from visnav.guidance.deck_approach import rot_z
+
+    def reference(a):  # rot_z before speed round 5
+        c, s = np.cos(a), np.sin(a)
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    rng = np.random.default_rng(13)
+    yaws = [0.0, -0.0, np.pi, -np.pi, 1e-300] + rng.uniform(-4, 4, 20000).tolist() + rng.normal(0, 1e3, 2000).tolist()
+    for a in yaws:
+        assert np.array_equal(rot_z(a).view(np.int64), reference(a).view(np.int64))

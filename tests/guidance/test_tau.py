@@ -87,3 +87,35 @@ def test_duration_for_touchdown_acceleration():
     assert tau.higher_order_tau(T, 1.41, T, 0.5)[2] == pytest.approx(2.5)
     with pytest.raises(ValueError):
         tau.higher_order_tau(1.0, 1.0, 0.0, 0.5)
+
+
+def _higher_order_tau_reference(t, x0, T, k):
+    """``higher_order_tau`` in its array form (every t before speed round 5)."""
+    t = np.clip(np.asarray(t, float), 0.0, T)
+    a = x0 / T ** (3.0 / k)
+    g = T**3 - t**3
+    x = a * tau._pow(g, 1.0 / k)
+    xd = -a * 3.0 * t * t / k * tau._pow(g, (1.0 - k) / k)
+    with np.errstate(invalid="ignore"):
+        xdd = a * 3.0 * t / k * (3.0 * t**3 * (1.0 - k) / k * tau._pow(g, (1.0 - 2.0 * k) / k)
+                                 - 2.0 * tau._pow(g, (1.0 - k) / k))
+    return x, xd, xdd
+
+
+def test_higher_order_tau_of_one_instant_equals_the_array_form_bit_for_bit():
+    """One float t takes Python floats (numpy float64 scalars' ** is libm's pow, as Python's): the same three
+    numbers to the bit, and of the same type, at and beyond both ends, at 0 / -0 / NaN, for every k the deck
+    flies and others."""
+    rng = np.random.default_rng(5)
+    bits = lambda v: np.float64(v).view(np.int64)  # noqa: E731
+    for n in range(20000):
+        T = float(rng.choice([rng.uniform(0.5, 20.0), 3.0, 1e-3]))
+        k = float(rng.choice([0.5, 0.45, 0.3, 0.25, 1.0, 2.0, rng.uniform(0.05, 3.0), -0.4]))
+        x0 = float(rng.choice([1.0, rng.normal(0, 5), 0.0]))
+        t = float(rng.choice([rng.uniform(-1.0, T + 1.0), rng.uniform(0, T), T, 0.0, -0.0, np.nan,
+                              T * (1 - 1e-12), np.inf, -np.inf]))
+        with np.errstate(invalid="ignore"):  # (x0 = 0 times an infinite power: NaN, as ever)
+            got, want = tau.higher_order_tau(t, x0, T, k), _higher_order_tau_reference(t, x0, T, k)
+        for g, w in zip(got, want):
+            assert type(g) is type(w) is np.float64
+            assert bits(g) == bits(w) or (np.isnan(g) and np.isnan(w)), (t, x0, T, k, got, want)

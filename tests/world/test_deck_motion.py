@@ -59,3 +59,27 @@ def test_state_kept_for_one_instant_is_read_only_and_equals_a_fresh_evaluation()
     for a, b in ((m.state(1.25), fresh.state(1.25)), (m.state(1.26), fresh.state(1.26))):
         for k in ("position", "velocity", "euler", "body_rates", "C"):
             np.testing.assert_array_equal(getattr(a, k), getattr(b, k))
+
+
+def test_state_equals_its_array_form_bit_for_bit():
+    """DeckMotion.state reads the attitude's three floats once (euler_to_dcm3 of them, euler_to_dcm's one-vector
+    path): every array of the state equals the form that went through euler_to_dcm(euler), to the bit."""
+    from visnav.geometry.rotations import euler_rates_to_body_rates
+
+    def reference(m, t):  # DeckMotion.state's arrays before speed round 5
+        d, dd = m.displacement(t)
+        euler = np.array([d[3], d[4], m.heading + d[5]])
+        return (m.p0 + m._Rz @ d[:3], m._Rz @ dd[:3], euler,
+                np.asarray(euler_rates_to_body_rates(euler, dd[3:])), euler_to_dcm(euler))
+
+    rng = np.random.default_rng(21)
+    for k in range(300):
+        n = int(rng.integers(1, 4))
+        sea, scale = str(rng.choice(["stewart", "ship_ss4", "calm"])), float(rng.uniform(0.2, 3.0))
+        m = DeckMotion.from_sea_state(sea, rng, n, scale, rng.normal(0, 2, 3), float(rng.uniform(-4, 4)))
+        if k % 10 == 0:
+            m = DeckMotion.static(rng.normal(0, 2, 3), float(rng.choice([0.0, -0.0, 1.0])))
+        for t in rng.uniform(0, 60, 5).tolist() + [0.0]:
+            s = m.state(t)
+            for got, want in zip((s.position, s.velocity, s.euler, s.body_rates, s.C), reference(m, t)):
+                assert np.array_equal(got.view(np.int64), want.view(np.int64))

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.control.multirotor import ThrottleController, attitude_command, follow
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm3
 from visnav.guidance.deck_approach import level_deck_geometry, rot_z
 from visnav.measurements import AttitudeThrustCommand, DeckReference
 from visnav.scalar import clip as _clip
@@ -69,7 +69,7 @@ class DeckController:
         g, dt = self.g, self.period
         roll, pitch, gyro = est.roll, est.pitch, est.gyro
         # the vertical specific-force reading, level frame, up positive, gravity removed
-        acc_up = -(euler_to_dcm([roll, pitch, 0.0]) @ est.accel)[2] - G
+        acc_up = -(euler_to_dcm3(float(roll), float(pitch), 0.0) @ est.accel)[2] - G  # (euler_to_dcm's one-vector path)
         tilt_cos = np.cos(roll) * np.cos(pitch)
         if ref.kind == "level":  # (ref.accel: a vertical acceleration to hold, z down; zero by default)
             thr = self.throttle.command(-float(ref.accel[2]), acc_up, 1.0, tilt_cos, dt)

@@ -33,6 +33,7 @@ the rotating-frame derivative, which is the state v itself, so the term is not a
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,8 +103,9 @@ def camera_rotation(depression: float, yaw: float) -> np.ndarray:
     return np.vstack([xc, np.cross(zc, xc), zc])
 
 
-def euler_dcm_batch(e: np.ndarray) -> np.ndarray:
-    """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3)."""
+def euler_dcm_batch(e: np.ndarray, rate: bool = False):
+    """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3); with ``rate`` also
+    E(e) of eq. 2.13 (body rates -> Euler angle rates, (N, 3, 3)) from the same cos / sin values: ``(C, E)``."""
     c, s = np.cos(e), np.sin(e)  # one call each for the three angles (the batches are small)
     cf, ct, cp = c[:, 0], c[:, 1], c[:, 2]
     sf, st, sp = s[:, 0], s[:, 1], s[:, 2]
@@ -118,13 +120,11 @@ def euler_dcm_batch(e: np.ndarray) -> np.ndarray:
     C[:, 2, 0] = -st
     C[:, 2, 1] = sf * ct
     C[:, 2, 2] = cf * ct
-    return C
-
-
-def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
-    """E(e) of eq. 2.13 (body rates -> Euler angle rates) for a batch (N, 3) -> (N, 3, 3)."""
-    cf, sf = np.cos(e[:, 0]), np.sin(e[:, 0])
-    ct, tt = np.cos(e[:, 1]), np.tan(e[:, 1])
+    if not rate:
+        return C
+    # (numpy's cos / sin of a column equal those of the whole batch, element by element: the same values the
+    # separate euler_rate_matrix form took; tests/estimation/test_deck_model.py compares them)
+    tt = np.tan(e[:, 1])
     E = np.zeros((e.shape[0], 3, 3))
     E[:, 0, 0] = 1.0
     E[:, 0, 1] = sf * tt
@@ -133,7 +133,12 @@ def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
     E[:, 1, 2] = -sf
     E[:, 2, 1] = sf / ct
     E[:, 2, 2] = cf / ct
-    return E
+    return C, E
+
+
+def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
+    """E(e) of eq. 2.13 (body rates -> Euler angle rates) for a batch (N, 3) -> (N, 3, 3)."""
+    return euler_dcm_batch(e, rate=True)[1]
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -166,9 +171,9 @@ def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
     # eq. 3.5: -a_h - wdot x r - 2 w x v - w x (w x r), the rate terms as two 3x3 products for the batch
     Sw = skew(w)
     vdot = -a_h - r @ (skew(wdot) + Sw @ Sw).T - v @ (2.0 * Sw).T
-    C = euler_dcm_batch(e)  # C_h^d
+    C, E = euler_dcm_batch(e, rate=True)  # C_h^d, E(e)
     w_rel = w - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
-    edot = np.einsum("nij,nj->ni", euler_rate_matrix(e), w_rel)
+    edot = np.einsum("nij,nj->ni", E, w_rel)
     out = np.empty_like(sig)
     out[:, POS] = r + v * dt + 0.5 * vdot * dt * dt
     out[:, ATT] = e + edot * dt
@@ -206,21 +211,6 @@ def _noise_templates(dt: float) -> tuple[np.ndarray, np.ndarray]:
     return t[0].copy(), t[1].copy()
 
 
-def _dcm_and_rate_matrix(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``euler_dcm_batch(e)[0]`` and ``euler_rate_matrix(e)[0]`` of one state's angles ``e`` (1, 3): the same
-    numpy cos / sin / tan calls, the products and quotients in Python floats (the same IEEE operations),
-    without building batches of one."""
-    (cf, ct, cp), (sf, st, sp) = np.cos(e).tolist()[0], np.sin(e).tolist()[0]
-    stcp, stsp = st * cp, st * sp
-    C = np.array([[ct * cp, sf * stcp - cf * sp, sf * sp + cf * stcp],
-                  [ct * sp, cf * cp + sf * stsp, cf * stsp - sf * cp],
-                  [-st, sf * ct, cf * ct]])
-    (cf1,), (sf1,) = np.cos(e[:, 0]).tolist(), np.sin(e[:, 0]).tolist()
-    (ct1,), (tt1,) = np.cos(e[:, 1]).tolist(), np.tan(e[:, 1]).tolist()
-    E = np.array([[1.0, sf1 * tt1, cf1 * tt1], [0.0, cf1, -sf1], [0.0, sf1 / ct1, cf1 / ct1]])
-    return C, E
-
-
 def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, ship_cov: np.ndarray) -> np.ndarray:
     """Q = F_z Sigma_imu F_z^T + F_ship Sigma_ship F_ship^T (eq. 3.8) at the mean ``x``.
 
@@ -230,14 +220,32 @@ def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, sh
     per-sample covariance of (accel, gyro); ``ship_cov`` (6, 6) that of the deck accelerations.
     The numerical derivative of the rates is not differentiated: its noise telescopes over steps.
     """
-    r, e, v = x[POS], x[ATT], x[VEL]
+    # Written out in Python floats for speed (one state, not a batch): every entry is the same IEEE operation on
+    # the same numbers as the array form it replaces (kept in tests/estimation/test_deck_model.py, compared bit
+    # for bit). numpy's cos / sin equal math's (libm), its tan is kept; the dot product and the matmuls (BLAS)
+    # are kept as they were.
+    r0, r1, r2, ef, et, ep, v0, v1, v2 = x[0:9].tolist()
     w = u.gyro
-    C, E = _dcm_and_rate_matrix(e[None, :])  # C_h^d, E(e)
-    I3 = _I3
+    w0, w1, w2 = w.tolist()
+    cf, ct, cp, sf, st, sp = math.cos(ef), math.cos(et), math.cos(ep), math.sin(ef), math.sin(et), math.sin(ep)
+    stcp, stsp = st * cp, st * sp
+    C = np.array([[ct * cp, sf * stcp - cf * sp, sf * sp + cf * stcp],  # C_h^d (euler_dcm_batch's entries)
+                  [ct * sp, cf * cp + sf * stsp, cf * stsp - sf * cp],
+                  [-st, sf * ct, cf * ct]])
+    tt = np.tan(x[4:5]).item()
+    E = np.array([[1.0, sf * tt, cf * tt], [0.0, cf, -sf], [0.0, sf / ct, cf / ct]])  # E(e), eq. 2.13
     dt2 = 0.5 * dt * dt
     Fz, Fs = _noise_templates(dt)
-    dvdw = 2.0 * skew(v) + 2.0 * np.multiply(r[:, None], w[None, :]) - np.dot(w, r) * I3 - np.multiply(
-        w[:, None], r[None, :])  # 2 [v]x + 2 r w^T - (w.r) I - w r^T
+    # dv/dw = 2 [v]x + 2 r w^T - (w.r) I - w r^T, entry by entry in the array form's order ((2 S + 2 R) - d I) - W
+    wr = float(np.dot(w, x[POS]))
+    z = wr * 0.0  # (the identity's zeros times w.r)
+    dvdw = np.array([
+        [((0.0 + 2.0 * (r0 * w0)) - wr) - w0 * r0, ((2.0 * -v2 + 2.0 * (r0 * w1)) - z) - w0 * r1,
+         ((2.0 * v1 + 2.0 * (r0 * w2)) - z) - w0 * r2],
+        [((2.0 * v2 + 2.0 * (r1 * w0)) - z) - w1 * r0, ((0.0 + 2.0 * (r1 * w1)) - wr) - w1 * r1,
+         ((2.0 * -v0 + 2.0 * (r1 * w2)) - z) - w1 * r2],
+        [((2.0 * -v1 + 2.0 * (r2 * w0)) - z) - w2 * r0, ((2.0 * v0 + 2.0 * (r2 * w1)) - z) - w2 * r1,
+         ((0.0 + 2.0 * (r2 * w2)) - wr) - w2 * r2]])
     Fz[VEL, 3:6] = dt * dvdw
     Fz[POS, 3:6] = dt2 * dvdw
     Fz[ATT, 3:6] = dt * E

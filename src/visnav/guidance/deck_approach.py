@@ -25,9 +25,11 @@ landing point along the predicted deck normal (so that the gear, not the body, m
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm, euler_to_dcm3
 from visnav.guidance.tau import duration_for_touchdown_acceleration, higher_order_tau
 
 G = 9.81
@@ -130,7 +132,7 @@ class StraightApproach:
 
 
 def rot_z(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = math.cos(a), math.sin(a)  # (numpy's float64 cos / sin are libm's, as math's: the same values, faster)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
@@ -145,7 +147,7 @@ def level_deck_geometry(x: np.ndarray, gyro: np.ndarray, roll: float, pitch: flo
     last = _LEVEL_LAST[0]  # the mission and the controller ask for the same estimate's in one step
     if last is not None and last[0] is x and last[1] is gyro and last[2] == roll and last[3] == pitch:
         return last[4]
-    Ch0 = euler_to_dcm([roll, pitch, 0.0])
+    Ch0 = euler_to_dcm3(float(roll), float(pitch), 0.0)  # (euler_to_dcm's one-vector path)
     r, e, v, wd = x[0:3], x[3:6], x[6:9], x[9:12]
     p = -Ch0 @ r
     vel = -Ch0 @ (v + cross3(gyro, r))

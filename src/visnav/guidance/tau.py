@@ -17,6 +17,8 @@ returns (x, x_dot, x_ddot); outside [0, T] the guidance laws hold their end stat
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -71,6 +73,11 @@ def higher_order_tau(t, x0: float, T: float, k: float):
     """
     if T <= 0 or k == 0:
         raise ValueError(f"higher-order tau needs T > 0 and k != 0, got T={T}, k={k}")
+    if isinstance(t, float):  # one instant (the mission's 50 Hz step): Python floats, see _higher_order_tau_one
+        try:
+            return _higher_order_tau_one(t, x0, T, k)
+        except (OverflowError, ZeroDivisionError):  # (Python's ** raises where numpy's gives inf)
+            pass
     t = np.clip(np.asarray(t, float), 0.0, T)
     a = x0 / T ** (3.0 / k)
     g = T**3 - t**3
@@ -80,6 +87,27 @@ def higher_order_tau(t, x0: float, T: float, k: float):
         xdd = a * 3.0 * t / k * (3.0 * t**3 * (1.0 - k) / k * _pow(g, (1.0 - 2.0 * k) / k)
                                  - 2.0 * _pow(g, (1.0 - k) / k))
     return x, xd, xdd
+
+
+def _pow_one(b: float, p: float) -> float:
+    """``_pow`` of one number (NaN and b <= 0 give the constant, as np.where(b > 0, ...) does)."""
+    return b**p if b > 0 else (0.0 if p > 0 else (1.0 if p == 0 else math.inf))
+
+
+def _higher_order_tau_one(t: float, x0: float, T: float, k: float):
+    """``higher_order_tau`` at one instant, for speed: the array form on a 0-d ``t`` computed in numpy float64
+    scalars, whose ``**`` is libm's ``pow`` as Python's (numpy's power *ufunc* is another implementation: it is
+    not used here, nor was it there), so the same operations in the same order on Python floats give the same
+    bits (tests/guidance/test_tau.py compares them)."""
+    t = 0.0 if t < 0.0 else t  # np.clip: a bound replaces t only beyond it (-0 and NaN stay)
+    t = T if t > T else t
+    a = x0 / T ** (3.0 / k)
+    g = T**3 - t**3
+    p1, p2 = _pow_one(g, (1.0 - k) / k), _pow_one(g, (1.0 - 2.0 * k) / k)
+    x = a * _pow_one(g, 1.0 / k)
+    xd = -a * 3.0 * t * t / k * p1
+    xdd = a * 3.0 * t / k * (3.0 * t**3 * (1.0 - k) / k * p2 - 2.0 * p1)
+    return np.float64(x), np.float64(xd), np.float64(xdd)
 
 
 def higher_order_tau_touchdown_acceleration(x0: float, T: float) -> float:

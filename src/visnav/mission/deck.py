@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm3
 from visnav.guidance.deck_approach import (StraightApproach, TauGapApproach, level_deck_geometry, rot_z,
                                            touchdown_acceleration, touchdown_target)
 from visnav.measurements import DeckReference, NavCommand, NavInit, RelativeStateSample
@@ -262,7 +262,7 @@ class DeckMission:
         """The vertical acceleration (up) from the IMU's specific force and the autopilot's roll and pitch."""
         if not (np.isfinite(est.roll) and np.isfinite(est.pitch)):
             return 0.0
-        return float(-(euler_to_dcm([est.roll, est.pitch, 0.0]) @ np.asarray(est.accel, float))[2] - G)
+        return float(-(euler_to_dcm3(float(est.roll), float(est.pitch), 0.0) @ np.asarray(est.accel, float))[2] - G)
 
     def _blind_hold(self, t: float, p_ld: np.ndarray) -> DeckReference:
         """Hover without a fix (unusable for ``blind_hold_s``, or its HPL above ``hover_hpl_m``): a go-around

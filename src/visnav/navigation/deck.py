@@ -47,7 +47,7 @@ from visnav.estimation import deck as dm
 from visnav.estimation.association import associate
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
 from visnav.estimation.ukf import UnscentedKalmanFilter
-from visnav.geometry.rotations import euler_to_dcm
+from visnav.geometry.rotations import euler_to_dcm3
 from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavInit
 from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
@@ -226,6 +226,7 @@ class DeckNavigator(CommandDispatch):
         self._locked = 0  # frames in a row with >= 3 blobs and every light rejected
         self._retying = False  # fusing a frame again after a re-tie (it cannot re-tie again)
         self._widen_until = -np.inf  # accelerometer noise widened in Q until then (after a re-tie)
+        self._est_last: tuple | None = None  # (what it was made of, the estimate) of the last estimate()
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -250,6 +251,23 @@ class DeckNavigator(CommandDispatch):
             raise TypeError(f"DeckNavigator takes ImuSample, AttitudeSample or Frame, not {type(m).__name__}")
 
     def estimate(self, t: float) -> DeckEstimate:
+        """The estimate at ``t``. The last one is returned again (the same object) while nothing it is made of
+        has been replaced: the mission, the controller and the truth log ask for the same step's estimate, and
+        every update replaces the arrays it changes (x, P, the IMU input, the attitude) rather than writing into
+        them. Its arrays are read, never changed in place, by its users."""
+        ukf, last = self.ukf, self._est_last
+        if (last is not None and ukf is not None and last[0] == t and last[1] is ukf and last[2] is ukf.x
+                and last[3] is ukf.P and last[4] == self._t and last[5] is self._u and last[6] is self._rp
+                and last[7] is self.last_gyro and last[8] is self._accel and last[9] is self.imu_cov
+                and last[10] is self.ship_cov):
+            return last[11]
+        est = self._estimate(t)
+        if ukf is not None:
+            self._est_last = (t, ukf, ukf.x, ukf.P, self._t, self._u, self._rp, self.last_gyro, self._accel,
+                              self.imu_cov, self.ship_cov, est)
+        return est
+
+    def _estimate(self, t: float) -> DeckEstimate:
         if self.ukf is None:
             return DeckEstimate(t=t, state=np.full(12, np.nan), covariance=np.full((12, 12), np.nan),
                                 gyro=self.last_gyro.copy(), accel=self._accel.copy(), roll=np.nan, pitch=np.nan,
@@ -360,7 +378,7 @@ class DeckNavigator(CommandDispatch):
         raw = (gyro - self._gyro) / dt_imu
         a = dt_imu / (self.cfg.gyro_dot_tau + dt_imu)
         self._gyro_dot = self._gyro_dot + a * (raw - self._gyro_dot)
-        gb = euler_to_dcm([self._rp[0], self._rp[1], 0.0]).T @ _GRAVITY_NED
+        gb = euler_to_dcm3(*self._rp.tolist(), 0.0).T @ _GRAVITY_NED  # (euler_to_dcm's one-vector path)
         u = dm.ImuInput(accel=accel, gyro=gyro, gyro_dot=self._gyro_dot, gravity_body=gb)
         prev_accel, prev_gyro = self._accel, self._gyro
         self._t_imu, self._gyro, self.last_gyro, self._accel, self._u = t, gyro, gyro, accel, u

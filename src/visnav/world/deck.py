@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visnav.estimation.deck import SEA_STATES as _SEA_STATES
-from visnav.geometry.rotations import cross3, dcm_to_euler, euler_rates_to_body_rates, euler_to_dcm
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_rates_to_body_rates, euler_to_dcm, euler_to_dcm3
 
 #: the four LEDs of eq. 5.10 (deck frame, m)
 LEDS_EQ_5_10 = np.array([[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.0], [0.058, 0.0, 0.0]])
@@ -108,9 +108,11 @@ class DeckMotion:
         d, dd = self.displacement(t)
         pos = self.p0 + self._Rz @ d[:3]
         vel = self._Rz @ dd[:3]
-        euler = np.array([d[3], d[4], self.heading + d[5]])
+        roll, pitch, yaw = d[3:].tolist()
+        yaw = self.heading + yaw
+        euler = np.array([roll, pitch, yaw])
         rates = np.asarray(euler_rates_to_body_rates(euler, dd[3:]))
-        C = euler_to_dcm(euler)
+        C = euler_to_dcm3(roll, pitch, yaw)  # (euler_to_dcm(euler)'s one-vector path, from the floats)
         for a in (pos, vel, euler, rates, C):
             a.flags.writeable = False
         self._last = DeckState(t=t, position=pos, velocity=vel, euler=euler, body_rates=rates, C=C)
