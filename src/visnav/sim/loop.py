@@ -39,8 +39,10 @@ from visnav.sim.streams import RMAX_STREAMS
 from visnav.vehicles.base import Environment
 
 
-#: the interpreter's switch interval while frames render on the worker thread [s] (``Simulation._fly``)
-RENDER_SWITCH_INTERVAL_S = 1e-4
+#: the interpreter's switch interval while frames render on the worker thread [s] (``Simulation._fly``): the
+#: worker takes the GIL back after each of a frame's ~5 OpenCV calls while the loop runs Python on the other
+#: core; at 0.1 ms palace-landing's frames waited ~0.7 ms each for it, at 20 us ~0.2 ms (BENCHMARKS.md, round 5)
+RENDER_SWITCH_INTERVAL_S = 2e-5
 
 
 @dataclass
@@ -265,7 +267,7 @@ class Simulation:
             self._render_pool = ThreadPoolExecutor(1)
             # the worker takes the GIL back after each OpenCV call; while the loop runs Python it would wait
             # for the interpreter's switch interval (5 ms) each time, so a frame of ~3 ms CPU would take tens
-            # of ms: hand the GIL over within 0.1 ms during the run (restored at the end)
+            # of ms: hand the GIL over within 20 us during the run (restored at the end)
             self._switch_interval = sys.getswitchinterval()
             sys.setswitchinterval(min(self._switch_interval, RENDER_SWITCH_INTERVAL_S))
         own, grid = self._sensor_schedule()
