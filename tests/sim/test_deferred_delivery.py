@@ -148,3 +148,33 @@ def test_a_wrapped_navigator_gets_each_measurement_at_its_step():
     sc = load_scenario("palace-landing", SHORT + ["run.duration_s=1"], seed=2)
     assert Simulation(sc).defer_deliveries
     assert not Simulation(sc, navigator_wrapper=lambda nav: nav).defer_deliveries
+
+
+@pytest.mark.parametrize("scenario, sets", [
+    ("palace-landing", SHORT + ["run.duration_s=6"]),
+    ("witas-homing", ["run.duration_s=14"]),  # GPS lost at 8 s: the vision navigator takes the frames
+])
+def test_frames_rendered_on_the_loops_thread_give_the_same_run(scenario, sets, monkeypatch):
+    """``render_thread = False`` (a campaign that runs a simulation per core) renders each frame when it is taken,
+    on the loop's thread, with no prework and no deferred delivery: the run is the threaded run to the last bit."""
+    from visnav.sensors.camera import Camera
+
+    runs, on_worker = [], []
+    sample_async = Camera.sample_async
+    monkeypatch.setattr(Camera, "sample_async", lambda *a, **k: on_worker.append(1) or sample_async(*a, **k))
+    for threaded in (True, False):
+        on_worker.clear()
+        sim = Simulation(load_scenario(scenario, sets, seed=3))
+        sim.render_thread = threaded
+        runs.append(sim.run())
+        assert runs[-1].error is None
+        assert (len(on_worker) >= 20) if threaded else not on_worker
+    a, b = runs
+    assert a.log.streams() == b.log.streams()
+    for s in a.log.streams():
+        for k, v in a.log.get(s).items():
+            w = b.log.get(s)[k]
+            same = list(v) == list(w) if v.dtype == object else np.array_equal(v, w, equal_nan=True)
+            assert same, f"{s}.{k}"
+    frames_used = {"palace-landing": "tracker", "witas-homing": "odometry"}[scenario]
+    assert len(a.log.get(frames_used)["t"]) >= 20  # frames were rendered and used

@@ -105,6 +105,10 @@ class Simulation:
         #: (``settle``); off for a wrapped navigator: ``visnav record`` logs the step each measurement is
         #: delivered at, ``--sil`` forwards it to another process in wall-clock time
         self.defer_deliveries = navigator_wrapper is None
+        #: frames render on a worker thread (the second core) while the loop steps on; off, they render on the
+        #: loop's thread when taken (the same numbers): a campaign that runs a simulation per core does not
+        #: gain a core from the thread, and the thread's hand-overs cost CPU (``analysis/montecarlo``)
+        self.render_thread = True
 
     @property
     def flight_nav(self):
@@ -263,7 +267,7 @@ class Simulation:
         d_ctrl = _divisor(self.controller.rate_hz, dt)  # the controller's own rate
         d_log = d_mis if p.log_hz is None else _divisor(p.log_hz, dt)
         # frames render on a second thread while the loop steps through the camera latency
-        if any(hasattr(s, "sample_async") and s.latency_s >= dt for s in self.sensors.values()):
+        if self.render_thread and any(hasattr(s, "sample_async") and s.latency_s >= dt for s in self.sensors.values()):
             self._render_pool = ThreadPoolExecutor(1)
             # the worker takes the GIL back after each OpenCV call; while the loop runs Python it would wait
             # for the interpreter's switch interval (5 ms) each time, so a frame of ~3 ms CPU would take tens
