@@ -41,7 +41,8 @@ from visnav.vehicles.base import Environment
 
 #: the interpreter's switch interval while frames render on the worker thread [s] (``Simulation._fly``): the
 #: worker takes the GIL back after each of a frame's ~5 OpenCV calls while the loop runs Python on the other
-#: core; a palace frame replayed beside a busy thread waited ~0.65 ms for it at 0.1 ms, ~0.3 ms at 10-30 us (BENCHMARKS.md)
+#: core; a palace frame replayed beside a busy thread waited ~0.65 ms for it at 0.1 ms, ~0.3 ms at 10-30 us
+#: (BENCHMARKS.md, speed round 5)
 RENDER_SWITCH_INTERVAL_S = 2e-5
 
 
