@@ -23,6 +23,7 @@ from visnav.guidance.pfcm import (
 )
 from visnav.guidance.pfcm import _clip, heading_rotation  # the issue #19 reference below
 from visnav.measurements import NavEstimate
+from tests.guidance.test_hermite import _frame_at_reference  # frame_at before issue #19
 
 G = 9.81
 PHI, R_MAX, THETA = math.radians(15), math.radians(40), math.radians(15)
@@ -332,20 +333,6 @@ class _PfcmReference(PfcmGuidance):
             source=getattr(nav, "source", "gps"))
         return self.last
 
-
-
-def _frame_at_reference(sg, s: float):
-    """``HermiteSegment.frame_at`` before issue #19 (tests/guidance/test_hermite.py keeps it too)."""
-    A, B, C, D = sg.coeffs
-    p = ((A * s + B) * s + C) * s + D
-    t = (3.0 * A * s + 2.0 * B) * s + C
-    q = 6.0 * A * s + 2.0 * B
-    tx, ty, tz = t
-    qx, qy, qz = q
-    cx, cy, cz = ty * qz - tz * qy, tz * qx - tx * qz, tx * qy - ty * qx
-    n2 = tx * tx + ty * ty + tz * tz
-    k = np.array([cy * tz - cz * ty, cz * tx - cx * tz, cx * ty - cy * tx]) / (n2 * n2)
-    return p, t, k
 
 
 def _same(a, b) -> bool:

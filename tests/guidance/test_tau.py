@@ -119,3 +119,15 @@ def test_higher_order_tau_of_one_instant_equals_the_array_form_bit_for_bit():
         for g, w in zip(got, want):
             assert type(g) is type(w) is np.float64
             assert bits(g) == bits(w) or (np.isnan(g) and np.isnan(w)), (t, x0, T, k, got, want)
+
+
+@pytest.mark.parametrize("t, k", [(0.9999, -0.01), (0.99999999, -0.005)])
+def test_higher_order_tau_of_a_float_that_overflows_answers_as_the_array_form(t, k):
+    """Python's ** raises OverflowError where numpy's gives inf: the one-instant path hands such a case to the
+    array form, so a float t gives what a 0-d array gives (here inf for an unbounded k < 0 approach)."""
+    with pytest.raises(OverflowError):
+        tau._higher_order_tau_one(t, 1.0, 1.0, k)
+    with np.errstate(all="ignore"):
+        one = tau.higher_order_tau(t, 1.0, 1.0, k)
+        arr = tau.higher_order_tau(np.array(t), 1.0, 1.0, k)
+    assert all(np.array_equal(a, b) for a, b in zip(one, arr)) and np.isinf(one[0])

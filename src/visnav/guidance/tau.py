@@ -17,6 +17,7 @@ returns (x, x_dot, x_ddot); outside [0, T] the guidance laws hold their end stat
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -73,11 +74,10 @@ def higher_order_tau(t, x0: float, T: float, k: float):
     """
     if T <= 0 or k == 0:
         raise ValueError(f"higher-order tau needs T > 0 and k != 0, got T={T}, k={k}")
-    if isinstance(t, float):  # one instant (the mission's 50 Hz step): Python floats, see _higher_order_tau_one
-        try:
+    if isinstance(t, float):  # one instant (the mission's 50 Hz step): Python floats, see _higher_order_tau_one;
+        # where Python's ** raises (numpy's gives inf) the array form below answers
+        with contextlib.suppress(OverflowError, ZeroDivisionError):
             return _higher_order_tau_one(t, x0, T, k)
-        except (OverflowError, ZeroDivisionError):  # (Python's ** raises where numpy's gives inf)
-            pass
     t = np.clip(np.asarray(t, float), 0.0, T)
     a = x0 / T ** (3.0 / k)
     g = T**3 - t**3
