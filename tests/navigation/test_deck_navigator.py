@@ -412,34 +412,3 @@ def test_the_mission_config_turns_the_re_tie_on():
     assert cfg.retie_accel_sigma == 1.0 and cfg.retie_hold_s == 3.0
     off = load_scenario("deck-static", ["navigation.retie_after_frames=0"])
     assert DeckNavConfig.from_mission(off, 0.03).retie_after_frames == 0
-
-
-def test_the_estimate_is_kept_until_something_it_is_made_of_changes_and_equals_a_fresh_one_bit_for_bit():
-    """``estimate(t)`` returns its last result again (the same object) for the same t while the filter, the
-    IMU input and the attitude are the ones it was made of; after any message, command or restart it is made
-    anew. Either way it equals the one made from scratch (``_estimate``) to the bit."""
-    nav, truth = _tied_nav()
-    rng = np.random.default_rng(3)
-    b, r = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
-
-    def same(a, c):
-        return (a.t == c.t and np.array_equal(a.state, c.state) and np.array_equal(a.covariance, c.covariance)
-                and np.array_equal(a.gyro, c.gyro) and np.array_equal(a.accel, c.accel)
-                and np.array_equal([a.roll, a.pitch], [c.roll, c.pitch], equal_nan=True) and a.valid == c.valid)
-
-    seen = []
-    for k in range(120):
-        t = k * 0.01
-        nav.update(ImuSample(t, ACC + 0.05 * rng.standard_normal(3), 0.003 * rng.standard_normal(3)))
-        if k % 2 == 0:
-            nav.update(AttitudeSample(t=t, euler=np.r_[0.01 * rng.standard_normal(2), np.nan]))
-        if k % 3 == 0:
-            nav.fuse_bearings(b[0] + 1e-3 * rng.standard_normal(b[0].shape), r[0])
-        if k == 60:
-            nav.command(NavCommand(t, "restart", {"yaw_deg": 5.0}))
-        for tq in (t, t + 0.004):
-            e1 = nav.estimate(tq)
-            assert nav.estimate(tq) is e1  # nothing changed in between
-            assert same(e1, nav._estimate(tq))
-            seen.append(e1)
-    assert len({id(e) for e in seen}) == len(seen)  # a new one after every change (and for another t)

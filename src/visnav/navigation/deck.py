@@ -226,7 +226,6 @@ class DeckNavigator(CommandDispatch):
         self._locked = 0  # frames in a row with >= 3 blobs and every light rejected
         self._retying = False  # fusing a frame again after a re-tie (it cannot re-tie again)
         self._widen_until = -np.inf  # accelerometer noise widened in Q until then (after a re-tie)
-        self._est_last: tuple | None = None  # (what it was made of, the estimate) of the last estimate()
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -251,23 +250,6 @@ class DeckNavigator(CommandDispatch):
             raise TypeError(f"DeckNavigator takes ImuSample, AttitudeSample or Frame, not {type(m).__name__}")
 
     def estimate(self, t: float) -> DeckEstimate:
-        """The estimate at ``t``. The last one is returned again (the same object) while nothing it is made of
-        has been replaced: the mission, the controller and the truth log ask for the same step's estimate, and
-        every update replaces the arrays it changes (x, P, the IMU input, the attitude) rather than writing into
-        them. Its arrays are read, never changed in place, by its users."""
-        ukf, last = self.ukf, self._est_last
-        if (last is not None and ukf is not None and last[0] == t and last[1] is ukf and last[2] is ukf.x
-                and last[3] is ukf.P and last[4] == self._t and last[5] is self._u and last[6] is self._rp
-                and last[7] is self.last_gyro and last[8] is self._accel and last[9] is self.imu_cov
-                and last[10] is self.ship_cov):
-            return last[11]
-        est = self._estimate(t)
-        if ukf is not None:
-            self._est_last = (t, ukf, ukf.x, ukf.P, self._t, self._u, self._rp, self.last_gyro, self._accel,
-                              self.imu_cov, self.ship_cov, est)
-        return est
-
-    def _estimate(self, t: float) -> DeckEstimate:
         if self.ukf is None:
             return DeckEstimate(t=t, state=np.full(12, np.nan), covariance=np.full((12, 12), np.nan),
                                 gyro=self.last_gyro.copy(), accel=self._accel.copy(), roll=np.nan, pitch=np.nan,
