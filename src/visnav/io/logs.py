@@ -26,10 +26,14 @@ from visnav.io.streams import gps_stream, heading_stream
 
 def open_recording(path: str | Path) -> Recording:
     """A recording folder (or a ``visnav bridge`` log folder: its ``recording/``), a DataFlash ``.bin``, a PX4
-    ``.ulg`` or a ROS bag (``.bag`` / ROS 2 folder)."""
+    ``.ulg``, an EuRoC / ASL folder or a ROS bag (``.bag`` / ROS 2 folder)."""
     p = Path(path)
     if p.is_dir() and (p / "bridge.tlog").is_file() and (p / "recording").is_dir():  # a `visnav bridge` log folder
         p = p / "recording"
+    from visnav.io.euroc import is_euroc, read_euroc
+
+    if is_euroc(p):  # the EuRoC / ASL dataset layout (mav0/imu0, cam0, ground truth)
+        return read_euroc(p)
     if p.is_dir() and not (p / "metadata.yaml").is_file():
         return Recording.open(p)
     if not p.exists():
