@@ -821,6 +821,45 @@ def replay_(
         raise typer.Exit(1)
 
 
+# ------------------------------------------------------------------ check (issue 29)
+@app.command("check")
+def check_(
+    recording: str = typer.Argument(..., help="recording folder, EuRoC folder, .bin, .ulg or ROS bag"),
+    json_: bool = typer.Option(False, "--json", help="print check.json on stdout"),
+    out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
+                                      "(default runs/check-<name>)"),
+    max_frames: Optional[int] = typer.Option(None, help="use at most this many frames (the most rotating stretch)"),
+) -> None:
+    """Verify a recording's conventions and calibration from the flight itself (docs/check.md)."""
+    from visnav.analysis.check import run_check, write_check
+    from visnav.io.logs import open_recording
+    from visnav.io.recording import RecordingError
+
+    try:
+        rec = open_recording(recording)
+        with console.status(f"checking {escape(recording)}"):
+            res = run_check(rec, max_frames=max_frames)
+        out_dir = Path(out) if out else Path("runs") / f"check-{Path(recording).resolve().name}"
+        doc = write_check(res, out_dir, f"visnav check: {recording}")
+    except (RecordingError, ValueError) as exc:
+        _fail(exc)
+    except OSError as exc:
+        _fail(f"cannot write {out}: {exc.strerror or exc}")
+    if json_:
+        _print_json(doc)
+        return
+    table = Table(title=f"check of {escape(recording)}")
+    for c in ("check", "status", "measured", "expected"):
+        table.add_column(c)
+    colour = {"ok": "green", "warning": "yellow", "problem": "red", "not observable": "dim"}
+    for n, s, m, e in res.rows:
+        table.add_row(escape(n), f"[{colour[s]}]{s}[/{colour[s]}]", escape(str(m)), escape(str(e)))
+    console.print(table)
+    for p in res.summary["problems"]:
+        console.print(f"[red]problem:[/red] {escape(p)}", soft_wrap=True)
+    console.print(f"written: {out_dir / 'check.json'}, {out_dir / 'check.html'}")
+
+
 def main() -> None:  # pragma: no cover
     app()
 
