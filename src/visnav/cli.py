@@ -436,7 +436,7 @@ def keys(
 
 @app.command()
 def ahrs(
-    log: str = typer.Argument(..., help="PX4 ULog file (.ulg)"),
+    log: str = typer.Argument(..., help="PX4 ULog (.ulg), or a recording / EuRoC folder / log with a reference attitude"),
     out: Optional[str] = typer.Option(None, "--out", help="output directory (default: runs/ahrs-<log name>)"),
     declination_deg: Optional[float] = typer.Option(
         None, "--declination-deg", help="magnetic declination \\[deg]; default: the log's EKF2_MAG_DECL, else 0"),
@@ -454,7 +454,7 @@ def ahrs(
         _fail(exc)
     for note in m["log_notes"]:
         err_console.print(f"[yellow]log:[/yellow] {escape(note)}", soft_wrap=True)
-    table = Table(title=f"AHRS vs PX4 vehicle_attitude ({Path(log).name})")
+    table = Table(title=f"AHRS vs {m['reference']} ({Path(log).name})")
     table.add_column("metric")
     table.add_column("value", justify="right")
     if m.get("log_truncated"):
@@ -462,8 +462,12 @@ def ahrs(
     table.add_row("magnetometer", m.get("magnetometer_source") or "NOT FOUND (yaw gyro-only)")
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
-        gyro_only = k == "yaw_rms_diff_deg" and not m["magnetometer"]
-        table.add_row(k, _fmt(m[k]) + (" (gyro-only: no magnetometer)" if gyro_only else ""))
+        table.add_row(k, "null (not observable)" if m[k] is None else _fmt(m[k]))
+    for k in ("reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
+        if k in m:
+            table.add_row(k, _fmt(m[k]) if not isinstance(m[k], list) else str([round(x, 3) for x in m[k]]))
+    if m.get("yaw_unobservable_reason"):
+        table.add_row("yaw", escape(m["yaw_unobservable_reason"]))
     console.print(table)
     console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
 
