@@ -779,6 +779,7 @@ def replay_(
                                               "real flight; the fixes stay the reference when there is no truth.csv)"),
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
                                "there are removed first)"),
+    no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -798,6 +799,14 @@ def replay_(
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
         rec = open_recording(recording)
+        if not no_check:  # issue 29: a recording whose conventions or calibration are wrong is refused
+            from visnav.analysis.check import run_check
+
+            with console.status(f"checking {escape(recording)}"):
+                problems = run_check(rec, max_frames=60).summary["problems"]
+            if problems:
+                raise RecordingError(f"{recording}: `visnav check` found {len(problems)} problem(s) "
+                                     "(replay anyway with --no-check):\n  " + "\n  ".join(problems))
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):

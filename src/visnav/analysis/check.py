@@ -265,6 +265,12 @@ def _check_camera(rec, out: CheckResult, max_frames: int | None) -> None:
         out.add("camera vs IMU", NA, f"rotation per frame interval {exc:.3f} deg RMS, rate correlation "
                 f"{cal.coarse.peak:.2f}, rotation sigma {cal.rotation_sigma_deg:.1f} deg", "turns entered and left")
         return
+    amb = _translation_ambiguity(rec, cal)
+    if amb is not None and amb > 0.3 * exc:
+        out.add("camera vs IMU", NA, f"the translation looks like {amb:.2f} deg of rotation per frame pair against "
+                f"{exc:.2f} deg of rotation (a distant scene: rotation and translation cannot be told apart); found "
+                f"{cal.rotation_error_deg:.1f} deg, offset {cal.offset_s * 1e3:.0f} ms", "rotation dominating")
+        return
     s = out.summary
     s["camera_time_offset_s"], s["camera_time_offset_sigma_s"] = cal.offset_s, cal.offset_sigma_s
     s["camera_imu_rotation_error_deg"], s["camera_imu_rotation_sigma_deg"] = (cal.rotation_error_deg,
@@ -280,6 +286,21 @@ def _check_camera(rec, out: CheckResult, max_frames: int | None) -> None:
             f"{cal.offset_s * 1e3:.1f} +- {cal.offset_sigma_s * 1e3:.1f} ms (t_imu = t_camera + offset; declared "
             f"{declared * 1e3:.1f} ms)", "within 5 ms of the declared")
     _check_focal(rec, out, cal)
+
+
+def _translation_ambiguity(rec, cal) -> float | None:
+    """RMS |v| dt / h per frame pair [deg]: how much rotation the translation over a distant scene (height h
+    from the truth or the GPS) can mimic; None without a velocity and a height."""
+    src = rec.truth if rec.truth is not None and "vn_mps" in rec.truth else rec.streams.get("gps")
+    if src is None or "vn_mps" not in src:
+        return None
+    h = -np.asarray(src["d_m"], float)
+    if not np.all(h > 1.0):
+        return None
+    tp = cal.extra["frames"].t_pairs
+    v = np.column_stack([np.interp(tp[:, 0], src["t_s"], src[k]) for k in ("vn_mps", "ve_mps", "vd_mps")])
+    hh = np.interp(tp[:, 0], src["t_s"], h)
+    return float(np.degrees(np.sqrt(np.mean((np.linalg.norm(v, axis=1) * np.diff(tp, axis=1)[:, 0] / hh) ** 2))))
 
 
 def _check_focal(rec, out: CheckResult, cal) -> None:
@@ -440,7 +461,7 @@ def _plots(res: CheckResult) -> list[tuple[str, str]]:
     if res.plots.get("dt"):
         fig, ax = plt.subplots(1, len(res.plots["dt"]), figsize=(3 * len(res.plots["dt"]), 2.6), squeeze=False)
         for a, (n, d) in zip(ax[0], res.plots["dt"].items()):
-            a.hist(d * 1e3, bins=40)
+            a.hist(d * 1e3, bins=40 if np.ptp(d) > 1e-9 else 1)
             a.set_title(n, fontsize=9)
             a.set_xlabel("interval [ms]")
         fig.tight_layout()
