@@ -187,12 +187,13 @@ def _check_imu_axes(rec, out: CheckResult) -> None:
             out.add("gyro vs attitude", OK if ang < 3 else WARN,
                     f"frames differ by {ang:.2f} deg, residual {res:.3f} deg per {step} s, gyro bias "
                     f"{np.round(b, 4).tolist()} rad/s ({asrc})", "< 3 deg")
-    # accelerometer against the attitude's gravity, 1 s means (a multirotor's mean acceleration ~ 0)
+    # accelerometer against the attitude's gravity, 0.25 s means (accelerations taken as noise)
     fa = C.transpose(0, 2, 1) @ np.array([0.0, 0.0, -G])
-    ti = np.arange(max(ta[0], t[0]), min(ta[-1], t[-1]) - 1.0, 1.0)
-    if len(ti) >= 5:
-        meas = np.array([f[(t >= a) & (t < a + 1)].mean(0) for a in ti])
-        pred = np.array([fa[(ta >= a) & (ta < a + 1)].mean(0) if np.any((ta >= a) & (ta < a + 1))
+    wl = 0.25  # window [s]: long enough to average vibration, short enough to keep the tilts
+    ti = np.arange(max(ta[0], t[0]), min(ta[-1], t[-1]) - wl, wl)
+    if len(ti) >= 8:
+        meas = np.array([f[(t >= a) & (t < a + wl)].mean(0) for a in ti])
+        pred = np.array([fa[(ta >= a) & (ta < a + wl)].mean(0) if np.any((ta >= a) & (ta < a + wl))
                          else fa[np.searchsorted(ta, a).clip(0, len(ta) - 1)] for a in ti])
         M, r_best, r_id = _best_axes(meas, pred)
         if not np.allclose(M, np.eye(3)) and r_best < 0.5 * r_id:
