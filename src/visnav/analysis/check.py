@@ -67,7 +67,9 @@ def _attitude(rec):
     for src, s in (("attitude.csv", rec.streams.get("attitude")), ("ground truth", rec.truth)):
         if s is not None and "roll_rad" in s and len(s["t_s"]) > 10:
             e = np.column_stack([s["roll_rad"], s["pitch_rad"], s["yaw_rad"]])
-            return s["t_s"], np.array([euler_to_dcm(x) for x in e]), src
+            ok = np.all(np.isfinite(e), axis=1) & np.isfinite(s["t_s"])  # an attitude without yaw is not enough
+            if ok.sum() > 10:
+                return s["t_s"][ok], np.array([euler_to_dcm(x) for x in e[ok]]), src
     return None
 
 
@@ -115,14 +117,18 @@ def _check_streams(rec, out: CheckResult) -> None:
         med = float(np.median(pos)) if len(pos) else math.nan
         rate = 1.0 / med if med > 0 else math.nan
         out.summary.setdefault("rates_hz", {})[name] = rate
-        back, rep = int((d < 0).sum()), int((d == 0).sum())
+        back = int((d < 0).sum())
+        if "sensor" in s:  # several sensors in one stream (range: sonar and laser) may share an instant
+            rep = sum(int((np.diff(t[s["sensor"] == k]) == 0).sum()) for k in np.unique(s["sensor"]))
+        else:
+            rep = int((d == 0).sum())
         gaps = d > 3 * med
         msg = f"{rate:.2f} Hz, {len(t)} samples"
         if gaps.any():
             msg += f", {int(gaps.sum())} gaps (longest {d.max():.3f} s)"
         status = OK
         if back or rep:
-            status = PROBLEM
+            status = PROBLEM if back else WARN
             msg += f", {back} out of order, {rep} repeated stamps"
         elif gaps.sum() > max(1, 0.01 * len(d)):
             status = WARN
@@ -238,7 +244,10 @@ def camera_imu(rec, max_offset_s: float = 0.25, max_frames: int | None = None, k
             ts.append(tf[k])
     if len(imgs) < 12:
         return None, f"{len(imgs)} decodable frames (at least 12 needed)"
-    fr = frame_rotations(ts, imgs, rec.camera.camera)
+    R_cb = rec.camera.mount.R_cam_to_body
+    down_cam = R_cb.T @ np.array([0.0, 0.0, 1.0])  # body down seen from the camera
+    plane = down_cam if down_cam[2] > math.cos(math.radians(45.0)) else None  # looking down: ground plane
+    fr = frame_rotations(ts, imgs, rec.camera.camera, plane_normal_cam=plane)
     t, _, w = _imu(rec)
     try:
         cal = calibrate_camera_imu(t, w, fr.t_pairs, fr.rotvec, rec.camera.mount.R_cam_to_body, max_offset_s)
@@ -266,7 +275,7 @@ def _check_camera(rec, out: CheckResult, max_frames: int | None) -> None:
         out.add("camera vs IMU", NA, f"rotation per frame interval {exc:.3f} deg RMS, rate correlation "
                 f"{cal.coarse.peak:.2f}, rotation sigma {cal.rotation_sigma_deg:.1f} deg", "turns entered and left")
         return
-    amb = _translation_ambiguity(rec, cal)
+    amb = _translation_ambiguity(rec, cal) if not np.any(cal.extra["frames"].method == "homography") else None
     if amb is not None and amb > 0.3 * exc:
         out.add("camera vs IMU", NA, f"the translation looks like {amb:.2f} deg of rotation per frame pair against "
                 f"{exc:.2f} deg of rotation (a distant scene: rotation and translation cannot be told apart); found "
