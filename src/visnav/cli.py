@@ -780,6 +780,10 @@ def replay_(
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
                                "there are removed first)"),
     no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock (needs "
+                                         "--time-offset auto or seconds: t_imu = t_frame + offset)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -799,6 +803,12 @@ def replay_(
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
         rec = open_recording(recording)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            if time_offset is None:
+                raise RecordingError("--frames on their own clock need --time-offset auto or seconds")
+            attach_frames(rec, frames, fps, camera_yaml)
         if not no_check:  # issue 29: a recording whose conventions or calibration are wrong is refused
             from visnav.analysis.check import run_check
 
@@ -842,6 +852,10 @@ def check_(
     out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
                                       "(default runs/check-<name>)"),
     max_frames: Optional[int] = typer.Option(None, help="use at most this many frames (the most rotating stretch)"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock "
+                                         "(replaces the recording's frames; the offset is searched over every lag)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
 ) -> None:
     """Verify a recording's conventions and calibration from the flight itself (docs/check.md)."""
     from visnav.analysis.check import run_check, write_check
@@ -850,6 +864,10 @@ def check_(
 
     try:
         rec = open_recording(recording)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            attach_frames(rec, frames, fps, camera_yaml)
         with console.status(f"checking {escape(recording)}"):
             res = run_check(rec, max_frames=max_frames)
         out_dir = Path(out) if out else Path("runs") / f"check-{Path(recording).resolve().name}"

@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from visnav.estimation.timesync import (calibrate_camera_imu, gyro_rotvecs, hand_eye_rotation,
-                                        rotation_angle_deg)
+                                        rotation_angle_deg, wide_offset)
 from visnav.geometry.rotations import euler_to_dcm
 
 __all__ = ["run_check", "camera_imu", "CheckResult", "write_check"]
@@ -216,8 +216,8 @@ def _frames_window(rec, max_frames: int | None) -> np.ndarray:
     """Indices of the frames to use: all, or the ``max_frames`` consecutive ones with the most gyro rotation."""
     tf = rec.streams["frames"]["t_s"]
     n = len(tf)
-    if max_frames is None or n <= max_frames:
-        return np.arange(n)
+    if max_frames is None or n <= max_frames or getattr(rec, "frames_own_clock", False):
+        return np.arange(n) if max_frames is None or n <= max_frames else np.arange(max_frames)
     t, _, w = _imu(rec)
     ang = np.interp(tf, t, np.concatenate([[0], np.cumsum(np.linalg.norm(w[1:], axis=1) * np.diff(t))]))
     score = np.abs(np.diff(ang))
@@ -250,7 +250,9 @@ def camera_imu(rec, max_offset_s: float = 0.25, max_frames: int | None = None, k
     fr = frame_rotations(ts, imgs, rec.camera.camera, plane_normal_cam=plane)
     t, _, w = _imu(rec)
     try:
-        cal = calibrate_camera_imu(t, w, fr.t_pairs, fr.rotvec, rec.camera.mount.R_cam_to_body, max_offset_s)
+        center = wide_offset(t, w, fr.t_pairs, fr.rotvec) if getattr(rec, "frames_own_clock", False) else 0.0
+        cal = calibrate_camera_imu(t, w, fr.t_pairs, fr.rotvec, rec.camera.mount.R_cam_to_body,
+                                   min(max_offset_s, 0.05) if center else max_offset_s, center_s=center)
     except ValueError as exc:
         return None, str(exc)
     cal.extra["frames"] = fr
@@ -291,7 +293,7 @@ def _check_camera(rec, out: CheckResult, max_frames: int | None) -> None:
             f"{cal.rotation_error_deg:.2f} +- {cal.rotation_sigma_deg:.2f} deg from the declared mount "
             f"({cal.intervals} frame pairs, residual {cal.residual_deg:.3f} deg)", "< 2 deg (or within 3 sigma)")
     d = cal.offset_s - declared
-    bad_t = abs(d) > max(0.005, 3 * cal.offset_sigma_s)
+    bad_t = abs(d) > max(0.005, 3 * cal.offset_sigma_s) and not getattr(rec, "frames_own_clock", False)
     out.add("camera clock offset", PROBLEM if bad_t else OK,
             f"{cal.offset_s * 1e3:.1f} +- {cal.offset_sigma_s * 1e3:.1f} ms (t_imu = t_camera + offset; declared "
             f"{declared * 1e3:.1f} ms)", "within 5 ms of the declared")
