@@ -134,3 +134,31 @@ def test_euroc_v1_01_camera_calibration_agrees():
     s = run_check(open_recording(EUROC)).summary
     assert s["camera_imu_rotation_error_deg"] <= 2.0 and abs(s["camera_time_offset_s"]) <= 0.005
     assert not any("camera" in p for p in s["problems"])
+
+
+@pytest.mark.parametrize("kind", ["folder", "mp4"])
+def test_frames_on_their_own_clock_are_aligned(clean, tmp_path, kind):
+    """The clean recording's frames as a folder named by seconds on their own clock (or an MP4 at 20 fps),
+    attached to the log: the offset (the first frame is at 0.3 s of the IMU clock) comes out with its sigma."""
+    from visnav.io.own_frames import attach_frames
+
+    rec, _ = clean
+    d = tmp_path / "own"
+    d.mkdir()
+    files = [rec.path / f for f in rec.streams["frames"]["file"]]
+    if kind == "folder":
+        for k, f in enumerate(files):
+            (d / f"{100.0 + 0.05 * k:.6f}.png").write_bytes(f.read_bytes())
+        src = d
+    else:
+        src = d / "v.mp4"
+        vw = cv2.VideoWriter(str(src), cv2.VideoWriter_fourcc(*"mp4v"), 20.0, (320, 240))
+        for f in files:
+            vw.write(cv2.cvtColor(cv2.imread(str(f), cv2.IMREAD_GRAYSCALE), cv2.COLOR_GRAY2BGR))
+        vw.release()
+    other = Recording.open(rec.path)
+    attach_frames(other, src)
+    s = run_check(other).summary
+    assert s["camera_time_offset_s"] == pytest.approx(0.3, abs=0.004)
+    assert 0 < s["camera_time_offset_sigma_s"] < 0.004
+    assert s["problems"] == []
