@@ -162,3 +162,72 @@ def test_frames_on_their_own_clock_are_aligned(clean, tmp_path, kind):
     assert s["camera_time_offset_s"] == pytest.approx(0.3, abs=0.004)
     assert 0 < s["camera_time_offset_sigma_s"] < 0.004
     assert s["problems"] == []
+
+
+# ------------------------------------------------------------------ a flight recorded by `visnav record`
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.record import record
+
+    d = tmp_path_factory.mktemp("rec") / "witas"
+    record(load_scenario("witas-homing", ["run.duration_s=12", "mission.gps_loss_s=3", "mission.settle_s=2"]), d)
+    return d
+
+
+def _recorded_copy(src, dst, fault: str):
+    """A copy of the recorded flight with one fault written into its files."""
+    import shutil
+
+    import yaml
+
+    from visnav.io.recording import STREAMS, read_csv
+
+    shutil.copytree(src, dst)
+    imu = read_csv(dst / "imu.csv", STREAMS["imu"])
+    if fault == "gyro_y_sign":
+        imu["gy_radps"] = -imu["gy_radps"]
+    elif fault == "gyro_xy_swap":
+        imu["gx_radps"], imu["gy_radps"] = imu["gy_radps"].copy(), imu["gx_radps"].copy()
+    write_csv(dst / "imu.csv", imu)
+    if fault == "mount_10deg":
+        doc = yaml.safe_load((dst / "camera.yaml").read_text())
+        R = Rotation.from_rotvec(np.radians(10.0) * np.array([1.0, 0, 0])).as_matrix() @ np.array(doc["R_cam_to_body"])
+        doc["R_cam_to_body"] = R.tolist()
+        (dst / "camera.yaml").write_text(yaml.safe_dump(doc))
+    if fault == "clock_80ms":
+        f = read_csv(dst / "frames.csv", STREAMS["frames"])
+        f["t_s"] = f["t_s"] - 0.08
+        f.pop("t_recv_s", None)
+        f.pop("seq", None)
+        write_csv(dst / "frames.csv", f)
+    if fault == "mag_offset":
+        a = read_csv(dst / "attitude.csv", STREAMS["attitude"])
+        C = np.array([euler_to_dcm(e) for e in np.column_stack([a["roll_rad"], a["pitch_rad"], a["yaw_rad"]])])
+        m = C.transpose(0, 2, 1) @ np.array([0.2, 0.0, 0.45]) + np.array([0.1, -0.08, 0.0])
+        write_csv(dst / "magnetometer.csv", {"t_s": a["t_s"], "mx": m[:, 0], "my": m[:, 1], "mz": m[:, 2]})
+    return Recording.open(dst)
+
+
+from visnav.geometry.rotations import euler_to_dcm  # noqa: E402
+
+RECORDED_FAULTS = {"clean": None, "gyro_y_sign": "gyro axes look y sign flipped",
+                   "gyro_xy_swap": "gyro axes look x/y swapped", "mount_10deg": "camera-to-IMU rotation",
+                   "clock_80ms": "camera clock offset", "mag_offset": "magnetometer hard iron"}
+
+
+@pytest.mark.parametrize("fault", list(RECORDED_FAULTS))
+def test_recorded_flight_faults_are_named(recorded, tmp_path, fault):
+    rec = _recorded_copy(recorded, tmp_path / fault, fault)
+    if fault not in ("clean", "mount_10deg", "clock_80ms"):
+        del rec.streams["frames"]  # not a camera fault: the tracking is not needed
+    s = run_check(rec, max_frames=40).summary
+    if fault == "clean":
+        assert s["problems"] == [] and s["imu_axes"] == "FRD"
+        assert s["camera_imu_rotation_error_deg"] < 2.0 and abs(s["camera_time_offset_s"]) < 0.01
+    else:
+        assert len(s["problems"]) == 1 and RECORDED_FAULTS[fault] in s["problems"][0], s["problems"]
+    if fault == "mount_10deg":
+        assert s["camera_imu_rotation_error_deg"] == pytest.approx(10.0, abs=2.0)
+    if fault == "clock_80ms":
+        assert s["camera_time_offset_s"] == pytest.approx(0.08, abs=0.01)
