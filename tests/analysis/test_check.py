@@ -246,3 +246,24 @@ def test_euroc_ahrs_roll_pitch_vs_vicon(tmp_path):
     assert m["pitch_rms_diff_deg"] <= 1.5 and m["roll_rms_diff_deg"] < 3.0
     assert m["yaw_rms_diff_deg"] is None and "magnetometer" in m["yaw_unobservable_reason"]
     assert m["reference_to_gyro_rotation_deg"] == pytest.approx(1.05, abs=0.2)
+
+
+def test_cli_check_and_replay_refusal(recorded, tmp_path):
+    """`visnav check --json` prints check.json; `visnav replay` refuses a faulty recording (exit 2, the problem
+    listed); a path that is not a recording is one line, exit 2."""
+    from typer.testing import CliRunner
+
+    from visnav.cli import app
+
+    bad = tmp_path / "bad"
+    _recorded_copy(recorded, bad, "gyro_xy_swap")
+    r = CliRunner().invoke(app, ["check", str(bad), "--json", "--out", str(tmp_path / "o"), "--max-frames", "30"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.output)
+    assert any("x/y swapped" in p for p in doc["problems"])
+    assert (tmp_path / "o" / "check.html").is_file()
+    r = CliRunner().invoke(app, ["replay", str(bad), "--navigator", "witas", "--out", str(tmp_path / "run")])
+    assert r.exit_code == 2 and "x/y swapped" in r.output and "--no-check" in r.output
+    assert not (tmp_path / "run").exists()
+    r = CliRunner().invoke(app, ["check", str(tmp_path / "nothing.xyz")])
+    assert r.exit_code == 2 and "Traceback" not in r.output and len(r.output.strip().splitlines()) == 1
