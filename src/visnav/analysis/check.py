@@ -494,6 +494,7 @@ def _plots(res: CheckResult) -> list[tuple[str, str]]:
             for j in range(3):
                 ax[j].plot(tp[:, 0] + cal.offset_s, np.degrees(gyr[:, j]), "k-", lw=0.8, label="gyro")
         ax[0].legend(fontsize=8)
+        ax[2].set_xlabel("t [s] (IMU clock; camera axes turned into the IMU's by the estimated rotation)")
         fig.tight_layout()
         figs.append(("Gyro vs camera rotation rates after alignment", _png(fig)))
         if cal.taus is not None:
