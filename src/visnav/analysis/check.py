@@ -182,16 +182,25 @@ def _check_imu_axes(rec, out: CheckResult) -> None:
         out.add("gyro vs attitude", NA, f"the attitude changes {exc:.2f} deg RMS per {step} s", "rotation")
     else:
         M, r_best, r_id = _best_axes(v_gyro - np.median(v_gyro - v_att, axis=0), v_att)
-        R, b = hand_eye_rotation(v_att, v_gyro, pairs[:, 1] - pairs[:, 0])
+        dts = pairs[:, 1] - pairs[:, 0]
+        R, b = hand_eye_rotation(v_att, v_gyro, dts)
         ang = rotation_angle_deg(R)
         res = float(np.degrees(np.sqrt(np.mean(np.sum((v_gyro - v_att @ R.T - b * step) ** 2, 1)))))
-        out.summary["gyro_attitude_rotation_deg"] = ang
+        rng = np.random.default_rng(0)
+        boot = [rotation_angle_deg(hand_eye_rotation(v_att, v_gyro, dts, w, iters=4)[0] @ R.T)
+                for w in rng.multinomial(len(dts), np.full(len(dts), 1 / len(dts)), size=40).astype(float)]
+        sig = float(np.sqrt(np.mean(np.square(boot))))
+        out.summary["gyro_attitude_rotation_deg"] = ang if sig < 2 else None
         if not np.allclose(M, np.eye(3)) and r_best < 0.5 * r_id:
             out.add("gyro vs attitude", PROBLEM, f"gyro axes look {_name_axes(M)} against the {asrc} "
                     f"(RMS {np.degrees(r_best):.3f} vs {np.degrees(r_id):.3f} deg as is)", "identity")
+        elif sig >= 2:
+            out.add("gyro vs attitude", NA, f"the rotation between gyro and attitude frames is undetermined "
+                    f"(bootstrap sigma {sig:.0f} deg: the flight rotates about too few axes; {exc:.2f} deg RMS per "
+                    f"{step} s)", "rotation about several axes")
         else:
             out.add("gyro vs attitude", OK if ang < 3 else WARN,
-                    f"frames differ by {ang:.2f} deg, residual {res:.3f} deg per {step} s, gyro bias "
+                    f"frames differ by {ang:.2f} +- {sig:.2f} deg, residual {res:.3f} deg per {step} s, gyro bias "
                     f"{np.round(b, 4).tolist()} rad/s ({asrc})", "< 3 deg")
     # accelerometer against the attitude's gravity, 0.25 s means (accelerations taken as noise)
     fa = C.transpose(0, 2, 1) @ np.array([0.0, 0.0, -G])
