@@ -50,7 +50,7 @@ from visnav.guidance.speed_limits import (  # noqa: F401  (re-exported: the PFCM
     max_path_speed,
     nz_max_for_mass,
 )
-from visnav.measurements import NavEstimate
+from visnav.measurements import NavEstimate, read_only
 from visnav.scalar import clip as _clip
 
 G = 9.81
@@ -338,7 +338,7 @@ class PfcmGuidance(_LiveReference):
             v_target=v, accel_target=accel, v_targ1=v1, v_targ2=v2, v_targ3=v3, phase=self.phase, heading_error=d_psi,
             r_ff=r_ff, phi_ff=phi_ff, distance_to_end=l_left, arc_position=l_now, finished=finished,
             source=getattr(nav, "source", "gps"))
-        return self.last
+        return read_only(self.last)  # handed out again at the same t: nobody may write into it
 
 
 class PointHold(_LiveReference):
