@@ -150,7 +150,8 @@ def read_dataflash(path: Path) -> Recording:
 
 # ------------------------------------------------------------------------------------------ PX4 ULog
 def read_px4(path: Path) -> Recording:
-    """A PX4 ULog through ``io/ulog.read_ulog`` (IMU, attitude, magnetometer)."""
+    """A PX4 ULog through ``io/ulog.read_ulog``: IMU, attitude, magnetometer (heading and field), GPS, baro,
+    distance sensor, optical flow, camera events."""
     from scipy.spatial.transform import Rotation
 
     from visnav.io.ulog import read_ulog
@@ -163,12 +164,46 @@ def read_px4(path: Path) -> Recording:
                        **{f"g{a}_radps": u.gyro[:, i] for i, a in enumerate("xyz")}}}
     e = dcm_to_euler(Rotation.from_quat(u.att_quat[:, [1, 2, 3, 0]]).as_matrix())
     streams["attitude"] = {"t_s": u.att_t, "roll_rad": e[:, 0], "pitch_rad": e[:, 1], "yaw_rad": e[:, 2]}
+    notes = list(u.notes)
     if u.mag is not None:
         streams["magnetometer"] = heading_stream(u.mag_t, u.mag, streams["attitude"],
                                                   np.radians(u.declination_deg or 0.0))
-    rec = Recording(path, _camera_beside(path), streams)
-    rec.notes += list(u.notes)
+        streams["mag_field"] = _mag_field(u.mag_t, u.mag)
+    if u.gps_t is not None:
+        streams["gps"] = gps_stream(u.gps_t, u.gps_lla[:, 0], u.gps_lla[:, 1], u.gps_lla[:, 2], u.gps_vel)
+    if u.baro_t is not None:  # PX4 logs the altitude above sea level: relative to the first sample here
+        streams["baro"] = {"t_s": u.baro_t, "altitude_m": u.baro_alt - u.baro_alt[0]}
+        notes.append(f"baro ({u.baro_source}): altitude relative to its first sample ({u.baro_alt[0]:.1f} m)")
+    if u.range_t is not None:
+        streams["range"] = {"t_s": u.range_t, "range_m": u.range_m,
+                            "sensor": np.where(u.range_down, "sonar", "laser")}
+    if u.flow_t is not None:
+        streams["optical_flow"] = _flow_stream(u.flow_t, u.flow, u.flow_dist)
+    if u.cam_t is not None:
+        streams["camera_trigger"] = _camera_stream(u.cam_t, u.cam_seq, u.cam_lla)
+    rec = Recording(path, _camera_beside(path), streams, summary=u.summary)
+    rec.notes += notes
     return rec
+
+
+def _mag_field(t, mag_gauss) -> dict:
+    m = np.asarray(mag_gauss, float)
+    return {"t_s": np.asarray(t, float), "mx_ga": m[:, 0], "my_ga": m[:, 1], "mz_ga": m[:, 2]}
+
+
+def _flow_stream(t, flow, dist=None) -> dict:
+    """``optical_flow`` columns: flow x, y and body rates x, y [rad/s], quality (0..255), distance [m]."""
+    f = np.asarray(flow, float)
+    out = {"t_s": np.asarray(t, float), "flow_x_radps": f[:, 0], "flow_y_radps": f[:, 1], "body_x_radps": f[:, 2],
+           "body_y_radps": f[:, 3], "quality": f[:, 4]}
+    return out | ({"distance_m": np.asarray(dist, float)} if dist is not None else {})
+
+
+def _camera_stream(t, seq, lla=None) -> dict:
+    out = {"t_s": np.asarray(t, float), "seq": np.asarray(seq, float)}
+    if lla is not None:
+        out |= {"lat_deg": lla[:, 0], "lon_deg": lla[:, 1], "alt_m": lla[:, 2]}
+    return out
 
 
 # ------------------------------------------------------------------------------------------ ROS bags
