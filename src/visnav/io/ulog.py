@@ -126,11 +126,19 @@ def ulog_damage(path) -> tuple[int | None, int, int]:
     end; its size in bytes; topics subscribed before that), from the message headers (16-byte file
     header, then messages of uint16 size + uint8 type + payload; an 'A' message subscribes a topic:
     uint8 multi_id, uint16 msg_id, name). The damage is a message cut by the end of the file or a
-    byte that is not a message type."""
+    byte that is not a message type. Appended data (the flag-bits message's ``appended_offsets``): a
+    message that runs past the next offset is the logger's unfinished one; reading goes on at the offset."""
+    import struct
+
     b = Path(path).read_bytes()
-    n, pos, topics = len(b), 16, set()
+    n, pos, topics, appended = len(b), 16, set(), []
+    if n >= 16 + 3 + 40 and b[18] == 0x42:  # 'B' flag bits: compat[8], incompat[8], appended_offsets[3]
+        appended = sorted(o for o in struct.unpack_from("<3Q", b, 19 + 16) if 16 < o <= n)
     while pos + 3 <= n:
         size, kind = b[pos] | (b[pos + 1] << 8), b[pos + 2]
+        if appended and pos + 3 + size > appended[0] >= pos:
+            pos = appended.pop(0)
+            continue
         if kind not in _MSG_TYPES or pos + 3 + size > n:
             return pos, n, len(topics)
         if kind == 0x41:  # 'A': add logged message
@@ -375,7 +383,8 @@ def _events(out: ULogData, topics: dict, notes: list[str], sec) -> None:
         dt = np.asarray(d[span], float) * 1e-6
         dt = np.where(dt > 0, dt, np.nan)  # no integration interval: no rate (the row is dropped)
         q = np.asarray(d.get(qual, np.full(len(dt), 255)), float)
-        rng = np.asarray(d.get(dist, np.full(len(dt), np.nan)), float)
+        rng = np.asarray(d.get(dist, np.full(len(dt), -1.0)), float)
+        rng = np.where(np.isfinite(rng) & (rng > 0), rng, -1.0)  # no distance: -1 here (NaN would drop the row)
         rates = np.column_stack([np.asarray(d[f], float) / dt for f in (fx, fy, gx, gy)] + [q])
         good = np.all(np.isfinite(rates), axis=1)
         try:
@@ -383,7 +392,7 @@ def _events(out: ULogData, topics: dict, notes: list[str], sec) -> None:
         except ValueError as exc:
             notes.append(f"{name}: no optical flow from it ({exc})")
             continue
-        out.flow_t, out.flow, out.flow_dist, out.flow_source = sec(tf), v[:, :5], v[:, 5], name
+        out.flow_t, out.flow, out.flow_dist, out.flow_source = sec(tf), v[:, :5], np.where(v[:, 5] > 0, v[:, 5], np.nan), name
         break
     for name in ("camera_capture", "camera_trigger"):
         d = topics[name].data if name in topics else None
