@@ -1,13 +1,20 @@
 """Flight logs read directly into a ``Recording`` (the same streams and columns as the folder format).
 
-* ArduPilot DataFlash ``.bin`` (pymavlink's ``DFReader`` indexes the messages and parses the FMT
-  formats; each message type is then decoded at once with numpy from the indexed offsets): IMU
-  (instance 0), ATT, BARO, MAG, GPS, RFND.
+* ArduPilot DataFlash ``.bin`` of either era (pymavlink's ``DFReader`` indexes the messages and parses the
+  FMT formats; each message type is then decoded at once with numpy from the indexed offsets): stamped in
+  ``TimeUS`` (ArduPilot >= 3.3) or ``TimeMS`` (older; the older GPS message's ``TimeMS`` is GPS time of week
+  and its ``T`` the boot time), FMTU multipliers applied where the log has them (else the format char's own;
+  MAG then in milligauss). IMU (instance 0; else IMU2 / IMU3), ATT (else AHR2, XKF1 / NKF1 core 0, EKF1),
+  BARO, MAG (else MAG2), GPS (3D fix), RFND, OF, CAM (else TRIG; an older CAM stamped only in GPS time is
+  put on the boot clock through the GPS messages).
 * ROS 1 / ROS 2 bags without ROS (``rosbags``): sensor_msgs Imu, NavSatFix, Range, Image,
   CompressedImage. ROS body axes are FLU and world axes ENU (REP 103); they are turned into FRD / NED.
   The bag's receive time is the delivery time (``t_recv_s``), the header stamp the instant (``t_s``).
-* PX4 ULog through ``io/ulog.py`` (IMU, attitude, magnetometer).
+* PX4 ULog through ``io/ulog.py`` (IMU, attitude, magnetometer, GPS, baro, distance sensor, optical flow,
+  camera events); MAVLink ``.tlog`` through ``io/tlog.py``.
 
+Every log reader reads to the end of the file or to the damage and says in one line what it read
+(``Recording.summary``: seconds, the byte of the damage, the message counts).
 Positions from latitude / longitude are NED about the first fix; a magnetometer's field becomes a
 tilt-compensated heading with the attitude of the log (declination added when the log has it).
 A ``camera.yaml`` beside the log (same folder) describes the camera of a bag's images.
@@ -26,7 +33,7 @@ from visnav.io.streams import gps_stream, heading_stream
 
 def open_recording(path: str | Path) -> Recording:
     """A recording folder (or a ``visnav bridge`` log folder: its ``recording/``), a DataFlash ``.bin``, a PX4
-    ``.ulg`` or a ROS bag (``.bag`` / ROS 2 folder)."""
+    ``.ulg``, a MAVLink ``.tlog`` (io/tlog.py) or a ROS bag (``.bag`` / ROS 2 folder)."""
     p = Path(path)
     if p.is_dir() and (p / "bridge.tlog").is_file() and (p / "recording").is_dir():  # a `visnav bridge` log folder
         p = p / "recording"
@@ -39,9 +46,13 @@ def open_recording(path: str | Path) -> Recording:
         return read_dataflash(p)
     if suffix == ".ulg":
         return read_px4(p)
+    if suffix == ".tlog":
+        from visnav.io.tlog import read_tlog
+
+        return read_tlog(p)
     if suffix in (".bag", ".db3", ".mcap") or p.is_dir():
         return read_rosbag(p.parent if suffix in (".db3", ".mcap") else p)
-    raise RecordingError(f"{p}: not a recording folder, .bin, .ulg or ROS bag")
+    raise RecordingError(f"{p}: not a recording folder, .ulg, .bin, .tlog or ROS bag")
 
 
 def _camera_beside(p: Path):
