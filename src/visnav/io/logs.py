@@ -28,7 +28,8 @@ import numpy as np
 
 from visnav.geometry.rotations import dcm_to_euler
 from visnav.io.recording import Recording, RecordingError, read_camera_yaml
-from visnav.io.streams import gps_stream, heading_stream
+from visnav.io.streams import (camera_stream, flow_stream, gps_stream, heading_stream, mag_field_stream,
+                                read_summary, sorted_stream)
 
 
 def open_recording(path: str | Path) -> Recording:
@@ -58,18 +59,6 @@ def open_recording(path: str | Path) -> Recording:
 def _camera_beside(p: Path):
     f = p.parent / "camera.yaml" if not p.is_dir() else p / "camera.yaml"
     return read_camera_yaml(f) if f.is_file() else None
-
-
-def _sorted(stream: dict, notes: list, what: str) -> dict:
-    """Sort by t_s (and drop non-finite stamps): logs are repaired with a note, not refused."""
-    t = stream["t_s"]
-    keep = np.isfinite(t)
-    if not keep.all():
-        notes.append(f"{what}: {int((~keep).sum())} samples without a valid time dropped")
-    o = np.argsort(np.where(keep, t, np.inf), kind="stable")[: int(keep.sum())]
-    if np.any(np.diff(o) < 0):
-        notes.append(f"{what}: samples re-sorted by time")
-    return {k: v[o] for k, v in stream.items()}
 
 
 # ------------------------------------------------------------------------------------------ DataFlash
@@ -143,14 +132,6 @@ def _df_damage(reader) -> tuple[int | None, bool]:
     return (None, False) if ofs == n else (ofs, True)
 
 
-def read_summary(name: str, dur: float, size: int, at: int | None, cut: bool, parts: list[str]) -> str:
-    """The one line a log reader gives: what was read, to the end or to the damage."""
-    where = (f"to the end ({size} bytes)" if at is None else
-             f"cut at byte {at} of {size} (the file ends inside a message)" if cut else
-             f"damaged at byte {at} of {size}, read on where messages resume")
-    return f"{name}: read {dur:.1f} s; {where}; " + ", ".join(parts)
-
-
 def _df_time(d: dict) -> np.ndarray:
     """A DataFlash message's boot time [s]: ``TimeUS`` [us] (ArduPilot >= 3.3), else the older ``T`` [ms]
     of GPS messages (whose ``TimeMS`` is the GPS time of week), else ``TimeMS`` [ms]."""
@@ -197,12 +178,12 @@ def read_dataflash(path: Path) -> Recording:
         raise RecordingError(f"{path}: {imu_name} messages have neither TimeUS nor TimeMS") from None
     ts = lambda d: _df_time(d) - t0  # noqa: E731
     streams: dict[str, dict] = {}
-    streams["imu"] = _sorted({"t_s": ts(imu), **{f"a{a}_mps2": imu[f"Acc{a.upper()}"].astype(float) for a in "xyz"},
+    streams["imu"] = sorted_stream({"t_s": ts(imu), **{f"a{a}_mps2": imu[f"Acc{a.upper()}"].astype(float) for a in "xyz"},
                               **{f"g{a}_radps": imu[f"Gyr{a.upper()}"].astype(float) for a in "xyz"}}, notes, imu_name)
     att_name = next((n for n in ("ATT", "AHR2", "XKF1", "NKF1", "EKF1") if get[n] is not None), None)
     if att_name is not None:
         a = first(get[att_name])
-        streams["attitude"] = _sorted({"t_s": ts(a), "roll_rad": np.radians(a["Roll"].astype(float)),
+        streams["attitude"] = sorted_stream({"t_s": ts(a), "roll_rad": np.radians(a["Roll"].astype(float)),
                                        "pitch_rad": np.radians(a["Pitch"].astype(float)),
                                        "yaw_rad": np.angle(np.exp(1j * np.radians(a["Yaw"].astype(float))))},
                                       notes, att_name)
@@ -210,7 +191,7 @@ def read_dataflash(path: Path) -> Recording:
             notes.append(f"no ATT messages: the attitude is {att_name}'s")
     if get["BARO"] is not None:
         b = first(get["BARO"])
-        streams["baro"] = _sorted({"t_s": ts(b), "altitude_m": b["Alt"].astype(float)}, notes, "BARO")
+        streams["baro"] = sorted_stream({"t_s": ts(b), "altitude_m": b["Alt"].astype(float)}, notes, "BARO")
     g = first(get["GPS"])
     if g is not None:
         g = {k: (v[g["Status"] >= 3] if np.ndim(v) else v) for k, v in g.items()} if "Status" in g else g  # 3D fix
@@ -219,7 +200,7 @@ def read_dataflash(path: Path) -> Recording:
             if all(k in g for k in ("Spd", "GCrs", "VZ")):
                 crs = np.radians(g["GCrs"].astype(float))
                 vel = np.column_stack([g["Spd"] * np.cos(crs), g["Spd"] * np.sin(crs), g["VZ"]]).astype(float)
-            streams["gps"] = _sorted(gps_stream(ts(g), g["Lat"].astype(float), g["Lng"].astype(float),
+            streams["gps"] = sorted_stream(gps_stream(ts(g), g["Lat"].astype(float), g["Lng"].astype(float),
                                                 g["Alt"].astype(float), vel), notes, "GPS")
         else:
             notes.append("GPS: no 3D fix in the log")
@@ -231,7 +212,7 @@ def read_dataflash(path: Path) -> Recording:
         if raw not in _BUILTIN_MULT and raw not in "fd" and not bool(r["_fmtu"]):
             dist = dist * 0.01  # an integer distance without a multiplier: centimetres (older logs)
         orient = r.get("Orient", r.get("Orient1", np.full(len(dist), 25)))
-        streams["range"] = _sorted({"t_s": ts(r), "range_m": np.where(dist > 0, dist, np.nan),
+        streams["range"] = sorted_stream({"t_s": ts(r), "range_m": np.where(dist > 0, dist, np.nan),
                                     "sensor": np.where(orient == 25, "sonar", "laser")}, notes, "RFND")
     mag_name = "MAG" if get["MAG"] is not None else "MAG2" if get["MAG2"] is not None else None
     if mag_name is not None:
@@ -239,7 +220,7 @@ def read_dataflash(path: Path) -> Recording:
         mag = np.column_stack([m["MagX"], m["MagY"], m["MagZ"]]).astype(float)
         if not bool(m["_fmtu"]):
             mag = mag * 1e-3  # no FMTU: ArduPilot logs milligauss
-        streams["mag_field"] = _sorted(_mag_field(ts(m), mag), notes, mag_name)
+        streams["mag_field"] = sorted_stream(mag_field_stream(ts(m), mag), notes, mag_name)
         if "attitude" in streams:
             f = streams["mag_field"]
             streams["magnetometer"] = heading_stream(f["t_s"], np.column_stack([f["mx_ga"], f["my_ga"], f["mz_ga"]]),
@@ -248,7 +229,7 @@ def read_dataflash(path: Path) -> Recording:
     if of is not None and all(k in of for k in ("flowX", "flowY", "bodyX", "bodyY")):
         flow = np.column_stack([of[k].astype(float) if k in of else np.full(len(of["flowX"]), np.nan)
                                 for k in ("flowX", "flowY", "bodyX", "bodyY", "Qual")])
-        streams["optical_flow"] = _sorted(_flow_stream(ts(of), flow), notes, "OF")
+        streams["optical_flow"] = sorted_stream(flow_stream(ts(of), flow), notes, "OF")
     cam_name = "CAM" if get["CAM"] is not None else "TRIG" if get["TRIG"] is not None else None
     if cam_name is not None:
         c = first(get[cam_name])
@@ -258,7 +239,7 @@ def read_dataflash(path: Path) -> Recording:
         else:
             seq = c["Img"] if "Img" in c else np.arange(len(t_cam))
             lla = np.column_stack([c["Lat"], c["Lng"], c["Alt"]]).astype(float) if "Lat" in c else None
-            streams["camera_trigger"] = _sorted(_camera_stream(t_cam - t0, seq, lla), notes, cam_name)
+            streams["camera_trigger"] = sorted_stream(camera_stream(t_cam - t0, seq, lla), notes, cam_name)
     rec = Recording(path, _camera_beside(path), streams)
     at, cut = _df_damage(reader)
     s = streams["imu"]["t_s"]
@@ -305,7 +286,7 @@ def read_px4(path: Path) -> Recording:
     if u.mag is not None:
         streams["magnetometer"] = heading_stream(u.mag_t, u.mag, streams["attitude"],
                                                   np.radians(u.declination_deg or 0.0))
-        streams["mag_field"] = _mag_field(u.mag_t, u.mag)
+        streams["mag_field"] = mag_field_stream(u.mag_t, u.mag)
     if u.gps_t is not None:
         streams["gps"] = gps_stream(u.gps_t, u.gps_lla[:, 0], u.gps_lla[:, 1], u.gps_lla[:, 2], u.gps_vel)
     if u.baro_t is not None:  # PX4 logs the altitude above sea level: relative to the first sample here
@@ -315,32 +296,12 @@ def read_px4(path: Path) -> Recording:
         streams["range"] = {"t_s": u.range_t, "range_m": u.range_m,
                             "sensor": np.where(u.range_down, "sonar", "laser")}
     if u.flow_t is not None:
-        streams["optical_flow"] = _flow_stream(u.flow_t, u.flow, u.flow_dist)
+        streams["optical_flow"] = flow_stream(u.flow_t, u.flow, u.flow_dist)
     if u.cam_t is not None:
-        streams["camera_trigger"] = _camera_stream(u.cam_t, u.cam_seq, u.cam_lla)
+        streams["camera_trigger"] = camera_stream(u.cam_t, u.cam_seq, u.cam_lla)
     rec = Recording(path, _camera_beside(path), streams, summary=u.summary)
     rec.notes += notes
     return rec
-
-
-def _mag_field(t, mag_gauss) -> dict:
-    m = np.asarray(mag_gauss, float)
-    return {"t_s": np.asarray(t, float), "mx_ga": m[:, 0], "my_ga": m[:, 1], "mz_ga": m[:, 2]}
-
-
-def _flow_stream(t, flow, dist=None) -> dict:
-    """``optical_flow`` columns: flow x, y and body rates x, y [rad/s], quality (0..255), distance [m]."""
-    f = np.asarray(flow, float)
-    out = {"t_s": np.asarray(t, float), "flow_x_radps": f[:, 0], "flow_y_radps": f[:, 1], "body_x_radps": f[:, 2],
-           "body_y_radps": f[:, 3], "quality": f[:, 4]}
-    return out | ({"distance_m": np.asarray(dist, float)} if dist is not None else {})
-
-
-def _camera_stream(t, seq, lla=None) -> dict:
-    out = {"t_s": np.asarray(t, float), "seq": np.asarray(seq, float)}
-    if lla is not None:
-        out |= {"lat_deg": lla[:, 0], "lon_deg": lla[:, 1], "alt_m": lla[:, 2]}
-    return out
 
 
 # ------------------------------------------------------------------------------------------ ROS bags
@@ -382,7 +343,7 @@ def read_rosbag(path: Path) -> Recording:
     acc = np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z] for m in msgs])
     gyr = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for m in msgs])
     acc, gyr = acc @ _T_FLU_FRD, gyr @ _T_FLU_FRD  # FLU -> FRD (a diagonal, its own transpose)
-    streams["imu"] = _sorted({"t_s": sec(ts), **{f"a{a}_mps2": acc[:, i] for i, a in enumerate("xyz")},
+    streams["imu"] = sorted_stream({"t_s": sec(ts), **{f"a{a}_mps2": acc[:, i] for i, a in enumerate("xyz")},
                               **{f"g{a}_radps": gyr[:, i] for i, a in enumerate("xyz")}, "t_recv_s": sec(tr)},
                              notes, "Imu")
     q = np.array([[m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w] for m in msgs])
@@ -390,19 +351,19 @@ def read_rosbag(path: Path) -> Recording:
     if np.all(qn > 0.5):  # orientation present (all zeros = 'not provided', REP 145)
         C = _T_NED_ENU @ Rotation.from_quat(q / qn[:, None]).as_matrix() @ _T_FLU_FRD
         e = dcm_to_euler(C)
-        streams["attitude"] = _sorted({"t_s": sec(ts), "roll_rad": e[:, 0], "pitch_rad": e[:, 1], "yaw_rad": e[:, 2],
+        streams["attitude"] = sorted_stream({"t_s": sec(ts), "roll_rad": e[:, 0], "pitch_rad": e[:, 1], "yaw_rad": e[:, 2],
                                        "t_recv_s": sec(tr)}, notes, "Imu orientation")
     fix = [r for r in rows["sensor_msgs/msg/NavSatFix"] if r[2].status.status >= 0]
     if fix:
         tr, ts, msgs = zip(*fix)
         lla = np.array([[m.latitude, m.longitude, m.altitude] for m in msgs])
-        streams["gps"] = _sorted(gps_stream(sec(ts), lla[:, 0], lla[:, 1], lla[:, 2]) | {"t_recv_s": sec(tr)}, notes,
+        streams["gps"] = sorted_stream(gps_stream(sec(ts), lla[:, 0], lla[:, 1], lla[:, 2]) | {"t_recv_s": sec(tr)}, notes,
                                  "NavSatFix")
     if rows["sensor_msgs/msg/Range"]:
         tr, ts, msgs = zip(*rows["sensor_msgs/msg/Range"])
         r = np.array([m.range if m.min_range <= m.range <= m.max_range else np.nan for m in msgs])
         sensor = np.array(["sonar" if m.radiation_type == 0 else "laser" for m in msgs])
-        streams["range"] = _sorted({"t_s": sec(ts), "range_m": r, "sensor": sensor, "t_recv_s": sec(tr)}, notes,
+        streams["range"] = sorted_stream({"t_s": sec(ts), "range_m": r, "sensor": sensor, "t_recv_s": sec(tr)}, notes,
                                    "Range")
     images = None
     frames = rows["sensor_msgs/msg/Image"] or rows["sensor_msgs/msg/CompressedImage"]

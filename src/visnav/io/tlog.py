@@ -84,8 +84,9 @@ def read_tlog(path: Path) -> Recording:
     """A MAVLink telemetry log (module docstring)."""
     from pymavlink.dialects.v20 import common
 
-    from visnav.io.logs import _camera_beside, _camera_stream, _flow_stream, _mag_field, _sorted, read_summary
-    from visnav.io.streams import gps_stream
+    from visnav.io.recording import read_camera_yaml
+    from visnav.io.streams import (camera_stream, flow_stream, gps_stream, heading_stream, mag_field_stream,
+                                   read_summary, sorted_stream)
     from visnav.io.ulog import pressure_altitude
 
     p = Path(path)
@@ -140,18 +141,16 @@ def read_tlog(path: Path) -> Recording:
     gyr = np.array([[m.xgyro, m.ygyro, m.zgyro] for _, m in v], float) * (1.0 if f else 1e-3)  # mrad/s
     mag = np.array([[m.xmag, m.ymag, m.zmag] for _, m in v], float) * (1.0 if f else 1e-3)  # milligauss
     streams: dict[str, dict] = {}
-    streams["imu"] = _sorted({"t_s": t_imu - t0, **{f"a{a}_mps2": acc[:, i] for i, a in enumerate("xyz")},
+    streams["imu"] = sorted_stream({"t_s": t_imu - t0, **{f"a{a}_mps2": acc[:, i] for i, a in enumerate("xyz")},
                               **{f"g{a}_radps": gyr[:, i] for i, a in enumerate("xyz")}}, notes, imu_name)
     if np.any(np.abs(mag) > 0):
-        streams["mag_field"] = _sorted(_mag_field(t_imu - t0, mag), notes, imu_name + " magnetometer")
+        streams["mag_field"] = sorted_stream(mag_field_stream(t_imu - t0, mag), notes, imu_name + " magnetometer")
     if rows["ATTITUDE"]:
         v = rows["ATTITUDE"]
         e = np.array([[m.roll, m.pitch, m.yaw] for _, m in v], float)
-        streams["attitude"] = _sorted({"t_s": times(v) - t0, "roll_rad": e[:, 0], "pitch_rad": e[:, 1],
+        streams["attitude"] = sorted_stream({"t_s": times(v) - t0, "roll_rad": e[:, 0], "pitch_rad": e[:, 1],
                                        "yaw_rad": np.angle(np.exp(1j * e[:, 2]))}, notes, "ATTITUDE")
     if "attitude" in streams and "mag_field" in streams:
-        from visnav.io.streams import heading_stream
-
         mf = streams["mag_field"]
         streams["magnetometer"] = heading_stream(mf["t_s"], np.column_stack([mf["mx_ga"], mf["my_ga"], mf["mz_ga"]]),
                                                  streams["attitude"])
@@ -167,18 +166,18 @@ def read_tlog(path: Path) -> Recording:
         g = gps_stream(t_g, lla[:, 0], lla[:, 1], lla[:, 2])
         if vel is not None:  # horizontal velocity from the receiver, vertical from the altitudes
             g["vn_mps"], g["ve_mps"] = vel[:, 0], vel[:, 1]
-        streams["gps"] = _sorted(g, notes, "GPS_RAW_INT")
+        streams["gps"] = sorted_stream(g, notes, "GPS_RAW_INT")
     elif rows["GPS_RAW_INT"]:
         notes.append("GPS_RAW_INT: fewer than 2 fixes with a 3D fix")
     if rows["SCALED_PRESSURE"]:
         v = rows["SCALED_PRESSURE"]
         alt = pressure_altitude(np.array([m.press_abs for _, m in v], float) * 100.0)
-        streams["baro"] = _sorted({"t_s": times(v) - t0, "altitude_m": alt - alt[0]}, notes, "SCALED_PRESSURE")
+        streams["baro"] = sorted_stream({"t_s": times(v) - t0, "altitude_m": alt - alt[0]}, notes, "SCALED_PRESSURE")
     if rows["DISTANCE_SENSOR"]:
         v = rows["DISTANCE_SENSOR"]
         d = np.array([[m.current_distance, m.min_distance, m.max_distance, m.orientation] for _, m in v], float)
         ok = (d[:, 0] >= d[:, 1]) & (d[:, 0] <= d[:, 2]) & (d[:, 0] > 0)
-        streams["range"] = _sorted({"t_s": times(v) - t0, "range_m": np.where(ok, d[:, 0] * 0.01, np.nan),
+        streams["range"] = sorted_stream({"t_s": times(v) - t0, "range_m": np.where(ok, d[:, 0] * 0.01, np.nan),
                                     "sensor": np.where(d[:, 3] == 25, "sonar", "laser")}, notes, "DISTANCE_SENSOR")
     fl = [(t, m) for t, m in rows["OPTICAL_FLOW_RAD"] if m.integration_time_us > 0]
     if fl:
@@ -187,15 +186,16 @@ def read_tlog(path: Path) -> Recording:
                      float) / dt[:, None]
         q = np.array([m.quality for _, m in fl], float)
         dist = np.array([m.distance if m.distance > 0 else np.nan for _, m in fl], float)
-        streams["optical_flow"] = _sorted(_flow_stream(times(fl) - t0, np.column_stack([f, q]), dist), notes,
+        streams["optical_flow"] = sorted_stream(flow_stream(times(fl) - t0, np.column_stack([f, q]), dist), notes,
                                           "OPTICAL_FLOW_RAD")
     if rows["CAMERA_FEEDBACK"]:  # its time_usec is UTC: the arrival time is used
         v = rows["CAMERA_FEEDBACK"]
         lla = np.array([[m.lat * 1e-7, m.lng * 1e-7, m.alt_msl] for _, m in v], float)
-        streams["camera_trigger"] = _sorted(_camera_stream(np.array([t + offset for t, _ in v]) - t0,
+        streams["camera_trigger"] = sorted_stream(camera_stream(np.array([t + offset for t, _ in v]) - t0,
                                                            np.array([m.img_idx for _, m in v]), lla), notes,
                                             "CAMERA_FEEDBACK")
-    rec = Recording(p, _camera_beside(p), streams)
+    cam = p.parent / "camera.yaml"
+    rec = Recording(p, read_camera_yaml(cam) if cam.is_file() else None, streams)
     s = streams["imu"]["t_s"]
     parts = [f"{imu_name} {s[-1] - s[0]:.1f} s ({len(s)} samples, system {sysid})"]
     for key, label in (("attitude", "ATTITUDE"), ("gps", "GPS_RAW_INT"), ("baro", "SCALED_PRESSURE"),

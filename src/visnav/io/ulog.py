@@ -217,11 +217,12 @@ def read_ulog(path) -> ULogData:
         if t is not None:
             extra = f"; {out.gps_no_fix} more without a 3D fix" if name == "GPS" and out.gps_no_fix else ""
             parts.append(f"{name} {len(t)} ({src}{extra})")
+    from visnav.io.streams import read_summary
+
     cut = at is not None and _cut_at_end(p, at, size)
-    where = ((f"cut at byte {at} of {size} (the file ends inside a message)" if cut else
-              f"damaged at byte {at} of {size}, read on where messages resume") if at is not None
-             else "corrupt in places") if damaged else f"to the end ({size} bytes)"
-    out.summary = f"{p.name}: read {dur:.1f} s; {where}; " + ", ".join(parts)
+    if damaged and at is None:
+        parts.insert(0, "pyulog found corrupt messages")
+    out.summary = read_summary(p.name, dur, size, at, cut, parts)
     return out
 
 
