@@ -762,8 +762,8 @@ def record_(
 
 @app.command("replay")
 def replay_(
-    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
-                                    "ROS bag"),
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, "
+                                    "PX4 .ulg, ArduPilot DataFlash .bin, MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
     navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
@@ -794,6 +794,8 @@ def replay_(
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
         rec = open_recording(recording)
+        if rec.summary:  # a log: what was read, to the end or to the damage
+            err.print(f"log: {escape(rec.summary)}", soft_wrap=True)
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
