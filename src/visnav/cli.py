@@ -436,7 +436,7 @@ def keys(
 
 @app.command()
 def ahrs(
-    log: str = typer.Argument(..., help="PX4 ULog file (.ulg)"),
+    log: str = typer.Argument(..., help="PX4 ULog (.ulg), or a recording / EuRoC folder / log with a reference attitude"),
     out: Optional[str] = typer.Option(None, "--out", help="output directory (default: runs/ahrs-<log name>)"),
     declination_deg: Optional[float] = typer.Option(
         None, "--declination-deg", help="magnetic declination \\[deg]; default: the log's EKF2_MAG_DECL, else 0"),
@@ -454,7 +454,7 @@ def ahrs(
         _fail(exc)
     for note in m["log_notes"]:
         err_console.print(f"[yellow]log:[/yellow] {escape(note)}", soft_wrap=True)
-    table = Table(title=f"AHRS vs PX4 vehicle_attitude ({Path(log).name})")
+    table = Table(title=f"AHRS vs {m['reference']} ({Path(log).name})")
     table.add_column("metric")
     table.add_column("value", justify="right")
     if m.get("log_truncated"):
@@ -462,8 +462,12 @@ def ahrs(
     table.add_row("magnetometer", m.get("magnetometer_source") or "NOT FOUND (yaw gyro-only)")
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
-        gyro_only = k == "yaw_rms_diff_deg" and not m["magnetometer"]
-        table.add_row(k, _fmt(m[k]) + (" (gyro-only: no magnetometer)" if gyro_only else ""))
+        table.add_row(k, "null (not observable)" if m[k] is None else _fmt(m[k]))
+    for k in ("reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
+        if k in m:
+            table.add_row(k, _fmt(m[k]) if not isinstance(m[k], list) else str([round(x, 3) for x in m[k]]))
+    if m.get("yaw_unobservable_reason"):
+        table.add_row("yaw", escape(m["yaw_unobservable_reason"]))
     console.print(table)
     console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
 
@@ -775,6 +779,7 @@ def replay_(
                                               "real flight; the fixes stay the reference when there is no truth.csv)"),
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
                                "there are removed first)"),
+    no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -796,6 +801,14 @@ def replay_(
         rec = open_recording(recording)
         if rec.summary:  # a log: what was read, to the end or to the damage
             err.print(f"log: {escape(rec.summary)}", soft_wrap=True)
+        if not no_check:  # issue 29: a recording whose conventions or calibration are wrong is refused
+            from visnav.analysis.check import run_check
+
+            with console.status(f"checking {escape(recording)}"):
+                problems = run_check(rec, max_frames=60).summary["problems"]
+            if problems:
+                raise RecordingError(f"{recording}: `visnav check` found {len(problems)} problem(s) "
+                                     "(replay anyway with --no-check):\n  " + "\n  ".join(problems))
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
@@ -821,6 +834,45 @@ def replay_(
         raise typer.Exit(130)
     if "error" in res.metrics:
         raise typer.Exit(1)
+
+
+# ------------------------------------------------------------------ check (issue 29)
+@app.command("check")
+def check_(
+    recording: str = typer.Argument(..., help="recording folder, EuRoC folder, .bin, .ulg or ROS bag"),
+    json_: bool = typer.Option(False, "--json", help="print check.json on stdout"),
+    out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
+                                      "(default runs/check-<name>)"),
+    max_frames: Optional[int] = typer.Option(None, help="use at most this many frames (the most rotating stretch)"),
+) -> None:
+    """Verify a recording's conventions and calibration from the flight itself (docs/check.md)."""
+    from visnav.analysis.check import run_check, write_check
+    from visnav.io.logs import open_recording
+    from visnav.io.recording import RecordingError
+
+    try:
+        rec = open_recording(recording)
+        with console.status(f"checking {escape(recording)}"):
+            res = run_check(rec, max_frames=max_frames)
+        out_dir = Path(out) if out else Path("runs") / f"check-{Path(recording).resolve().name}"
+        doc = write_check(res, out_dir, f"visnav check: {recording}")
+    except (RecordingError, ValueError) as exc:
+        _fail(exc)
+    except OSError as exc:
+        _fail(f"cannot write {out}: {exc.strerror or exc}")
+    if json_:
+        _print_json(doc)
+        return
+    table = Table(title=f"check of {escape(recording)}")
+    for c in ("check", "status", "measured", "expected"):
+        table.add_column(c)
+    colour = {"ok": "green", "warning": "yellow", "problem": "red", "not observable": "dim"}
+    for n, s, m, e in res.rows:
+        table.add_row(escape(n), f"[{colour[s]}]{s}[/{colour[s]}]", escape(str(m)), escape(str(e)))
+    console.print(table)
+    for p in res.summary["problems"]:
+        console.print(f"[red]problem:[/red] {escape(p)}", soft_wrap=True)
+    console.print(f"written: {out_dir / 'check.json'}, {out_dir / 'check.html'}")
 
 
 def main() -> None:  # pragma: no cover

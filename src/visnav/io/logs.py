@@ -34,10 +34,15 @@ from visnav.io.streams import (camera_stream, flow_stream, gps_stream, heading_s
 
 def open_recording(path: str | Path) -> Recording:
     """A recording folder (or a ``visnav bridge`` log folder: its ``recording/``), a DataFlash ``.bin``, a PX4
-    ``.ulg``, a MAVLink ``.tlog`` (io/tlog.py) or a ROS bag (``.bag`` / ROS 2 folder)."""
+    ``.ulg``, a MAVLink ``.tlog`` (io/tlog.py), an EuRoC / ASL folder (io/euroc.py) or a ROS bag (``.bag`` / ROS 2
+    folder)."""
     p = Path(path)
     if p.is_dir() and (p / "bridge.tlog").is_file() and (p / "recording").is_dir():  # a `visnav bridge` log folder
         p = p / "recording"
+    from visnav.io.euroc import is_euroc, read_euroc
+
+    if is_euroc(p):  # the EuRoC / ASL dataset layout (mav0/imu0, cam0, ground truth)
+        return read_euroc(p)
     if p.is_dir() and not (p / "metadata.yaml").is_file():
         return Recording.open(p)
     if not p.exists():

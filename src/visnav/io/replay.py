@@ -86,25 +86,15 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
 
 
 def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
-    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``): gyro of ``imu.csv`` against
-    the frames' rotation; the ground is assumed below the body (the camera's view of body down)."""
-    from visnav.estimation.timesync import estimate_offset, frame_rotation_angles
+    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``: frame rotations from feature
+    tracks against the gyro, the camera-to-IMU rotation fitted with it); a ``CameraImuCalibration``."""
+    from visnav.analysis.check import camera_imu
 
     rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
-    if rec.camera.mount is None:
-        raise RecordingError(f"{rec.path / 'camera.yaml'}: a gimbal camera (gimbal: true); --time-offset auto needs a "
-                             "camera fixed to the body (R_cam_to_body): give the offset in seconds")
-    s = rec.streams["imu"]
-    gyro = np.column_stack([s["gx_radps"], s["gy_radps"], s["gz_radps"]])
-    decoded = [(float(t), rec.image(i)[0]) for i, t in enumerate(rec.streams["frames"]["t_s"])]
-    decoded = [(t, im) for t, im in decoded if im is not None]
-    cam = rec.camera
-    down = cam.mount.R_cam_to_body.T @ np.array([0.0, 0.0, 1.0])
-    pairs, ang = frame_rotation_angles([t for t, _ in decoded], (im for _, im in decoded), cam.camera.K, down)
-    try:
-        return estimate_offset(s["t_s"], gyro, pairs, ang, max_offset_s=max_offset_s)
-    except ValueError as exc:
-        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {exc}") from None
+    cal, why = camera_imu(rec, max_offset_s=max_offset_s)
+    if cal is None:
+        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {why}")
+    return cal
 
 
 # ------------------------------------------------------------------------------------ the replay
@@ -150,9 +140,9 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     if opts.time_offset == "auto":
         est = offset_from_recording(rec)
         rec.time_offset_s = est.offset_s
-        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
-        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
-                     f"cross-correlation, peak {est.peak:.2f})")
+        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.offset_sigma_s}
+        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.offset_sigma_s * 1e3:.1f} ms (frame rotations vs "
+                     f"gyro, rate correlation {est.coarse.peak:.2f})")
     elif opts.time_offset is not None:
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
