@@ -44,7 +44,9 @@ def open_recording(path: str | Path) -> Recording:
     if is_euroc(p):  # the EuRoC / ASL dataset layout (mav0/imu0, cam0, ground truth)
         return read_euroc(p)
     if p.is_dir() and not (p / "metadata.yaml").is_file():
-        return Recording.open(p)
+        from visnav.io.photos import is_photo_folder, read_photos  # a folder of geotagged photos (a survey)
+
+        return read_photos(p) if is_photo_folder(p) else Recording.open(p)
     if not p.exists():
         raise RecordingError(f"{p}: no such recording folder or log")
     suffix = p.suffix.lower()

@@ -214,7 +214,8 @@ def write_camera_yaml(path: Path, camera: PinholeCamera, mount: FixedMount | Non
     path.write_text(head + yaml.safe_dump(doc, sort_keys=False))
 
 
-def read_camera_yaml(path: Path) -> CameraInfo:
+def read_camera_yaml(path: Path, default_mount: FixedMount | None = None) -> CameraInfo:
+    """``default_mount``: the mount of a camera.yaml that names none (a photo survey's: nadir), else one is needed."""
     import yaml
 
     if not path.is_file():
@@ -244,6 +245,8 @@ def read_camera_yaml(path: Path) -> CameraInfo:
             mount = FixedMount.depressed(float(doc["depression_deg"]), tuple(doc.get("lever_arm_m", (0, 0, 0))))
         elif doc.get("gimbal") is True:
             mount = None
+        elif default_mount is not None:
+            mount = default_mount
         else:
             raise ValueError("no mount: give R_cam_to_body (3x3, camera -> body FRD), depression_deg, or "
                              "gimbal: true (attitude from camera_attitude.csv and pan.csv)")
