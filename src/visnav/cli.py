@@ -291,6 +291,8 @@ def margins(
     identify_altitude: float = typer.Option(12.0, help="height \\[m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
     seeds: int = typer.Option(1, help="seeds per sweep, merged (weighted by coherence)"),
+    ident_seeds: Optional[int] = typer.Option(None, help="seeds of the identification sweeps (default max(seeds, 4))"),
+    min_delay_confidence: float = typer.Option(0.9, help="below it (P(|error| < 5 ms)) a delay is not compensated"),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
@@ -313,6 +315,8 @@ def margins(
         alts, dels = numbers(altitudes, "--altitudes"), numbers(delays, "--delays")
         if not alts or not dels:
             raise ValueError("--altitudes and --delays need at least one value each")
+        if not 0 <= min_delay_confidence <= 1 or (ident_seeds is not None and ident_seeds < 1):
+            raise ValueError("--min-delay-confidence takes a value in [0, 1] and --ident-seeds a count >= 1")
         check_margins_scenario(scenario, list(set_))
         out_dir = prepare_out_dir(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}", force=force,
                                   clear=("margins.csv", "frf.npz"))
@@ -324,7 +328,8 @@ def margins(
         frfs: dict = {}
         rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario, frf_sink=frfs,
                                 overrides=tuple(set_), workers=workers, laser_delay_s=laser_delay,
-                                identify_altitude_m=identify_altitude, seeds=seeds,
+                                identify_altitude_m=identify_altitude, seeds=seeds, ident_seeds=ident_seeds,
+                                min_delay_confidence=min_delay_confidence,
                                 progress=lambda *a, **k: prog.advance(task))
     cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
             "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]

@@ -36,8 +36,8 @@ from visnav.measurements import (
 )
 from visnav.navigation.base import CommandDispatch, propagate
 from visnav.navigation.integrity import NavIntegrity, gps_check_from, watch_gps
-from visnav.vision.correlation import PnccTracker
-from visnav.vision.interest import forstner
+from visnav.vision.correlation import PnccTracker, distinct_points
+from visnav.vision.interest import forstner, forstner_top_k
 from visnav.log_schema import register_stream
 
 _NED = "NED world (origin at the scenario's home)"
@@ -337,6 +337,13 @@ class PalaceNavigator(CommandDispatch):
         y1 = int(np.clip(uv[1] + half, margin + 1, H - margin))
         tc = self.cfg.tracker
         pt = forstner(f.image, feature_size=tc.feature_size, region=(x0, y0, x1, y1), min_isotropy=tc.min_isotropy)
+        if pt is not None and tc.max_self_coherence < 1.0:  # distinctness guard: strongest point with no copy near
+            cands = forstner_top_k(f.image, 8, feature_size=tc.feature_size, region=(x0, y0, x1, y1),
+                                   min_isotropy=tc.min_isotropy, min_distance=5.0)
+            ok = distinct_points(f.image, cands, tc.template_px, tc.search_radius_px, tc.max_self_coherence)
+            if not ok:
+                self._note(f"{f.t:.1f}s no distinct Förstner point near {uv.round(0)} (self-coherence guard)")
+            pt = ok[0] if ok else pt
         if pt is None:
             self._note(f"{f.t:.1f}s Förstner found no point near {uv.round(0)}")
             return

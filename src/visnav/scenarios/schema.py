@@ -126,6 +126,9 @@ class TrackerConfig(_M):
     min_coherence: float = Field(0.5, ge=-1, le=1)
     feature_size: int = Field(7, ge=1, le=31)
     min_isotropy: float = Field(0.2, ge=0, le=1)
+    max_self_coherence: float = Field(0.9, ge=0, le=1, description="distinctness guard: skip a Förstner point "
+                                      "whose template matches a copy within the search window at least this well "
+                                      "(vision.correlation.self_coherence; 1 = off, the thesis)")
 
 
 class MpeConfig(_M):
