@@ -141,7 +141,10 @@ def test_imu_out_of_order_dropped_and_late_imu_inflates_then_stops_and_resumes()
     texts = [m.text for m in sent if m.get_type() == "STATUSTEXT"]
     assert len(texts) == 1 and "no estimate" in texts[0]
     br._consume(_imu(101.29))
-    br._consume(_frame(101.30, 4))
+    br._consume(_frame(101.30, 4))  # the IMU is back, but the estimate crossed a 1.21 s gap: still withheld
+    assert len(_odo(sent)) == n_before and br.counts["estimates_withheld"] == 3
+    br._consume(_gps(101.31))  # an aiding fix after the gap
+    br._consume(_frame(101.32, 5))
     assert len(_odo(sent)) == n_before + 1 and sum(n.startswith("estimates resumed:") for n in notes) == 1
     assert br.reset_counter == 1 and _odo(sent)[-1].reset_counter == 1
 

@@ -150,14 +150,20 @@ class Bridge:
         self._withheld_at = 0.0
         self._withheld_reset = 0
         self.requests_applied = 0  # sequence number of the newest mission request applied
+        self._reset_at_loss = 0  # reset_counter when the link was lost
+        self._out_at_rx = 0  # estimates out while up, as of the last message received (link-up time ends there)
         link.on_link_up.append(self._on_link_up)
+        link.on_link_lost.append(self._on_link_lost)
         link.request_intervals(self.cfg.rates_hz)
 
     # ------------------------------------------------------------------ threads
     def _reader(self) -> None:
         while not self.stop.is_set():
             self.link.tick()
-            for t_recv, msg in self.link.poll(0.005):
+            got = self.link.poll(0.005)
+            if got:
+                self._out_at_rx = self.counts["estimates_out_link_up"]
+            for t_recv, msg in got:
                 try:
                     m = self._decode(msg, t_recv)
                 except Exception as e:  # noqa: BLE001 - a message we cannot decode is skipped, counted
@@ -258,9 +264,13 @@ class Bridge:
 
     def _on_link_up(self) -> None:
         self.link.request_message(mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
-        if self.link.link_lost_count > 0:
+        if self.link.link_lost_count > 0 and self.reset_counter == self._reset_at_loss:  # not told yet (a resumption)
             self._bump("autopilot link back")
         self._origin_sent = False
+
+    def _on_link_lost(self) -> None:
+        self._reset_at_loss = self.reset_counter
+        self.counts["estimates_out_link_up"] = self._out_at_rx  # sent after the last message: not link-up time
 
     # ------------------------------------------------------------------ main loop
     def run(self, duration_s: float | None = None, max_frames: int | None = None) -> dict:
@@ -497,7 +507,7 @@ class Bridge:
             gone = ", ".join(LABELS[k] for k in self._withheld.expired)
             self.notify(f"estimates resumed: {gone} back after {now - self._withheld_at:.1f} s without an estimate")
             self._statustext(f"visnav: estimates resumed ({gone} back)", mavlink.MAV_SEVERITY_INFO)
-            if self.reset_counter == self._withheld_reset:  # not already told by a link-back
+            if self.reset_counter == self._withheld_reset:  # not already told by a link back
                 self._bump("estimates resumed after a gap")
             self._prev = None  # no jump test across the gap: the reset says it
             self._withheld = None

@@ -38,6 +38,12 @@ constant-velocity transition (the navigator extrapolates without propagating its
 
     F = [[I, tau_imu I], [0, I]],   P' = F P F^T + sum_k Q_k                        (3)
 
+A gap in the IMU outlives the gap: the navigator extrapolated across it, and its error stays when the IMU
+is back. A gap longer than the IMU's budget is therefore remembered (its length added to the IMU's age,
+``tau_imu = age + gaps``) until an aiding stream that applies to the estimate (GPS, camera) delivers a sample
+stamped after the gap; so after the autopilot's data stopped for longer than the timeout, estimates resume
+once the IMU *and* the aiding are back (a dead-reckoning estimate, no aiding applying, is not sent again).
+
 The quality (``mavlink_messages.quality_from``), ODOMETRY's and VISION_*'s covariances and GPS_INPUT's
 accuracies are computed from P', so they fall / grow with every stream's age and with the filter's own
 covariance. A stream that has never delivered a sample is not judged (a vehicle without a range finder).
@@ -141,10 +147,28 @@ class Freshness:
     def __init__(self, cfg: FreshnessConfig | None = None):
         self.cfg = cfg or FreshnessConfig()
         self.newest: dict[str, float] = {}
+        self.imu_gaps_s = 0.0  # IMU gaps longer than its budget not yet corrected by an aiding sample
+        self.imu_gap_end = -np.inf
 
     def seen(self, stream: str, t: float) -> None:
-        if np.isfinite(t):
-            self.newest[stream] = max(t, self.newest.get(stream, -np.inf))
+        if not np.isfinite(t):
+            return
+        prev = self.newest.get(stream, -np.inf)
+        if stream == "imu" and np.isfinite(prev) and t - prev > self.cfg.budgets["imu"].budget_s:
+            self.imu_gaps_s += t - prev
+            self.imu_gap_end = t
+        self.newest[stream] = max(t, prev)
+
+    def _gaps(self, source: str) -> float:
+        """The IMU gaps an estimate of ``source`` still carries (none once an applicable aiding sample came after)."""
+        if self.imu_gaps_s == 0.0:
+            return 0.0
+        for k, b in self.cfg.budgets.items():
+            if k not in ("imu", "height") and (b.sources is None or source in b.sources) \
+                    and self.newest.get(k, -np.inf) > self.imu_gap_end:
+                self.imu_gaps_s = 0.0  # corrected: forgotten
+                return 0.0
+        return self.imu_gaps_s
 
     def ages(self, t: float, source: str) -> dict:
         """Age [s] at ``t`` of every stream seen so far that applies to an estimate of ``source``."""
@@ -152,6 +176,8 @@ class Freshness:
         for k, b in self.cfg.budgets.items():
             if k in self.newest and (b.sources is None or source in b.sources):
                 out[k] = max(0.0, t - self.newest[k])
+        if "imu" in out:
+            out["imu"] += self._gaps(source)
         return out
 
     def assess(self, est: NavEstimate) -> Assessment:

@@ -120,6 +120,7 @@ class MavlinkLink:
         self._pending_ts: deque[int] = deque(maxlen=64)
         self._send_lock = threading.Lock()
         self.on_link_up: list[Callable[[], None]] = []
+        self.on_link_lost: list[Callable[[], None]] = []
 
     # ------------------------------------------------------------------ sending
     def send(self, msg) -> None:
@@ -185,6 +186,8 @@ class MavlinkLink:
             self.link_lost_count += 1
             self.notify(f"autopilot link lost: no HEARTBEAT from {self.target_system}/{self.target_component} "
                         f"for {(now - self._last_hb_rx) / 1e9:.1f} s")
+            for cb in self.on_link_lost:
+                cb()
 
     # ------------------------------------------------------------------ receiving
     def poll(self, timeout_s: float = 0.01) -> list:
