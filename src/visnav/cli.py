@@ -612,6 +612,15 @@ def bridge(
     if not 0.0 < gps_sigma < 1000.0:
         fail(f"--gps-sigma must be a positive number of metres, got {gps_sigma:g}")
     out_dir = Path(out or f"runs/bridge-{time.strftime('%Y%m%d-%H%M%S')}")
+    out_existed = out_dir.exists()
+    logf = None
+
+    def say(m: str) -> None:  # console, and bridge.log once the session is open
+        console.print(escape(m), soft_wrap=True)
+        if logf is not None:
+            logf.write(f"{time.strftime('%H:%M:%S')} {m}\n")
+            logf.flush()
+
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         (out_dir / ".write-test").touch()
@@ -623,13 +632,19 @@ def bridge(
         cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
                            send_health=health, gps_sigma_m=gps_sigma, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
-        link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=lambda m: console.print(m))
+        link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=say)
         built = build_navigator(navigator, map_, set_, recorder=navlog.record)
         src = open_source(camera, fps=fps or built.camera_hz, time_offset_s=offset)
     except (MavlinkLinkError, CameraSourceError, ScenarioError, FileNotFoundError, ValueError) as exc:
         if link is not None:
             link.close()
+            tlog = out_dir / "bridge.tlog"
+            if tlog.is_file() and tlog.stat().st_size == 0:
+                tlog.unlink()  # a session that did not start leaves no empty tlog behind
+        if not out_existed and out_dir.is_dir() and not any(out_dir.iterdir()):
+            out_dir.rmdir()  # nothing left behind by a session that did not start
         fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    logf = open(out_dir / "bridge.log", "a")
     console.print(f"bridge: {built.scenario} navigator, {mavlink_url} -> {output}, camera {camera} "
                   f"({fps or built.camera_hz:g} Hz); log {out_dir}")
     rec = None
@@ -641,7 +656,7 @@ def bridge(
             fail(f"cannot write the recording in {out_dir / 'recording'}: {exc}")
         nav = rec.navigator
     with Live(console=console, transient=False, auto_refresh=False) as live:
-        br = Bridge(link, src, nav, cfg, record=navlog.record, notify=lambda m: live.console.print(m),
+        br = Bridge(link, src, nav, cfg, record=navlog.record, notify=say,
                     on_status=lambda s: live.update(status_line(s), refresh=True))
         try:
             metrics = br.run(duration_s=duration)
@@ -651,6 +666,8 @@ def bridge(
         finally:
             link.close()
             src.close()
+    if not console.is_terminal:
+        console.line()  # Live leaves its last status line open off a terminal: the summary goes on its own line
     try:
         if rec is not None:
             rec.close()
@@ -659,11 +676,12 @@ def bridge(
         pass
     br.write_metrics(out_dir / "metrics.json")
     lat = metrics["latency_capture_to_send_ms"]
-    console.print(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
+    say(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
                   f"{lat['median']:.1f} ms, p95 {lat['p95']:.1f} ms; reset_counter {metrics['reset_counter']}; "
                   f"written {out_dir / 'metrics.json'}, {out_dir / 'bridge.tlog'}"
                   + (f", {out_dir / 'recording'} (visnav replay {out_dir / 'recording'} --navigator {built.name})"
                      if rec is not None else ""))
+    logf.close()
 
 
 @app.command("sil-autopilot")

@@ -287,7 +287,7 @@ def summary_rows(sc, metrics: dict) -> tuple[list[Row], list[str], str]:
     by_metric = {p.metric: p for p in figs}
     rows, omitted = [], []
     for k, v in metrics.items():
-        if k == "provenance" or isinstance(v, dict):
+        if k == "provenance" or isinstance(v, (dict, list, tuple)):  # lists (sil_notes) print as lines: run_notes
             continue
         if _missing(v):
             omitted.append(k)
