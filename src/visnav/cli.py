@@ -315,7 +315,7 @@ def margins(
             raise ValueError("--altitudes and --delays need at least one value each")
         check_margins_scenario(scenario, list(set_))
         out_dir = prepare_out_dir(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}", force=force,
-                                  clear=("margins.csv", "frf.npz"))
+                                  clear=("margins.csv", "frf.npz"), kind="a margins folder")
     except ValueError as exc:  # ScenarioError and OutputDirError are ValueErrors
         _fail(exc)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
@@ -448,7 +448,7 @@ def ahrs(
 
     out_dir = Path(out) if out else Path("runs") / f"ahrs-{Path(log).stem}"
     try:
-        prepare_out_dir(out_dir, force=True, clear=())  # writable? (ahrs overwrites its own two files)
+        prepare_out_dir(out_dir, force=True, clear=(), kind=None)  # writable? (ahrs overwrites its own two files)
         m = ahrs_check(log, out_dir, declination_deg)
     except (OSError, ValueError) as exc:
         _fail(exc)
