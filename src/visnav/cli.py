@@ -784,6 +784,12 @@ def replay_(
     from visnav.scenarios.schema import ScenarioError
 
     err = Console(stderr=True)
+    out_dir = None
+    try:  # the output first (issue #32: --out FILE failed only after the replay's work)
+        out_dir = new_run_dir(f"replay-{navigator}", out, force)
+    except ValueError as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(2)
     try:
         offset = None
         if time_offset is not None and time_offset != "auto":
@@ -798,9 +804,10 @@ def replay_(
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)
-        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out, force),
-                               title=f"replay of {recording} on {navigator}")
+        write_replay(res, out_dir, title=f"replay of {recording} on {navigator}")
     except (RecordingError, ScenarioError, ValueError) as exc:
+        if not any(out_dir.iterdir()):
+            out_dir.rmdir()  # made for this replay: not left behind empty
         err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(2)
     except OSError as exc:

@@ -66,3 +66,54 @@ def test_force_still_replaces_an_earlier_run(tmp_path):
     r = _invoke("run", "pfcm-segment", *SHORT, "--out", d, "--force", "--no-report", "--seed", "7")
     assert r.exit_code == 0, r.output
     assert "seed = 7" in (d / "scenario.toml").read_text()
+
+
+# ------------------------------------------------------------------ a short simulated recording (points 2, 3, 4)
+@pytest.fixture(scope="module")
+def witas_rec(tmp_path_factory):
+    d = tmp_path_factory.mktemp("rec") / "witas"
+    r = _invoke("record", "witas-homing", "--out", d, "--set", "run.duration_s=2")
+    assert r.exit_code == 0, r.output
+    return d
+
+
+# ------------------------------------------------------------------ point 2: any navigator on any recording
+@pytest.mark.parametrize("navigator", ["palace", "deck", "pad", "condor", "geolocation", "witas"])
+def test_any_navigator_on_a_witas_recording_runs_or_says_what_it_lacks(witas_rec, tmp_path, navigator):
+    r = _invoke("replay", witas_rec, "--navigator", navigator, "--out", tmp_path / "o")
+    assert "Traceback" not in r.output and (r.exception is None or isinstance(r.exception, SystemExit)), r.output
+    if r.exit_code == 2:  # one line naming the streams or the part it lacks
+        _one_line_error(r, "needs")
+        return
+    assert r.exit_code == 0, r.output
+    m = json.loads((tmp_path / "o" / "metrics.json").read_text())
+    assert "error" not in m and m["imu_samples"] == 200, m
+    if navigator != "witas":  # the settings come from its own scenario, and the user is told
+        assert f"the {navigator} navigator takes its settings from" in " ".join(r.stdout.split())
+
+
+# ------------------------------------------------------------------ point 4: outputs before inputs; eval empty
+def test_replay_checks_out_before_reading_the_recording(tmp_path):
+    f = tmp_path / "afile"
+    f.write_text("x")
+    r = _invoke("replay", tmp_path / "no-such-recording", "--navigator", "witas", "--out", f)
+    _one_line_error(r, "exists and is not a directory")  # the output is refused, not the missing recording
+
+
+def test_replay_leaves_no_empty_out_folder_on_an_input_error(tmp_path):
+    r = _invoke("replay", tmp_path / "no-such-recording", "--navigator", "witas", "--out", tmp_path / "o")
+    _one_line_error(r, "no-such-recording")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("name, text", [("empty.tum", "no poses"), ("empty.csv", "no rows")])
+def test_eval_of_an_empty_file_is_one_line_without_a_library_warning(tmp_path, name, text):
+    import warnings
+
+    f = tmp_path / name
+    f.write_text("t_s,x_m,y_m,z_m\n" if name.endswith(".csv") else "")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = _invoke("eval", f, f)
+    _one_line_error(r, text)
+    assert not [w for w in caught if "numpy" in str(w.filename) or "input contained no data" in str(w.message)]
