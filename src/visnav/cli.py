@@ -775,6 +775,8 @@ def replay_(
                                               "real flight; the fixes stay the reference when there is no truth.csv)"),
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
                                "there are removed first)"),
+    allow_truncated: bool = typer.Option(False, "--allow-truncated", help="a recording CSV cut while written (a "
+                                         "short last row): replay the rows before it"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -799,7 +801,7 @@ def replay_(
                 raise RecordingError(f"--time-offset must be 'auto' or seconds, got {time_offset!r}") from None
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
-        rec = open_recording(recording)
+        rec = open_recording(recording, allow_truncated)
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):

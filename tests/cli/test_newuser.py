@@ -117,3 +117,28 @@ def test_eval_of_an_empty_file_is_one_line_without_a_library_warning(tmp_path, n
         r = _invoke("eval", f, f)
     _one_line_error(r, text)
     assert not [w for w in caught if "numpy" in str(w.filename) or "input contained no data" in str(w.message)]
+
+
+# ------------------------------------------------------------------ point 3: a truncated imu.csv
+def _cut_imu(src: Path, dst: Path) -> tuple[int, int]:
+    """A copy of the recording whose imu.csv is cut in the middle of a row; (that line's number, its columns)."""
+    import shutil
+
+    shutil.copytree(src, dst)
+    lines = (dst / "imu.csv").read_text().splitlines()
+    keep = len(lines) // 2
+    cut_row = ",".join(lines[keep].split(",")[:5])
+    (dst / "imu.csv").write_text("\n".join(lines[:keep] + [cut_row]))
+    return keep + 1, 5
+
+
+def test_truncated_imu_csv_is_named_and_allow_truncated_replays_what_came_before(witas_rec, tmp_path):
+    line, cols = _cut_imu(witas_rec, tmp_path / "cut")
+    expected = len((witas_rec / "imu.csv").read_text().splitlines()[0].split(","))
+    r = _invoke("replay", tmp_path / "cut", "--navigator", "witas", "--out", tmp_path / "o")
+    _one_line_error(r, f"imu.csv: line {line} has {cols} columns, {expected} expected (truncated file?)")
+    assert "usecols" not in r.output
+    r = _invoke("replay", tmp_path / "cut", "--navigator", "witas", "--out", tmp_path / "o", "--allow-truncated")
+    assert r.exit_code == 0, r.output
+    assert json.loads((tmp_path / "o" / "metrics.json").read_text())["imu_samples"] == line - 2
+    assert f"read the {line - 2} rows before it" in " ".join(r.stdout.split())

@@ -24,14 +24,15 @@ from visnav.io.recording import Recording, RecordingError, read_camera_yaml
 from visnav.io.streams import gps_stream, heading_stream
 
 
-def open_recording(path: str | Path) -> Recording:
+def open_recording(path: str | Path, allow_truncated: bool = False) -> Recording:
     """A recording folder (or a ``visnav bridge`` log folder: its ``recording/``), a DataFlash ``.bin``, a PX4
-    ``.ulg`` or a ROS bag (``.bag`` / ROS 2 folder)."""
+    ``.ulg`` or a ROS bag (``.bag`` / ROS 2 folder); ``allow_truncated``: a folder's CSV cut while written is
+    read up to its first short row."""
     p = Path(path)
     if p.is_dir() and (p / "bridge.tlog").is_file() and (p / "recording").is_dir():  # a `visnav bridge` log folder
         p = p / "recording"
     if p.is_dir() and not (p / "metadata.yaml").is_file():
-        return Recording.open(p)
+        return Recording.open(p, allow_truncated)
     if not p.exists():
         raise RecordingError(f"{p}: no such recording folder or log")
     suffix = p.suffix.lower()
