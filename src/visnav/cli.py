@@ -8,6 +8,7 @@ rich markup: units in brackets are written escaped (``\\[m]``).
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import List, NoReturn, Optional
@@ -21,7 +22,8 @@ from rich.table import Table
 import visnav
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="visnav: UAV navigation without GPS")
-console = Console()
+# off a terminal (``make run``, a pipe, a log) rich would lay tables out 80 columns wide: widen them (issue #32)
+console = Console(width=None if sys.stdout.isatty() or os.environ.get("COLUMNS") else 140)
 err_console = Console(stderr=True)
 
 
@@ -51,6 +53,16 @@ def _version(value: bool) -> None:
 def _main(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
                                        help="print the version and exit")) -> None:
     """visnav: UAV navigation without GPS"""
+
+
+def _metrics_table(title: str, names, *columns: str) -> Table:
+    """A table whose first column (the metric names) is never cut, not even 80 columns wide off a terminal
+    (issue #32: "hpl_bound_violat…" under ``make run``); the other columns fold. ``">value"``: right-justified."""
+    t = Table(title=title)
+    t.add_column("metric", no_wrap=True, min_width=max((len(str(n)) for n in names), default=6))
+    for c in columns:
+        t.add_column(c.removeprefix(">"), justify="right" if c.startswith(">") else "left", overflow="fold")
+    return t
 
 
 def _fmt(v) -> str:
@@ -140,12 +152,12 @@ def run(
         _print_json({"run_dir": str(out_dir), "scenario": sc.run.name, "seed": sc.run.seed,
                      "metrics": result.metrics, "error": result.error})
         raise typer.Exit(1 if result.error else 0)
+    from visnav.analysis.outcome import verdict_line
+
+    console.print(escape(verdict_line(result.metrics)), style="bold", soft_wrap=True)  # the verdict first (#30)
     rows, omitted, source = summary_rows(sc, result.metrics)
-    table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
-    table.add_column("metric")
-    table.add_column("this run", justify="right")
-    table.add_column(f"thesis: {source}")
-    table.add_column("verdict")
+    table = _metrics_table(f"{sc.run.name} (seed {sc.run.seed})", [r.metric for r in rows], ">this run",
+                           f"thesis: {source}", "verdict")
     for r in rows:
         table.add_row(r.metric, escape(r.ours), escape(r.thesis), r.verdict)
     console.print(table)
@@ -214,9 +226,9 @@ def montecarlo(
         _print_json({"campaign_dir": str(camp.out), "summary": summary})
         raise typer.Exit(1 if summary["failed"] else 0)
     source = summary.get("published_source", "")
-    table = Table(title=f"{scenario}: {summary['count']} runs, {summary['failed']} failed")
-    for col in ("metric", "mean", "median", "p95", "min", "max", source or "thesis"):
-        table.add_column(col, justify="left" if col == "metric" else "right")
+    table = _metrics_table(f"{scenario}: {summary['count']} runs, {summary['failed']} failed",
+                           [*summary["metrics"], *summary.get("rates", {})],
+                           *(f">{c}" for c in ("mean", "median", "p95", "min", "max", source or "thesis")))
     for k, v in summary["metrics"].items():
         table.add_row(k, *(f"{v[c]:.4g}" for c in ("mean", "median", "p95", "min", "max")), v.get("published", ""))
     for k, v in summary.get("rates", {}).items():
@@ -386,9 +398,7 @@ def metrics(
     if json_:
         _print_json(m)
         return
-    table = Table(title=f"metrics from {run_dir}/log.h5")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"metrics from {run_dir}/log.h5", m, ">value")
     for k, v in m.items():
         table.add_row(k, escape(_fmt(v)))
     console.print(table)
@@ -523,9 +533,7 @@ def eval_(
     if json_:
         print(json.dumps(s, indent=2))
         return
-    table = Table(title=f"{est.name} vs {ref.name} (alignment {align}, {ev.matched} poses matched)")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"{est.name} vs {ref.name} (alignment {align}, {ev.matched} poses matched)", s, ">value")
     for k, v in s.items():
         table.add_row(k, _fmt(v))
     console.print(table)
@@ -815,9 +823,7 @@ def replay_(
     except OSError as exc:
         err.print(f"[red]error:[/red] cannot write {escape(str(out))}: {escape(exc.strerror or str(exc))}")
         raise typer.Exit(2)
-    table = Table(title=f"replay of {escape(recording)} on {navigator}")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"replay of {escape(recording)} on {navigator}", res.metrics, ">value")
     for k, v in res.metrics.items():
         table.add_row(k, _fmt(v))
     console.print(table)

@@ -142,3 +142,134 @@ def test_truncated_imu_csv_is_named_and_allow_truncated_replays_what_came_before
     assert r.exit_code == 0, r.output
     assert json.loads((tmp_path / "o" / "metrics.json").read_text())["imu_samples"] == line - 2
     assert f"read the {line - 2} rows before it" in " ".join(r.stdout.split())
+
+
+# ------------------------------------------------------------------ point 7: names never cut; 9: vrs, ate; #30.4
+@pytest.fixture(scope="module")
+def segment_run(tmp_path_factory):
+    """A 3 s pfcm-segment run (on the path from 2 s) printed 80 columns wide (as `make run` off a terminal did)."""
+    from rich.console import Console
+
+    import visnav.cli as cli
+
+    d = tmp_path_factory.mktemp("seg") / "run"
+    old = cli.console
+    cli.console = Console(width=80)
+    try:
+        r = _invoke("run", "pfcm-segment", "--set", "run.duration_s=3", "--out", d, "--no-report")
+    finally:
+        cli.console = old
+    assert r.exit_code == 0, r.output
+    return d, r.stdout
+
+
+def test_the_summary_never_cuts_a_metric_name(segment_run):
+    d, out = segment_run
+    names = [k for k, v in json.loads((d / "metrics.json").read_text()).items()
+             if k != "provenance" and v is not None]
+    assert "hpl_bound_violations" in names and "worst_error_while_ok_m" in names
+    cells = {c.strip() for line in out.splitlines() for c in line.split("│")}
+    assert [n for n in names if n not in cells] == []
+    assert "…" not in out
+
+
+def test_no_vortex_ring_approach_in_table_and_json_and_metrics_has_ate(segment_run):
+    d, out = segment_run
+    m = json.loads((d / "metrics.json").read_text())
+    assert m["vrs_margin_min_mps"] == "no vortex-ring approach"  # a level segment: eq. 4.23 limits nothing
+    row = [line for line in out.splitlines() if "vrs_margin_min_mps" in line][0]
+    assert "no vortex-ring" in row and "inf" not in row.split("│")[2]  # (80 columns: the value folds)
+    r = _invoke("metrics", d, "--json")
+    assert r.exit_code == 0, r.output
+    again = json.loads(r.stdout)
+    assert again["vrs_margin_min_mps"] == "no vortex-ring approach"
+    assert again["ate_rmse_m"] == pytest.approx(m["ate_rmse_m"], rel=1e-9)
+
+
+def test_the_summary_opens_with_the_verdict(segment_run):
+    d, out = segment_run
+    m = json.loads((d / "metrics.json").read_text())
+    assert m["outcome"] == "safe"
+    assert out.splitlines()[0].startswith("outcome: safe")
+
+
+def test_the_verdict_names_hpl_violations_while_ok():
+    from visnav.analysis.outcome import verdict_line
+
+    line = verdict_line({"outcome": "safe", "outcome_reason": "orbit radius error up to 12.0 m while ok",
+                         "hpl_bound_violations": 6, "hpl_samples_ok": 23950, "worst_error_while_ok_m": 18.7})
+    assert line.startswith("outcome: safe") and "6 steps of 23950" in line and "18.7 m" in line
+    assert "HPL" not in verdict_line({"outcome": "safe", "hpl_bound_violations": 0})
+
+
+def test_an_interrupted_run_reports_interrupted(tmp_path):
+    from visnav.io.runs import write_run
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.missions import make_simulation
+
+    sim = make_simulation(load_scenario("pfcm-segment", ["run.duration_s=3"]))
+
+    def ctrl_c(t, total):
+        if t > 0.5:
+            raise KeyboardInterrupt
+
+    res = sim.run(progress=ctrl_c)
+    assert res.interrupted and res.metrics["outcome"] == "interrupted"
+    write_run(res, tmp_path, report=False)
+    m = json.loads((tmp_path / "metrics.json").read_text())
+    assert m["outcome"] == "interrupted" and m["interrupted"] is True
+    assert json.loads(_invoke("metrics", tmp_path, "--json").stdout)["outcome"] == "interrupted"
+
+
+def test_an_abort_without_touchdown_is_aborted_and_counts_safe_in_a_fault_campaign():
+    import numpy as np
+
+    from visnav.analysis.fault_campaign import fault_row
+    from visnav.analysis.outcome import OUTCOMES, run_outcome
+    from visnav.scenarios.schema import load_scenario
+
+    log = {"mode": {"t": np.array([0.0, 40.0]), "mode": ["descend_mpe", "abort"],
+                    "reason": ["", "integrity unusable"]}}
+    out, why = run_outcome(log, load_scenario("palace-landing"), {"outcome": "safe",
+                                                                 "outcome_reason": "no landing (held or aborted)"})
+    assert (out, why) == ("aborted", "abort at t=40.0 s: integrity unusable") and out in OUTCOMES
+    assert run_outcome({}, load_scenario("mav-geolocation-single"), {})[0] == "not_applicable"
+    row = fault_row("x", [{"status": "ok", "outcome": "aborted"}, {"status": "ok", "outcome": "unsafe"},
+                          {"status": "failed"}])
+    assert (row["safe"], row["unsafe"]) == (1, 2)
+
+
+# ------------------------------------------------------------------ point 8: not applicable, not scored
+def test_a_one_frame_geolocation_is_not_scored_against_the_rls_figures():
+    from visnav.analysis.published import summary_rows
+    from visnav.scenarios.schema import load_scenario
+
+    metrics = {"target_error_m": 1.3, "samples_to_3m": 1.0, "single_frame_error_median_m": 3.0}
+    single = {r.metric: r for r in summary_rows(load_scenario("mav-geolocation-single"), metrics)[0]}
+    assert single["samples_to_3m"].verdict == "not scored" and "one frame" in single["samples_to_3m"].thesis
+    assert single["target_error_m"].verdict == "not scored"
+    assert single["single_frame_error_median_m"].verdict.startswith("meets")
+    many = {r.metric: r for r in summary_rows(load_scenario("mav-geolocation"), metrics)[0]}
+    assert many["samples_to_3m"].verdict.startswith("meets") and many["target_error_m"].verdict.startswith("meets")
+
+
+# ------------------------------------------------------------------ point 10: the bank limit, by how much
+def test_max_roll_over_the_bank_limit_says_by_how_much_and_how_long():
+    import numpy as np
+
+    from visnav.analysis.path_metrics import notes
+    from visnav.analysis.published import PFCM, verdict
+    from visnav.scenarios.schema import load_scenario
+
+    p = next(x for x in PFCM if x.metric == "max_roll_deg")
+    assert verdict(p, 15.623) == "does not meet (> 15 deg, by 0.623 deg)"
+    assert verdict(p, 14.9) == "meets (<= 15 deg)"
+    t = np.arange(0.0, 10.0, 0.01)
+    roll = np.where((t > 4.0) & (t <= 4.5), np.radians(15.6), np.radians(10.0))
+    log = {"truth": {"t": t, "euler": np.column_stack([roll, 0 * t, 0 * t])},
+           "mode": {"t": np.array([1.0]), "mode": ["follow"]}}
+    (line,) = notes(log, load_scenario("pfcm-spiral"), {})
+    assert "exceeds the bank limit phi_max 15 deg by 0.6 deg, for 0.5 s of the 9 s on the path" in line
+    assert "16.5 deg" in line  # the controller's command limit, said
+    log["truth"]["euler"][:, 0] = np.radians(14.0)
+    assert notes(log, load_scenario("pfcm-spiral"), {}) == []

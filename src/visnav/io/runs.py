@@ -125,9 +125,12 @@ def write_run(result, out_dir: Path, report: bool = True) -> Path:
     sc, log = result.scenario, result.log
     prov = provenance(sc)
     (out_dir / "scenario.toml").write_text(to_toml(sc))
+    from visnav.analysis.outcome import apply_outcome
+
     metrics = dict(result.metrics)
     if getattr(result, "interrupted", False):
         metrics["interrupted"] = True
+    result.metrics = apply_outcome(metrics, log, sc, bool(getattr(result, "interrupted", False)))
     (out_dir / "metrics.json").write_text(json.dumps(_jsonable({**metrics, "provenance": prov}), indent=2) + "\n")
     log.to_hdf5(out_dir / "log.h5", attrs={"seed": sc.run.seed,
                                            **{k: "" if v is None else v for k, v in prov.items()}})
