@@ -65,6 +65,49 @@ def _metrics_table(title: str, names, *columns: str) -> Table:
     return t
 
 
+class RunProgress:
+    """A run's progress (issue #32: 70 s of ``--sil`` without a word): a rich bar on a terminal, else one plain
+    line every ``every_s`` seconds of wall time on ``con`` (a log, ``make run``). ``update(t, info)`` each step."""
+
+    every_s = 10.0
+
+    def __init__(self, name: str, total_s: float, con: Console, clock=None):
+        import time
+
+        self.name, self.total, self.con = name, float(total_s), con
+        self.clock = clock or time.perf_counter
+        self._bar = self._task = None
+        self._t0 = self._next = 0.0
+        self._shown = -1
+
+    def __enter__(self) -> "RunProgress":
+        self._t0 = self.clock()
+        self._next = self._t0 + self.every_s
+        if self.con.is_terminal:
+            self._bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
+                                 TimeElapsedColumn(), TimeRemainingColumn(), console=self.con, transient=True)
+            self._bar.__enter__()
+            self._task = self._bar.add_task(self.name, total=self.total, info="")
+        return self
+
+    def update(self, t: float, info: str = "") -> None:
+        if self._bar is not None:
+            if int(t) != self._shown:  # once a simulated second
+                self._shown = int(t)
+                self._bar.update(self._task, completed=t, info=f"t={t:5.1f}s {info}")
+            return
+        now = self.clock()
+        if now >= self._next:
+            self._next = now + self.every_s
+            pct = f" ({100.0 * t / self.total:.0f} %)" if self.total > 0 else ""
+            self.con.print(f"{self.name}: t={t:.1f} s of {self.total:g} s{pct}, {info}, {now - self._t0:.0f} s "
+                           "elapsed", soft_wrap=True, highlight=False)
+
+    def __exit__(self, *exc) -> None:
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+
+
 def _fmt(v) -> str:
     if isinstance(v, bool):
         return "yes" if v else "no"
@@ -119,13 +162,13 @@ def run(
         raise typer.Exit(130)
     for note in getattr(sim, "notes", []):
         err_console.print(f"[yellow]note:[/yellow] {escape(note)}", soft_wrap=True)
-    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
-                  TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=True) as prog:
-        task = prog.add_task(sc.run.name, total=sc.run.duration_s, info="")
+    if sil and not sil_external:
+        err_console.print(f"--sil: starting `visnav bridge` and waiting for it, then {sc.run.duration_s:g} s of real "
+                          "time", soft_wrap=True)
+    with RunProgress(sc.run.name, sc.run.duration_s, err_console) as prog:
 
         def progress(t, total):
-            if int(t * 10) % 10 == 0:
-                prog.update(task, completed=t, info=f"t={t:5.1f}s {sim.mission.mode}")
+            prog.update(t, f"mode {sim.mission.mode}")
 
         if sil or sil_external:  # the same scenario, its navigator in `visnav bridge` (sim/sil.py)
             from visnav.sim.sil import SilError, run_sil

@@ -273,3 +273,32 @@ def test_max_roll_over_the_bank_limit_says_by_how_much_and_how_long():
     assert "16.5 deg" in line  # the controller's command limit, said
     log["truth"]["euler"][:, 0] = np.radians(14.0)
     assert notes(log, load_scenario("pfcm-spiral"), {}) == []
+
+
+# ------------------------------------------------------------------ point 6: long runs show progress
+def test_progress_off_a_terminal_is_a_plain_line_every_10_s_of_wall_time():
+    from io import StringIO
+
+    from rich.console import Console
+
+    from visnav.cli import RunProgress
+
+    now = [0.0]
+    con = Console(file=StringIO(), width=200)  # not a terminal
+    with RunProgress("palace-landing", 120.0, con, clock=lambda: now[0]) as p:
+        for wall, t in [(0.0, 0.0), (5.0, 3.0), (10.5, 6.0), (15.0, 9.0), (21.0, 12.6)]:
+            now[0] = wall
+            p.update(t, "mode descend_gps")
+    lines = con.file.getvalue().splitlines()
+    assert lines == ["palace-landing: t=6.0 s of 120 s (5 %), mode descend_gps, 10 s elapsed",
+                     "palace-landing: t=12.6 s of 120 s (10 %), mode descend_gps, 21 s elapsed"]
+
+
+def test_a_run_off_a_terminal_says_where_it_is(tmp_path, monkeypatch):
+    from visnav.cli import RunProgress
+
+    monkeypatch.setattr(RunProgress, "every_s", 0.0)  # a line at every step
+    r = _invoke("run", "pfcm-segment", *SHORT, "--out", tmp_path / "r", "--no-report")
+    assert r.exit_code == 0, r.output
+    progress = [line for line in r.stderr.splitlines() if line.startswith("pfcm-segment: t=")]
+    assert len(progress) >= 5 and "mode " in progress[-1]
