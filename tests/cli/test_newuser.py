@@ -302,3 +302,58 @@ def test_a_run_off_a_terminal_says_where_it_is(tmp_path, monkeypatch):
     assert r.exit_code == 0, r.output
     progress = [line for line in r.stderr.splitlines() if line.startswith("pfcm-segment: t=")]
     assert len(progress) >= 5 and "mode " in progress[-1]
+
+
+# ------------------------------------------------------------------ point 11: reports open with the outcome
+def test_the_report_opens_with_the_outcome_and_the_headline_figures():
+    from visnav.analysis.report import headline_html
+    from visnav.scenarios.schema import load_scenario
+
+    sc = load_scenario("condor-orbit")
+    m = {"outcome": "safe", "outcome_reason": "orbit radius error up to 12.0 m while ok", "hpl_bound_violations": 6,
+         "hpl_samples_ok": 23950, "worst_error_while_ok_m": 18.7, "radius_est_error_max_pct": 22.0,
+         "tracking_lost_s": 6.0, "radius_est_error_rms_pct": 5.0}
+    top = headline_html(sc, m)
+    assert top.index("outcome: safe") < top.index("radius_est_error_max_pct")
+    assert "6 steps of 23950" in top and "#ffe0e0" in top  # HPL violations while ok: not shown as all well
+    assert "does not meet (&gt; 4 s, by 2 s)" in top  # tracking_lost_s against Fig. 7.1's 4 s
+    assert "radius_est_error_rms_pct" not in top  # no bound in the thesis: not a headline
+
+
+def test_the_report_page_has_the_verdict_above_the_metrics_table(tmp_path):
+    from visnav.analysis.report import write_report
+    from visnav.scenarios.schema import load_scenario
+    from visnav.sim.missions import make_simulation
+
+    res = make_simulation(load_scenario("pfcm-segment", ["run.duration_s=3"])).run()
+    write_report(res, tmp_path / "report.html")
+    page = (tmp_path / "report.html").read_text()
+    assert page.index("<b>outcome: safe") < page.index("headline figure") < page.index("<h2>Metrics")
+
+
+def test_the_witas_pmf_map_panel_has_a_legend(monkeypatch):
+    import numpy as np
+
+    import visnav.analysis.report as report
+    from visnav.analysis.witas_metrics import plots
+    from visnav.scenarios.schema import load_scenario
+
+    figs = []
+
+    class Enough(Exception):
+        pass
+
+    def keep(fig):
+        figs.append(fig)
+        raise Enough
+
+    monkeypatch.setattr(report, "_fig_to_img", keep)
+    t = np.linspace(0.0, 10.0, 11)
+    pos = np.column_stack([t * 5.0, t * 2.0, -60.0 + 0 * t])
+    log = {"truth": {"t": t, "position": pos},
+           "pmf": {"t": t, "position": pos[:, :2] + 1.0, "cov": np.tile(np.eye(2) * 4.0, (t.size, 1, 1))}}
+    with pytest.raises(Enough):
+        plots(log, load_scenario("witas-homing"))
+    panels = figs[0].axes[:2]
+    texts = [[x.get_text() for x in a.get_legend().get_texts()] if a.get_legend() else [] for a in panels]
+    assert "PMF 3-sigma north/east ellipse" in texts[1] and "PMF" in texts[1], texts
