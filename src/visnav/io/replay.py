@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 import numpy as np
 
-from visnav.io.recording import STREAM_NAMES, Recording, RecordingError
+from visnav.io.recording import STREAM_NAMES, STREAMS, Recording, RecordingError
 from visnav.measurements import NavCommand, NavInit
 from visnav.sim.log import FlightLog, register_stream
 
@@ -62,7 +62,15 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
     """The registered navigator ``name`` (``io/navigators.py``) with the recording's camera and scenario."""
     from visnav.io.navigators import make_navigator, spec
 
-    sc = scenario_of(rec, spec(name).scenario, opts.scenario_overrides)
+    s = spec(name)
+    sc = scenario_of(rec, s.scenario, opts.scenario_overrides)
+    kind = getattr(sc.mission, "type", "")
+    if kind not in s.mission_types:  # another system's flight: the navigator's settings from its own scenario
+        rec.notes.append(f"the recording was flown as {sc.run.name} (mission.type {kind}); the {name} navigator "
+                         f"takes its settings from {s.scenario}")
+        from visnav.scenarios.schema import load_scenario
+
+        sc = load_scenario(s.scenario, list(opts.scenario_overrides))
     parts: dict = {}
     if rec.camera is not None:
         parts |= {"camera": rec.camera.camera, "mount": rec.camera.mount}
@@ -202,6 +210,7 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
     uplink = getattr(nav, "pop_uplink", None)  # a ground-station half's fixes (CONDOR): back through link.csv
     fixes: dict[float, object] = {}
     via_link = "link" in rec.streams
+    unused: set[str] = set()
     k, t = 0, float("nan")
 
     def flush():
@@ -245,7 +254,16 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                     continue
                 if name in ("frames", "imu"):
                     counts[name] += 1
-                deliver(m)
+                if name in unused:
+                    continue
+                try:
+                    deliver(m)
+                except TypeError:  # a stream this navigator does not take (baro to the deck's): left out, said once
+                    if name in NAVIGATORS[navigator].needs:
+                        raise
+                    unused.add(name)
+                    notes.append(f"{STREAMS[name].file}: the {navigator} navigator does not take {name} "
+                                 "samples; left out")
             elif kinds[k] == 2 or c["method"][b[k]] == "estimate":
                 t = t if kinds[k] == 2 else _query_t(c, b[k], t)
                 if pending and pending[0] != t:
