@@ -374,3 +374,56 @@ class StuckRangeCheck:
         if self.onset is None or self.detected_t is None:
             return 0.0
         return self.rate_mps * max(min(t, self.detected_t) - self.onset, 0.0)
+
+
+class TiltCheck:
+    """Does a navigation filter's tilt agree with the autopilot's attitude solution? (issue #30)
+
+    A horizontal accelerometer bias ``b`` that an INS filter cannot tell from a tilt (position aids alone)
+    is taken into its roll / pitch: the filter leaves the autopilot's (independent) attitude by
+    ``~ b / g``. ``update(t, d)`` takes the roll / pitch difference [rad] (filter minus autopilot, at the same
+    instant); above ``limit_rad`` for ``persist_s`` it flags (once): ``detected_t``, ``angle`` (the
+    difference then) and ``onset``, when the difference last rose above half the limit (the bias began
+    about then). ``position_bound()``: the horizontal error the unmodelled acceleration ``g sin(angle)`` can
+    have built from the onset to the detection, ``g sin(angle) T^2 / 2``.
+    """
+
+    def __init__(self, limit_deg: float = 1.5, persist_s: float = 1.0):
+        self.limit = math.radians(limit_deg)
+        self.persist_s = float(persist_s)
+        self.onset: float | None = None
+        self._above: float | None = None
+        self.detected_t: float | None = None
+        self.angle = 0.0
+        self.last = 0.0
+
+    def update(self, t: float, d) -> bool:
+        """One comparison; True at the flag (once)."""
+        a = float(np.hypot(*np.asarray(d, float)[:2]))
+        self.last = a
+        if self.detected_t is not None:
+            return False
+        if a <= 0.5 * self.limit:
+            self.onset, self._above = None, None
+            return False
+        if self.onset is None:
+            self.onset = float(t)
+        if a <= self.limit:
+            self._above = None
+            return False
+        if self._above is None:
+            self._above = float(t)
+        if t - self._above >= self.persist_s:
+            self.detected_t, self.angle = float(t), a
+            return True
+        return False
+
+    def position_bound(self) -> float:
+        if self.detected_t is None or self.onset is None:
+            return 0.0
+        T = self.detected_t - self.onset
+        return 9.81 * math.sin(self.angle) * T * T / 2
+
+
+register_stream("tilt_check", angle=("deg", "", "filter roll / pitch minus the autopilot's (navigation/integrity."
+                                                  "TiltCheck)"))
