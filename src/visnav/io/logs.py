@@ -32,14 +32,22 @@ from visnav.io.streams import (camera_stream, flow_stream, gps_stream, heading_s
                                 read_summary, sorted_stream)
 
 
-def open_recording(path: str | Path) -> Recording:
+def open_recording(path: str | Path, allow_truncated: bool = False) -> Recording:
     """A recording folder (or a ``visnav bridge`` log folder: its ``recording/``), a DataFlash ``.bin``, a PX4
-    ``.ulg``, a MAVLink ``.tlog`` (io/tlog.py) or a ROS bag (``.bag`` / ROS 2 folder)."""
+    ``.ulg``, a MAVLink ``.tlog`` (io/tlog.py), an EuRoC / ASL folder (io/euroc.py), a folder of geotagged photos
+    (io/photos.py) or a ROS bag (``.bag`` / ROS 2 folder); ``allow_truncated``: a folder's CSV cut while written is
+    read up to its first short row."""
     p = Path(path)
     if p.is_dir() and (p / "bridge.tlog").is_file() and (p / "recording").is_dir():  # a `visnav bridge` log folder
         p = p / "recording"
+    from visnav.io.euroc import is_euroc, read_euroc
+
+    if is_euroc(p):  # the EuRoC / ASL dataset layout (mav0/imu0, cam0, ground truth)
+        return read_euroc(p)
     if p.is_dir() and not (p / "metadata.yaml").is_file():
-        return Recording.open(p)
+        from visnav.io.photos import is_photo_folder, read_photos  # a folder of geotagged photos (a survey)
+
+        return read_photos(p) if is_photo_folder(p) else Recording.open(p, allow_truncated)
     if not p.exists():
         raise RecordingError(f"{p}: no such recording folder or log")
     suffix = p.suffix.lower()

@@ -15,8 +15,9 @@ of our instants it meant, see ``tests``).
 
 The vehicle: a horizontal circle of radius ``radius_m`` at ``speed_mps`` and height ``height_m`` (truth in
 closed form: position, velocity, attitude with yaw along the track and the coordinated-turn bank, specific
-force). Faults: ``drop(seconds)`` stops all its output (a link drop), ``send_malformed()`` sends a
-MAVLink 2 frame with a broken CRC.
+force). Faults: ``drop(seconds)`` stops all its output (a link drop), ``stop_data(seconds)`` stops its
+sensor and position messages while HEARTBEAT and TIMESYNC go on (the autopilot's data stops, the link stays
+up), ``send_malformed()`` sends a MAVLink 2 frame with a broken CRC. The truth goes on meanwhile.
 """
 
 from __future__ import annotations
@@ -85,6 +86,7 @@ class SilAutopilot:
         self.stats = SilStats()
         self._stop = threading.Event()
         self._mute_until = 0.0
+        self._data_mute_until = 0.0
         self._correction = np.zeros(3)
         self._lock = threading.Lock()
         self.p0_hpa = 1013.25
@@ -122,13 +124,17 @@ class SilAutopilot:
     def drop(self, seconds: float) -> None:
         self._mute_until = time.monotonic() + seconds
 
+    def stop_data(self, seconds: float) -> None:
+        self._data_mute_until = time.monotonic() + seconds
+
     def send_malformed(self) -> None:
         buf = bytearray(self.mav.heartbeat_encode(2, 12, 0, 0, 4).pack(self.mav))
         buf[-1] ^= 0xFF  # break the CRC
         self.conn.write(bytes(buf))
 
     def _send(self, msg) -> None:
-        if time.monotonic() >= self._mute_until:
+        now = time.monotonic()
+        if now >= self._mute_until and (now >= self._data_mute_until or msg.get_type() == "HEARTBEAT"):
             self.mav.send(msg)
 
     def _run(self, duration_s: float) -> None:

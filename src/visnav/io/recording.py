@@ -31,6 +31,7 @@ significant digits (``%.17g``), so a replay reads back the very numbers the navi
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -105,9 +106,22 @@ def stream_of(m) -> str | None:
 
 
 # ---------------------------------------------------------------------------------------------- CSV
-def read_csv(path: Path, spec: Stream) -> dict[str, np.ndarray]:
+def _short_row(path: Path, n: int) -> tuple[int, int] | None:
+    """(line number, its column count) of the first data row of ``path`` whose column count is not ``n``."""
+    import csv
+
+    with open(path, newline="") as fh:
+        for i, r in enumerate(csv.reader(fh)):
+            if i and r and len(r) != n:
+                return i + 1, len(r)
+    return None
+
+
+def read_csv(path: Path, spec: Stream, allow_truncated: bool = False, notes: list | None = None) -> dict[str, np.ndarray]:
     """Columns of a CSV with a header line (vectorised parse); checks the required columns, finite
-    non-decreasing ``t_s`` and, where present, ``t_recv_s``."""
+    non-decreasing ``t_s`` and, where present, ``t_recv_s``. A row with another column count than the header
+    (a file cut while written) is an error naming its line, or with ``allow_truncated`` the rows before it
+    are read (said in ``notes``)."""
     try:
         with open(path, newline="") as fh:
             header = fh.readline().strip()
@@ -119,10 +133,24 @@ def read_csv(path: Path, spec: Stream) -> dict[str, np.ndarray]:
         alts = "".join(f" or {', '.join(a)}" for a in spec.alternatives)
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing)} (header: {header!r}; "
                              f"needed: {', '.join(spec.required)}{alts})")
+    def load(max_rows=None):
+        with warnings.catch_warnings():  # no rows: numpy's UserWarning (an empty stream is allowed)
+            warnings.simplefilter("ignore", UserWarning)
+            return np.loadtxt(path, delimiter=",", skiprows=1, dtype=str, ndmin=2, quotechar='"', comments=None,
+                              max_rows=max_rows)
+
     try:
-        raw = np.loadtxt(path, delimiter=",", skiprows=1, dtype=str, ndmin=2, quotechar='"', comments=None)
+        raw = load()
     except ValueError as exc:
-        raise RecordingError(f"{path}: {exc}") from None
+        bad = _short_row(path, len(names))
+        if bad is None:
+            raise RecordingError(f"{path}: {exc}") from None
+        what = f"line {bad[0]} has {bad[1]} columns, {len(names)} expected (truncated file?)"
+        if not allow_truncated:
+            raise RecordingError(f"{path}: {what}; --allow-truncated reads the rows before it") from None
+        raw = load(bad[0] - 2) if bad[0] > 2 else np.empty((0, len(names)), dtype=str)
+        if notes is not None:
+            notes.append(f"{path.name}: {what}: read the {bad[0] - 2} rows before it")
     if raw.size == 0:
         raw = np.empty((0, len(names)), dtype=str)
     if raw.shape[1] != len(names):
@@ -214,7 +242,8 @@ def write_camera_yaml(path: Path, camera: PinholeCamera, mount: FixedMount | Non
     path.write_text(head + yaml.safe_dump(doc, sort_keys=False))
 
 
-def read_camera_yaml(path: Path) -> CameraInfo:
+def read_camera_yaml(path: Path, default_mount: FixedMount | None = None) -> CameraInfo:
+    """``default_mount``: the mount of a camera.yaml that names none (a photo survey's: nadir), else one is needed."""
     import yaml
 
     if not path.is_file():
@@ -244,6 +273,8 @@ def read_camera_yaml(path: Path) -> CameraInfo:
             mount = FixedMount.depressed(float(doc["depression_deg"]), tuple(doc.get("lever_arm_m", (0, 0, 0))))
         elif doc.get("gimbal") is True:
             mount = None
+        elif default_mount is not None:
+            mount = default_mount
         else:
             raise ValueError("no mount: give R_cam_to_body (3x3, camera -> body FRD), depression_deg, or "
                              "gimbal: true (attitude from camera_attitude.csv and pan.csv)")
@@ -275,11 +306,13 @@ class Recording:
     _video: dict = field(default_factory=dict, repr=False)  # file -> [cv2.VideoCapture, next frame number]
 
     @classmethod
-    def open(cls, path: str | Path) -> "Recording":
+    def open(cls, path: str | Path, allow_truncated: bool = False) -> "Recording":
+        """``allow_truncated``: a CSV cut while written is read up to its first short row (said in ``notes``)."""
         d = Path(path)
         if not d.is_dir():
             raise RecordingError(f"{d}: not a recording folder (no such directory)")
-        streams = {k: read_csv(d / s.file, s) for k, s in STREAMS.items() if (d / s.file).is_file()}
+        cut: list[str] = []
+        streams = {k: read_csv(d / s.file, s, allow_truncated, cut) for k, s in STREAMS.items() if (d / s.file).is_file()}
         if not streams:
             raise RecordingError(f"{d}: no sensor CSV ({', '.join(s.file for s in STREAMS.values())})")
         cam = read_camera_yaml(d / "camera.yaml") if ("frames" in streams or (d / "camera.yaml").exists()) else None
@@ -295,10 +328,10 @@ class Recording:
                 if not cv2.VideoCapture(str(d / v)).isOpened():
                     raise RecordingError(f"{d / v}: cannot open the video (format or codec not supported by OpenCV)")
         _convert(streams, d)
-        truth = read_csv(d / TRUTH.file, TRUTH) if (d / TRUTH.file).is_file() else None
-        cmds = read_csv(d / COMMANDS.file, COMMANDS) if (d / COMMANDS.file).is_file() else None
+        truth = read_csv(d / TRUTH.file, TRUTH, allow_truncated, cut) if (d / TRUTH.file).is_file() else None
+        cmds = read_csv(d / COMMANDS.file, COMMANDS, allow_truncated, cut) if (d / COMMANDS.file).is_file() else None
         sc = (d / "scenario.toml").read_text() if (d / "scenario.toml").is_file() else None
-        return cls(d, cam, streams, truth, cmds, sc, time_offset_s=cam.time_offset_s if cam else 0.0)
+        return cls(d, cam, streams, truth, cmds, sc, notes=cut, time_offset_s=cam.time_offset_s if cam else 0.0)
 
     def require(self, names, who: str) -> None:
         """Raise a ``RecordingError`` naming what ``who`` needs and the folder lacks."""
