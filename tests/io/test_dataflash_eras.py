@@ -96,6 +96,7 @@ def test_the_older_timems_era(tmp_path):
     cam = rec.streams["camera_trigger"]  # GPS time 5.440 s of week offset -> boot 5.400 s -> t = 0.4 s
     np.testing.assert_allclose(cam["t_s"], [0.4], atol=1e-9)
     assert rec.summary.startswith("old.bin: read 2.0 s; to the end") and "TimeMS era" in rec.summary
+    assert "not read: IMU2" in rec.summary
 
 
 def test_the_newer_timeus_era_with_fmtu_multipliers(tmp_path):
@@ -120,6 +121,7 @@ def test_the_newer_timeus_era_with_fmtu_multipliers(tmp_path):
     c = rec.streams["camera_trigger"]
     assert c["seq"][0] == 42 and c["t_s"][0] == pytest.approx(0.5) and c["lat_deg"][0] == pytest.approx(LAT0)
     assert "TimeUS era, FMTU multipliers" in rec.summary and "to the end" in rec.summary
+    assert "not read: IMU instances 1" in rec.summary
 
 
 @pytest.mark.parametrize("era", [_old_era, _new_era])

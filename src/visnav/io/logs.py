@@ -250,6 +250,11 @@ def read_dataflash(path: Path) -> Recording:
     s = streams["imu"]["t_s"]
     parts = [f"{'TimeUS' if 'TimeUS' in imu else 'TimeMS'} era" + (", FMTU multipliers" if fmtu else ""),
              f"{imu_name} {s[-1] - s[0]:.1f} s ({len(s)} samples)"]
+    others = [n for n in ("IMU", "IMU2", "IMU3") if get[n] is not None and n != imu_name]
+    if "I" in get[imu_name] and len(np.unique(get[imu_name]["I"])) > 1:
+        others.append(f"{imu_name} instances {', '.join(str(int(i)) for i in np.unique(get[imu_name]['I'])[1:])}")
+    if others:
+        parts.append(f"not read: {', '.join(others)}")
     for key, label in (("attitude", att_name), ("gps", "GPS"), ("baro", "BARO"), ("mag_field", mag_name),
                        ("range", "RFND"), ("optical_flow", "OF"), ("camera_trigger", cam_name)):
         if key in streams:
