@@ -96,6 +96,7 @@ def test_the_older_timems_era(tmp_path):
     cam = rec.streams["camera_trigger"]  # GPS time 5.440 s of week offset -> boot 5.400 s -> t = 0.4 s
     np.testing.assert_allclose(cam["t_s"], [0.4], atol=1e-9)
     assert rec.summary.startswith("old.bin: read 2.0 s; to the end") and "TimeMS era" in rec.summary
+    assert "not read: IMU2" in rec.summary
 
 
 def test_the_newer_timeus_era_with_fmtu_multipliers(tmp_path):
@@ -120,10 +121,11 @@ def test_the_newer_timeus_era_with_fmtu_multipliers(tmp_path):
     c = rec.streams["camera_trigger"]
     assert c["seq"][0] == 42 and c["t_s"][0] == pytest.approx(0.5) and c["lat_deg"][0] == pytest.approx(LAT0)
     assert "TimeUS era, FMTU multipliers" in rec.summary and "to the end" in rec.summary
+    assert "not read: IMU instances 1" in rec.summary
 
 
 @pytest.mark.parametrize("era", [_old_era, _new_era])
-def test_damaged_copies_read_to_the_damage(tmp_path, era):
+def test_damaged_copies_read_to_the_damage(tmp_path, era, capfd):
     from typer.testing import CliRunner
 
     from visnav.cli import app
@@ -137,7 +139,9 @@ def test_damaged_copies_read_to_the_damage(tmp_path, era):
     assert "cut at byte" in rec.summary
     at = int(0.5 * len(whole))
     bad = _write(tmp_path / "garbage.bin", whole[:at] + bytes(range(7, 250, 3)) * 10 + whole[at:])
+    capfd.readouterr()
     rec = open_recording(bad)
+    assert capfd.readouterr() == ("", "")  # pymavlink's C indexer would print a line per bad byte
     n_at = int(rec.summary.split("damaged at byte ")[1].split()[0])
     assert abs(n_at - at) <= 100  # within a message of where the garbage starts
     assert len(rec.streams["imu"]["t_s"]) >= 0.95 * len(full.streams["imu"]["t_s"])  # read on past it
@@ -148,3 +152,32 @@ def test_damaged_copies_read_to_the_damage(tmp_path, era):
 def _write(p, b):
     p.write_bytes(b)
     return p
+
+
+@pytest.mark.parametrize("att", ["AHR2", "NKF1", "EKF1"])
+def test_attitude_and_imu_fallbacks(tmp_path, att):
+    """No IMU message: IMU2; no ATT: AHR2 (degrees), NKF1 (core column C: core 0), EKF1 (older, centi-degrees)."""
+    w = DataFlashWriter()
+    w.fmt("IMU2", "QffffffB", "TimeUS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,U")
+    spec = {"AHR2": ("QccCfLL", "TimeUS,Roll,Pitch,Yaw,Alt,Lat,Lng"), "NKF1": ("QBccCf", "TimeUS,C,Roll,Pitch,Yaw,VN"),
+            "EKF1": ("IccCf", "TimeMS,Roll,Pitch,Yaw,VN")}[att]
+    w.fmt(att, *spec)
+    for k in range(50):
+        tu = 1_000_000 + 20_000 * k
+        w.msg("IMU2", tu, 0.0, 0.0, 0.1, 0.0, 0.0, -9.8, 1)
+        if k % 5 == 0:
+            if att == "AHR2":
+                w.msg(att, tu, -300, 200, 9000, 10.0, int(LAT0 * 1e7), int(LON0 * 1e7))
+            elif att == "NKF1":
+                w.msg(att, tu, 1, 0, 0, 0, 0.0)  # core 1 first: not read
+                w.msg(att, tu, 0, -300, 200, 9000, 0.0)
+            else:
+                w.msg(att, tu // 1000, -300, 200, 9000, 0.0)
+    p = tmp_path / "f.bin"
+    p.write_bytes(w.bytes())
+    rec = open_recording(p)
+    assert len(rec.streams["imu"]["t_s"]) == 50 and "IMU2 0.98 s" not in rec.summary and "IMU2 1.0 s" in rec.summary
+    a = rec.streams["attitude"]
+    assert len(a["t_s"]) == 10 and any(f"the attitude is {att}'s" in n for n in rec.notes)
+    np.testing.assert_allclose([a["roll_rad"][0], a["pitch_rad"][0], a["yaw_rad"][0]], np.radians([-3.0, 2.0, 90.0]),
+                               atol=1e-12)

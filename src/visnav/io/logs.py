@@ -154,14 +154,11 @@ def _df_time(d: dict) -> np.ndarray:
 
 def read_dataflash(path: Path) -> Recording:
     """An ArduPilot DataFlash log of either era (module docstring)."""
-    import contextlib
-    import io
-
     try:
         from pymavlink.DFReader import DFReader_binary
 
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            reader = DFReader_binary(str(path))  # it prints per bad message; the damage is located below
+        with _quiet():
+            reader = DFReader_binary(str(path))  # it prints per bad byte; the damage is located below
     except Exception as exc:  # pymavlink raises bare Exceptions on damaged logs
         raise RecordingError(f"{path}: not a readable DataFlash log ({exc})") from None
     notes: list[str] = []
@@ -253,6 +250,11 @@ def read_dataflash(path: Path) -> Recording:
     s = streams["imu"]["t_s"]
     parts = [f"{'TimeUS' if 'TimeUS' in imu else 'TimeMS'} era" + (", FMTU multipliers" if fmtu else ""),
              f"{imu_name} {s[-1] - s[0]:.1f} s ({len(s)} samples)"]
+    others = [n for n in ("IMU", "IMU2", "IMU3") if get[n] is not None and n != imu_name]
+    if "I" in get[imu_name] and len(np.unique(get[imu_name]["I"])) > 1:
+        others.append(f"{imu_name} instances {', '.join(str(int(i)) for i in np.unique(get[imu_name]['I'])[1:])}")
+    if others:
+        parts.append(f"not read: {', '.join(others)}")
     for key, label in (("attitude", att_name), ("gps", "GPS"), ("baro", "BARO"), ("mag_field", mag_name),
                        ("range", "RFND"), ("optical_flow", "OF"), ("camera_trigger", cam_name)):
         if key in streams:
@@ -260,6 +262,43 @@ def read_dataflash(path: Path) -> Recording:
     rec.summary = read_summary(Path(path).name, float(s[-1] - s[0]), reader.data_len, at, cut, parts)
     rec.notes += notes
     return rec
+
+
+class _quiet:
+    """Silence stdout and stderr down to the file descriptors (pymavlink's C indexer prints a line per bad
+    byte of a damaged log to fd 2)."""
+
+    def __enter__(self):
+        import os
+        import sys
+
+        for f in (sys.stdout, sys.stderr):
+            try:
+                f.flush()
+            except (AttributeError, ValueError):
+                pass
+        self.null = os.open(os.devnull, os.O_WRONLY)
+        self.saved = [os.dup(1), os.dup(2)]
+        os.dup2(self.null, 1)
+        os.dup2(self.null, 2)
+        import contextlib
+        import io
+
+        self.py = [contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO())]
+        for c in self.py:
+            c.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        import os
+
+        for c in reversed(self.py):
+            c.__exit__(*exc)
+        os.dup2(self.saved[0], 1)
+        os.dup2(self.saved[1], 2)
+        for fd in (*self.saved, self.null):
+            os.close(fd)
+        return False
 
 
 def _cam_time(c: dict, gps: dict | None) -> np.ndarray | None:
