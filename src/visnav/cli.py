@@ -521,7 +521,8 @@ def ahrs(
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
         table.add_row(k, "null (not observable)" if m[k] is None else _fmt(m[k]))
-    for k in ("reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
+    for k in ("roll_mean_diff_deg", "roll_std_diff_deg", "pitch_mean_diff_deg", "pitch_std_diff_deg",
+              "reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
         if k in m:
             table.add_row(k, _fmt(m[k]) if not isinstance(m[k], list) else str([round(x, 3) for x in m[k]]))
     if m.get("yaw_unobservable_reason"):
@@ -856,6 +857,10 @@ def replay_(
     no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="a recording CSV cut while written (a "
                                          "short last row): replay the rows before it"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock (needs "
+                                         "--time-offset auto or seconds: t_imu = t_frame + offset)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -880,9 +885,15 @@ def replay_(
                 raise RecordingError(f"--time-offset must be 'auto' or seconds, got {time_offset!r}") from None
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
-        rec = open_recording(recording)
+        rec = open_recording(recording, allow_truncated)
         if rec.summary:  # a log: what was read, to the end or to the damage
             err.print(f"log: {escape(rec.summary)}", soft_wrap=True)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            if time_offset is None:
+                raise RecordingError("--frames on their own clock need --time-offset auto or seconds")
+            attach_frames(rec, frames, fps, camera_yaml)
         if not no_check:  # issue 29: a recording whose conventions or calibration are wrong is refused
             from visnav.analysis.check import run_check
 
@@ -891,7 +902,6 @@ def replay_(
             if problems:
                 raise RecordingError(f"{recording}: `visnav check` found {len(problems)} problem(s) "
                                      "(replay anyway with --no-check):\n  " + "\n  ".join(problems))
-        rec = open_recording(recording, allow_truncated)
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
@@ -926,6 +936,10 @@ def check_(
     out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
                                       "(default runs/check-<name>)"),
     max_frames: Optional[int] = typer.Option(None, help="use at most this many frames (the most rotating stretch)"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock "
+                                         "(replaces the recording's frames; the offset is searched over every lag)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
 ) -> None:
     """Verify a recording's conventions and calibration from the flight itself (docs/check.md)."""
     from visnav.analysis.check import run_check, write_check
@@ -934,6 +948,10 @@ def check_(
 
     try:
         rec = open_recording(recording)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            attach_frames(rec, frames, fps, camera_yaml)
         with console.status(f"checking {escape(recording)}"):
             res = run_check(rec, max_frames=max_frames)
         out_dir = Path(out) if out else Path("runs") / f"check-{Path(recording).resolve().name}"
