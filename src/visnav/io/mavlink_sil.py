@@ -147,8 +147,8 @@ class SilAutopilot:
             bn = self.boot_ns(mono)
             p, v, e, f = self.truth.at(t)
             due = [k for k in period if t >= nxt[k]]
-            for k in due:
-                nxt[k] += period[k]
+            for k in due:  # a starved loop skips what it missed (an autopilot sends no burst of old samples)
+                nxt[k] = max(nxt[k] + period[k], t)
             if "hb" in due:
                 self._send(self.mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4,
                                                      mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0,
