@@ -8,6 +8,7 @@ rich markup: units in brackets are written escaped (``\\[m]``).
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import List, NoReturn, Optional
@@ -21,7 +22,8 @@ from rich.table import Table
 import visnav
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="visnav: UAV navigation without GPS")
-console = Console()
+# off a terminal (``make run``, a pipe, a log) rich would lay tables out 80 columns wide: widen them (issue #32)
+console = Console(width=None if sys.stdout.isatty() or os.environ.get("COLUMNS") else 140)
 err_console = Console(stderr=True)
 
 
@@ -51,6 +53,59 @@ def _version(value: bool) -> None:
 def _main(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
                                        help="print the version and exit")) -> None:
     """visnav: UAV navigation without GPS"""
+
+
+def _metrics_table(title: str, names, *columns: str) -> Table:
+    """A table whose first column (the metric names) is never cut, not even 80 columns wide off a terminal
+    (issue #32: "hpl_bound_violat…" under ``make run``); the other columns fold. ``">value"``: right-justified."""
+    t = Table(title=title)
+    t.add_column("metric", no_wrap=True, min_width=max((len(str(n)) for n in names), default=6))
+    for c in columns:
+        t.add_column(c.removeprefix(">"), justify="right" if c.startswith(">") else "left", overflow="fold")
+    return t
+
+
+class RunProgress:
+    """A run's progress (issue #32: 70 s of ``--sil`` without a word): a rich bar on a terminal, else one plain
+    line every ``every_s`` seconds of wall time on ``con`` (a log, ``make run``). ``update(t, info)`` each step."""
+
+    every_s = 10.0
+
+    def __init__(self, name: str, total_s: float, con: Console, clock=None):
+        import time
+
+        self.name, self.total, self.con = name, float(total_s), con
+        self.clock = clock or time.perf_counter
+        self._bar = self._task = None
+        self._t0 = self._next = 0.0
+        self._shown = -1
+
+    def __enter__(self) -> "RunProgress":
+        self._t0 = self.clock()
+        self._next = self._t0 + self.every_s
+        if self.con.is_terminal:
+            self._bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
+                                 TimeElapsedColumn(), TimeRemainingColumn(), console=self.con, transient=True)
+            self._bar.__enter__()
+            self._task = self._bar.add_task(self.name, total=self.total, info="")
+        return self
+
+    def update(self, t: float, info: str = "") -> None:
+        if self._bar is not None:
+            if int(t) != self._shown:  # once a simulated second
+                self._shown = int(t)
+                self._bar.update(self._task, completed=t, info=f"t={t:5.1f}s {info}")
+            return
+        now = self.clock()
+        if now >= self._next:
+            self._next = now + self.every_s
+            pct = f" ({100.0 * t / self.total:.0f} %)" if self.total > 0 else ""
+            self.con.print(f"{self.name}: t={t:.1f} s of {self.total:g} s{pct}, {info}, {now - self._t0:.0f} s "
+                           "elapsed", soft_wrap=True, highlight=False)
+
+    def __exit__(self, *exc) -> None:
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
 
 
 def _fmt(v) -> str:
@@ -107,13 +162,13 @@ def run(
         raise typer.Exit(130)
     for note in getattr(sim, "notes", []):
         err_console.print(f"[yellow]note:[/yellow] {escape(note)}", soft_wrap=True)
-    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
-                  TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=True) as prog:
-        task = prog.add_task(sc.run.name, total=sc.run.duration_s, info="")
+    if sil and not sil_external:
+        err_console.print(f"--sil: starting `visnav bridge` and waiting for it, then {sc.run.duration_s:g} s of real "
+                          "time", soft_wrap=True)
+    with RunProgress(sc.run.name, sc.run.duration_s, err_console) as prog:
 
         def progress(t, total):
-            if int(t * 10) % 10 == 0:
-                prog.update(task, completed=t, info=f"t={t:5.1f}s {sim.mission.mode}")
+            prog.update(t, f"mode {sim.mission.mode}")
 
         if sil or sil_external:  # the same scenario, its navigator in `visnav bridge` (sim/sil.py)
             from visnav.sim.sil import SilError, run_sil
@@ -140,12 +195,12 @@ def run(
         _print_json({"run_dir": str(out_dir), "scenario": sc.run.name, "seed": sc.run.seed,
                      "metrics": result.metrics, "error": result.error})
         raise typer.Exit(1 if result.error else 0)
+    from visnav.analysis.outcome import verdict_line
+
+    console.print(escape(verdict_line(result.metrics)), style="bold", soft_wrap=True)  # the verdict first (#30)
     rows, omitted, source = summary_rows(sc, result.metrics)
-    table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
-    table.add_column("metric")
-    table.add_column("this run", justify="right")
-    table.add_column(f"thesis: {source}")
-    table.add_column("verdict")
+    table = _metrics_table(f"{sc.run.name} (seed {sc.run.seed})", [r.metric for r in rows], ">this run",
+                           f"thesis: {source}", "verdict")
     for r in rows:
         table.add_row(r.metric, escape(r.ours), escape(r.thesis), r.verdict)
     console.print(table)
@@ -214,9 +269,9 @@ def montecarlo(
         _print_json({"campaign_dir": str(camp.out), "summary": summary})
         raise typer.Exit(1 if summary["failed"] else 0)
     source = summary.get("published_source", "")
-    table = Table(title=f"{scenario}: {summary['count']} runs, {summary['failed']} failed")
-    for col in ("metric", "mean", "median", "p95", "min", "max", source or "thesis"):
-        table.add_column(col, justify="left" if col == "metric" else "right")
+    table = _metrics_table(f"{scenario}: {summary['count']} runs, {summary['failed']} failed",
+                           [*summary["metrics"], *summary.get("rates", {})],
+                           *(f">{c}" for c in ("mean", "median", "p95", "min", "max", source or "thesis")))
     for k, v in summary["metrics"].items():
         table.add_row(k, *(f"{v[c]:.4g}" for c in ("mean", "median", "p95", "min", "max")), v.get("published", ""))
     for k, v in summary.get("rates", {}).items():
@@ -291,6 +346,8 @@ def margins(
     identify_altitude: float = typer.Option(12.0, help="height \\[m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
     seeds: int = typer.Option(1, help="seeds per sweep, merged (weighted by coherence)"),
+    ident_seeds: Optional[int] = typer.Option(None, help="seeds of the identification sweeps (default max(seeds, 4))"),
+    min_delay_confidence: float = typer.Option(0.9, help="below it (P(|error| < 5 ms)) a delay is not compensated"),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
@@ -313,9 +370,11 @@ def margins(
         alts, dels = numbers(altitudes, "--altitudes"), numbers(delays, "--delays")
         if not alts or not dels:
             raise ValueError("--altitudes and --delays need at least one value each")
+        if not 0 <= min_delay_confidence <= 1 or (ident_seeds is not None and ident_seeds < 1):
+            raise ValueError("--min-delay-confidence takes a value in [0, 1] and --ident-seeds a count >= 1")
         check_margins_scenario(scenario, list(set_))
         out_dir = prepare_out_dir(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}", force=force,
-                                  clear=("margins.csv", "frf.npz"))
+                                  clear=("margins.csv", "frf.npz"), kind="a margins folder")
     except ValueError as exc:  # ScenarioError and OutputDirError are ValueErrors
         _fail(exc)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
@@ -324,7 +383,8 @@ def margins(
         frfs: dict = {}
         rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario, frf_sink=frfs,
                                 overrides=tuple(set_), workers=workers, laser_delay_s=laser_delay,
-                                identify_altitude_m=identify_altitude, seeds=seeds,
+                                identify_altitude_m=identify_altitude, seeds=seeds, ident_seeds=ident_seeds,
+                                min_delay_confidence=min_delay_confidence,
                                 progress=lambda *a, **k: prog.advance(task))
     cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
             "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]
@@ -386,9 +446,7 @@ def metrics(
     if json_:
         _print_json(m)
         return
-    table = Table(title=f"metrics from {run_dir}/log.h5")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"metrics from {run_dir}/log.h5", m, ">value")
     for k, v in m.items():
         table.add_row(k, escape(_fmt(v)))
     console.print(table)
@@ -436,7 +494,7 @@ def keys(
 
 @app.command()
 def ahrs(
-    log: str = typer.Argument(..., help="PX4 ULog file (.ulg)"),
+    log: str = typer.Argument(..., help="PX4 ULog (.ulg), or a recording / EuRoC folder / log with a reference attitude"),
     out: Optional[str] = typer.Option(None, "--out", help="output directory (default: runs/ahrs-<log name>)"),
     declination_deg: Optional[float] = typer.Option(
         None, "--declination-deg", help="magnetic declination \\[deg]; default: the log's EKF2_MAG_DECL, else 0"),
@@ -448,13 +506,13 @@ def ahrs(
 
     out_dir = Path(out) if out else Path("runs") / f"ahrs-{Path(log).stem}"
     try:
-        prepare_out_dir(out_dir, force=True, clear=())  # writable? (ahrs overwrites its own two files)
+        prepare_out_dir(out_dir, force=True, clear=(), kind=None)  # writable? (ahrs overwrites its own two files)
         m = ahrs_check(log, out_dir, declination_deg)
     except (OSError, ValueError) as exc:
         _fail(exc)
     for note in m["log_notes"]:
         err_console.print(f"[yellow]log:[/yellow] {escape(note)}", soft_wrap=True)
-    table = Table(title=f"AHRS vs PX4 vehicle_attitude ({Path(log).name})")
+    table = Table(title=f"AHRS vs {m['reference']} ({Path(log).name})")
     table.add_column("metric")
     table.add_column("value", justify="right")
     if m.get("log_truncated"):
@@ -462,8 +520,12 @@ def ahrs(
     table.add_row("magnetometer", m.get("magnetometer_source") or "NOT FOUND (yaw gyro-only)")
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
-        gyro_only = k == "yaw_rms_diff_deg" and not m["magnetometer"]
-        table.add_row(k, _fmt(m[k]) + (" (gyro-only: no magnetometer)" if gyro_only else ""))
+        table.add_row(k, "null (not observable)" if m[k] is None else _fmt(m[k]))
+    for k in ("reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
+        if k in m:
+            table.add_row(k, _fmt(m[k]) if not isinstance(m[k], list) else str([round(x, 3) for x in m[k]]))
+    if m.get("yaw_unobservable_reason"):
+        table.add_row("yaw", escape(m["yaw_unobservable_reason"]))
     console.print(table)
     console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
 
@@ -523,9 +585,7 @@ def eval_(
     if json_:
         print(json.dumps(s, indent=2))
         return
-    table = Table(title=f"{est.name} vs {ref.name} (alignment {align}, {ev.matched} poses matched)")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"{est.name} vs {ref.name} (alignment {align}, {ev.matched} poses matched)", s, ">value")
     for k, v in s.items():
         table.add_row(k, _fmt(v))
     console.print(table)
@@ -800,8 +860,8 @@ def record_(
 
 @app.command("replay")
 def replay_(
-    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
-                                    "ROS bag"),
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, "
+                                    "PX4 .ulg, ArduPilot DataFlash .bin, MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
     navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
@@ -813,6 +873,9 @@ def replay_(
                                               "real flight; the fixes stay the reference when there is no truth.csv)"),
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
                                "there are removed first)"),
+    no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
+    allow_truncated: bool = typer.Option(False, "--allow-truncated", help="a recording CSV cut while written (a "
+                                         "short last row): replay the rows before it"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -822,6 +885,12 @@ def replay_(
     from visnav.scenarios.schema import ScenarioError
 
     err = Console(stderr=True)
+    out_dir = None
+    try:  # the output first (issue #32: --out FILE failed only after the replay's work)
+        out_dir = new_run_dir(f"replay-{navigator}", out, force)
+    except ValueError as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(2)
     try:
         offset = None
         if time_offset is not None and time_offset != "auto":
@@ -832,21 +901,31 @@ def replay_(
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
         rec = open_recording(recording)
+        if rec.summary:  # a log: what was read, to the end or to the damage
+            err.print(f"log: {escape(rec.summary)}", soft_wrap=True)
+        if not no_check:  # issue 29: a recording whose conventions or calibration are wrong is refused
+            from visnav.analysis.check import run_check
+
+            with console.status(f"checking {escape(recording)}"):
+                problems = run_check(rec, max_frames=60).summary["problems"]
+            if problems:
+                raise RecordingError(f"{recording}: `visnav check` found {len(problems)} problem(s) "
+                                     "(replay anyway with --no-check):\n  " + "\n  ".join(problems))
+        rec = open_recording(recording, allow_truncated)
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)
-        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out, force),
-                               title=f"replay of {recording} on {navigator}")
+        write_replay(res, out_dir, title=f"replay of {recording} on {navigator}")
     except (RecordingError, ScenarioError, ValueError) as exc:
+        if not any(out_dir.iterdir()):
+            out_dir.rmdir()  # made for this replay: not left behind empty
         err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(2)
     except OSError as exc:
         err.print(f"[red]error:[/red] cannot write {escape(str(out))}: {escape(exc.strerror or str(exc))}")
         raise typer.Exit(2)
-    table = Table(title=f"replay of {escape(recording)} on {navigator}")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"replay of {escape(recording)} on {navigator}", res.metrics, ">value")
     for k, v in res.metrics.items():
         table.add_row(k, _fmt(v))
     console.print(table)
@@ -857,6 +936,45 @@ def replay_(
         raise typer.Exit(130)
     if "error" in res.metrics:
         raise typer.Exit(1)
+
+
+# ------------------------------------------------------------------ check (issue 29)
+@app.command("check")
+def check_(
+    recording: str = typer.Argument(..., help="recording folder, EuRoC folder, .bin, .ulg or ROS bag"),
+    json_: bool = typer.Option(False, "--json", help="print check.json on stdout"),
+    out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
+                                      "(default runs/check-<name>)"),
+    max_frames: Optional[int] = typer.Option(None, help="use at most this many frames (the most rotating stretch)"),
+) -> None:
+    """Verify a recording's conventions and calibration from the flight itself (docs/check.md)."""
+    from visnav.analysis.check import run_check, write_check
+    from visnav.io.logs import open_recording
+    from visnav.io.recording import RecordingError
+
+    try:
+        rec = open_recording(recording)
+        with console.status(f"checking {escape(recording)}"):
+            res = run_check(rec, max_frames=max_frames)
+        out_dir = Path(out) if out else Path("runs") / f"check-{Path(recording).resolve().name}"
+        doc = write_check(res, out_dir, f"visnav check: {recording}")
+    except (RecordingError, ValueError) as exc:
+        _fail(exc)
+    except OSError as exc:
+        _fail(f"cannot write {out}: {exc.strerror or exc}")
+    if json_:
+        _print_json(doc)
+        return
+    table = Table(title=f"check of {escape(recording)}")
+    for c in ("check", "status", "measured", "expected"):
+        table.add_column(c)
+    colour = {"ok": "green", "warning": "yellow", "problem": "red", "not observable": "dim"}
+    for n, s, m, e in res.rows:
+        table.add_row(escape(n), f"[{colour[s]}]{s}[/{colour[s]}]", escape(str(m)), escape(str(e)))
+    console.print(table)
+    for p in res.summary["problems"]:
+        console.print(f"[red]problem:[/red] {escape(p)}", soft_wrap=True)
+    console.print(f"written: {out_dir / 'check.json'}, {out_dir / 'check.html'}")
 
 
 def main() -> None:  # pragma: no cover

@@ -294,7 +294,7 @@ class Campaign:
             raise CampaignError(f"{self.out}: {problem}; use --new to start a fresh campaign beside it, "
                                 "or another --out")
         try:
-            prepare_out_dir(self.out, force=True, clear=())
+            prepare_out_dir(self.out, force=True, clear=(), kind=None)
         except OutputDirError as exc:
             raise CampaignError(str(exc)) from None
         old = self._read_json()

@@ -21,6 +21,7 @@ __all__ = [
     "skew",
     "cross3",
     "wrap_angle",
+    "kabsch",
 ]
 
 _GIMBAL_EPS = 1e-12
@@ -159,3 +160,13 @@ def euler_rates_to_body_rates(euler, euler_dot) -> np.ndarray:
     q = theta_dot * cphi + psi_dot * sphi * cth
     r = -theta_dot * sphi + psi_dot * cphi * cth
     return np.stack(np.broadcast_arrays(p, q, r), axis=-1)
+
+
+def kabsch(a: np.ndarray, b: np.ndarray, w: np.ndarray | None = None) -> np.ndarray:
+    """R minimising sum w |b - R a|^2 (Kabsch 1976; Arun, Huang & Blostein 1987): H = sum w a b^T = U S V^T,
+    R = V diag(1, 1, det(V U^T)) U^T."""
+    w = np.ones(len(a)) if w is None else np.asarray(w, float)
+    H = (np.asarray(a, float) * w[:, None]).T @ np.asarray(b, float)
+    U, _, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, 1.0 if np.linalg.det(Vt.T @ U.T) >= 0 else -1.0])
+    return Vt.T @ D @ U.T

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 import numpy as np
 
-from visnav.io.recording import STREAM_NAMES, Recording, RecordingError
+from visnav.io.recording import STREAM_NAMES, STREAMS, Recording, RecordingError
 from visnav.measurements import NavCommand, NavInit
 from visnav.sim.log import FlightLog, register_stream
 
@@ -62,7 +62,15 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
     """The registered navigator ``name`` (``io/navigators.py``) with the recording's camera and scenario."""
     from visnav.io.navigators import make_navigator, spec
 
-    sc = scenario_of(rec, spec(name).scenario, opts.scenario_overrides)
+    s = spec(name)
+    sc = scenario_of(rec, s.scenario, opts.scenario_overrides)
+    kind = getattr(sc.mission, "type", "")
+    if kind not in s.mission_types:  # another system's flight: the navigator's settings from its own scenario
+        rec.notes.append(f"the recording was flown as {sc.run.name} (mission.type {kind}); the {name} navigator "
+                         f"takes its settings from {s.scenario}")
+        from visnav.scenarios.schema import load_scenario
+
+        sc = load_scenario(s.scenario, list(opts.scenario_overrides))
     parts: dict = {}
     if rec.camera is not None:
         parts |= {"camera": rec.camera.camera, "mount": rec.camera.mount}
@@ -86,25 +94,15 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
 
 
 def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
-    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``): gyro of ``imu.csv`` against
-    the frames' rotation; the ground is assumed below the body (the camera's view of body down)."""
-    from visnav.estimation.timesync import estimate_offset, frame_rotation_angles
+    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``: frame rotations from feature
+    tracks against the gyro, the camera-to-IMU rotation fitted with it); a ``CameraImuCalibration``."""
+    from visnav.analysis.check import camera_imu
 
     rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
-    if rec.camera.mount is None:
-        raise RecordingError(f"{rec.path / 'camera.yaml'}: a gimbal camera (gimbal: true); --time-offset auto needs a "
-                             "camera fixed to the body (R_cam_to_body): give the offset in seconds")
-    s = rec.streams["imu"]
-    gyro = np.column_stack([s["gx_radps"], s["gy_radps"], s["gz_radps"]])
-    decoded = [(float(t), rec.image(i)[0]) for i, t in enumerate(rec.streams["frames"]["t_s"])]
-    decoded = [(t, im) for t, im in decoded if im is not None]
-    cam = rec.camera
-    down = cam.mount.R_cam_to_body.T @ np.array([0.0, 0.0, 1.0])
-    pairs, ang = frame_rotation_angles([t for t, _ in decoded], (im for _, im in decoded), cam.camera.K, down)
-    try:
-        return estimate_offset(s["t_s"], gyro, pairs, ang, max_offset_s=max_offset_s)
-    except ValueError as exc:
-        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {exc}") from None
+    cal, why = camera_imu(rec, max_offset_s=max_offset_s)
+    if cal is None:
+        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {why}")
+    return cal
 
 
 # ------------------------------------------------------------------------------------ the replay
@@ -150,9 +148,9 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     if opts.time_offset == "auto":
         est = offset_from_recording(rec)
         rec.time_offset_s = est.offset_s
-        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
-        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
-                     f"cross-correlation, peak {est.peak:.2f})")
+        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.offset_sigma_s}
+        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.offset_sigma_s * 1e3:.1f} ms (frame rotations vs "
+                     f"gyro, rate correlation {est.coarse.peak:.2f})")
     elif opts.time_offset is not None:
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
@@ -212,6 +210,7 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
     uplink = getattr(nav, "pop_uplink", None)  # a ground-station half's fixes (CONDOR): back through link.csv
     fixes: dict[float, object] = {}
     via_link = "link" in rec.streams
+    unused: set[str] = set()
     k, t = 0, float("nan")
 
     def flush():
@@ -255,7 +254,16 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                     continue
                 if name in ("frames", "imu"):
                     counts[name] += 1
-                deliver(m)
+                if name in unused:
+                    continue
+                try:
+                    deliver(m)
+                except TypeError:  # a stream this navigator does not take (baro to the deck's): left out, said once
+                    if name in NAVIGATORS[navigator].needs:
+                        raise
+                    unused.add(name)
+                    notes.append(f"{STREAMS[name].file}: the {navigator} navigator does not take {name} "
+                                 "samples; left out")
             elif kinds[k] == 2 or c["method"][b[k]] == "estimate":
                 t = t if kinds[k] == 2 else _query_t(c, b[k], t)
                 if pending and pending[0] != t:

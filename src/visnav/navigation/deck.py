@@ -168,6 +168,16 @@ class DeckEstimate:
     pitch: float
     valid: bool = True
 
+    @property
+    def position(self) -> np.ndarray:
+        """The deck origin relative to the vehicle, body FRD [m] (states 0-2)."""
+        return self.state[0:3]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """The deck origin's velocity relative to the vehicle, body FRD [m/s] (states 6-8)."""
+        return self.state[6:9]
+
 
 @dataclass
 class DeckHealth(Health):
