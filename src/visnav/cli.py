@@ -609,6 +609,23 @@ def _bridge_origin(text: Optional[str]):
         raise ValueError(f"--origin must be LAT_DEG,LON_DEG,ALT_M (AMSL), got {text!r} ({exc})") from None
 
 
+def _input_timeouts(items: list[str]):
+    from visnav.io.bridge_freshness import FreshnessConfig
+
+    cfg = FreshnessConfig()
+    for it in items:
+        k, _, v = it.partition("=")
+        try:
+            val = None if v.strip().lower() == "none" else float(v)
+            if val is not None and not 0.0 < val < 1e6:
+                raise ValueError
+            cfg = cfg.with_overrides(**{k.strip(): {"timeout_s": val}})
+        except ValueError as exc:
+            why = str(exc) if "unknown bridge input stream" in str(exc) else "seconds must be a positive number or none"
+            raise ValueError(f"--input-timeout {it!r}: {why}") from None
+    return cfg
+
+
 @app.command()
 def bridge(
     mavlink_url: str = typer.Option(..., "--mavlink", help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or a "
@@ -638,6 +655,9 @@ def bridge(
                                 "autopilot side (the SIL)"),
     gps_sigma: float = typer.Option(2.5, "--gps-sigma", help="1-sigma \\[m] the navigator gives a position fix whose "
                                     "message carries no accuracy (GLOBAL_POSITION_INT; GPS_RAW_INT without h_acc)"),
+    input_timeout: List[str] = typer.Option([], "--input-timeout", help="STREAM=SECONDS (imu, gps, height, "
+                                            "camera; 'none': never): no estimate is sent while that input is older "
+                                            "(defaults imu=1 camera=10, docs/autopilots.md)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
     import time
@@ -681,7 +701,7 @@ def bridge(
         fail(f"log folder {out_dir} is not writable ({exc.strerror})")
     link = src = None
     try:
-        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
+        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), freshness=_input_timeouts(input_timeout), frame_log=out_dir / "frames" if log_frames else None,
                            send_health=health, gps_sigma_m=gps_sigma, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
         link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=say)
