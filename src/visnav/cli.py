@@ -277,6 +277,10 @@ def montecarlo(
     for k, v in summary.get("rates", {}).items():
         table.add_row(k, f"rate {v['rate']:.0%}", f"{v['count']} of {v['n']}", "", "", "", v.get("published", ""))
     console.print(table)
+    from visnav.analysis.outcome import outcome_text
+
+    if outcome_text(summary.get("outcomes", {})):
+        console.print(outcome_text(summary["outcomes"]), style="bold")
     console.print(f"campaign directory: {camp.out}")
     if summary["failed"]:
         raise typer.Exit(1)
