@@ -132,6 +132,10 @@ class DeckFilterConfig(_M):
     light_survey_sigma_m: float | None = Field(None, ge=0, le=0.5, description="the light survey's sigma the "
                                                "filter adds to R as sigma / range; None: mission.deck's "
                                                "light_survey_error_m")
+    calibration_floor: bool = Field(True, description="keep the position and attitude variances at least at the "
+                                    "calibration's constant share (misalignment x range, survey error over the "
+                                    "layout) after each update, so that the covariance does not claim what the "
+                                    "frames cannot average out")
     acquisition_bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="bearing sigma while the filter "
                                                  "converges before hand-over (the thesis' R; from a far-off start "
                                                  "a sensor-sized R collapses P before the nonlinear errors are gone)")
