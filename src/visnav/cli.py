@@ -8,6 +8,7 @@ rich markup: units in brackets are written escaped (``\\[m]``).
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import List, NoReturn, Optional
@@ -21,7 +22,8 @@ from rich.table import Table
 import visnav
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="visnav: UAV navigation without GPS")
-console = Console()
+# off a terminal (``make run``, a pipe, a log) rich would lay tables out 80 columns wide: widen them (issue #32)
+console = Console(width=None if sys.stdout.isatty() or os.environ.get("COLUMNS") else 140)
 err_console = Console(stderr=True)
 
 
@@ -51,6 +53,59 @@ def _version(value: bool) -> None:
 def _main(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
                                        help="print the version and exit")) -> None:
     """visnav: UAV navigation without GPS"""
+
+
+def _metrics_table(title: str, names, *columns: str) -> Table:
+    """A table whose first column (the metric names) is never cut, not even 80 columns wide off a terminal
+    (issue #32: "hpl_bound_violat…" under ``make run``); the other columns fold. ``">value"``: right-justified."""
+    t = Table(title=title)
+    t.add_column("metric", no_wrap=True, min_width=max((len(str(n)) for n in names), default=6))
+    for c in columns:
+        t.add_column(c.removeprefix(">"), justify="right" if c.startswith(">") else "left", overflow="fold")
+    return t
+
+
+class RunProgress:
+    """A run's progress (issue #32: 70 s of ``--sil`` without a word): a rich bar on a terminal, else one plain
+    line every ``every_s`` seconds of wall time on ``con`` (a log, ``make run``). ``update(t, info)`` each step."""
+
+    every_s = 10.0
+
+    def __init__(self, name: str, total_s: float, con: Console, clock=None):
+        import time
+
+        self.name, self.total, self.con = name, float(total_s), con
+        self.clock = clock or time.perf_counter
+        self._bar = self._task = None
+        self._t0 = self._next = 0.0
+        self._shown = -1
+
+    def __enter__(self) -> "RunProgress":
+        self._t0 = self.clock()
+        self._next = self._t0 + self.every_s
+        if self.con.is_terminal:
+            self._bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
+                                 TimeElapsedColumn(), TimeRemainingColumn(), console=self.con, transient=True)
+            self._bar.__enter__()
+            self._task = self._bar.add_task(self.name, total=self.total, info="")
+        return self
+
+    def update(self, t: float, info: str = "") -> None:
+        if self._bar is not None:
+            if int(t) != self._shown:  # once a simulated second
+                self._shown = int(t)
+                self._bar.update(self._task, completed=t, info=f"t={t:5.1f}s {info}")
+            return
+        now = self.clock()
+        if now >= self._next:
+            self._next = now + self.every_s
+            pct = f" ({100.0 * t / self.total:.0f} %)" if self.total > 0 else ""
+            self.con.print(f"{self.name}: t={t:.1f} s of {self.total:g} s{pct}, {info}, {now - self._t0:.0f} s "
+                           "elapsed", soft_wrap=True, highlight=False)
+
+    def __exit__(self, *exc) -> None:
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
 
 
 def _fmt(v) -> str:
@@ -107,13 +162,13 @@ def run(
         raise typer.Exit(130)
     for note in getattr(sim, "notes", []):
         err_console.print(f"[yellow]note:[/yellow] {escape(note)}", soft_wrap=True)
-    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
-                  TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=True) as prog:
-        task = prog.add_task(sc.run.name, total=sc.run.duration_s, info="")
+    if sil and not sil_external:
+        err_console.print(f"--sil: starting `visnav bridge` and waiting for it, then {sc.run.duration_s:g} s of real "
+                          "time", soft_wrap=True)
+    with RunProgress(sc.run.name, sc.run.duration_s, err_console) as prog:
 
         def progress(t, total):
-            if int(t * 10) % 10 == 0:
-                prog.update(task, completed=t, info=f"t={t:5.1f}s {sim.mission.mode}")
+            prog.update(t, f"mode {sim.mission.mode}")
 
         if sil or sil_external:  # the same scenario, its navigator in `visnav bridge` (sim/sil.py)
             from visnav.sim.sil import SilError, run_sil
@@ -140,12 +195,12 @@ def run(
         _print_json({"run_dir": str(out_dir), "scenario": sc.run.name, "seed": sc.run.seed,
                      "metrics": result.metrics, "error": result.error})
         raise typer.Exit(1 if result.error else 0)
+    from visnav.analysis.outcome import verdict_line
+
+    console.print(escape(verdict_line(result.metrics)), style="bold", soft_wrap=True)  # the verdict first (#30)
     rows, omitted, source = summary_rows(sc, result.metrics)
-    table = Table(title=f"{sc.run.name} (seed {sc.run.seed})")
-    table.add_column("metric")
-    table.add_column("this run", justify="right")
-    table.add_column(f"thesis: {source}")
-    table.add_column("verdict")
+    table = _metrics_table(f"{sc.run.name} (seed {sc.run.seed})", [r.metric for r in rows], ">this run",
+                           f"thesis: {source}", "verdict")
     for r in rows:
         table.add_row(r.metric, escape(r.ours), escape(r.thesis), r.verdict)
     console.print(table)
@@ -214,14 +269,18 @@ def montecarlo(
         _print_json({"campaign_dir": str(camp.out), "summary": summary})
         raise typer.Exit(1 if summary["failed"] else 0)
     source = summary.get("published_source", "")
-    table = Table(title=f"{scenario}: {summary['count']} runs, {summary['failed']} failed")
-    for col in ("metric", "mean", "median", "p95", "min", "max", source or "thesis"):
-        table.add_column(col, justify="left" if col == "metric" else "right")
+    table = _metrics_table(f"{scenario}: {summary['count']} runs, {summary['failed']} failed",
+                           [*summary["metrics"], *summary.get("rates", {})],
+                           *(f">{c}" for c in ("mean", "median", "p95", "min", "max", source or "thesis")))
     for k, v in summary["metrics"].items():
         table.add_row(k, *(f"{v[c]:.4g}" for c in ("mean", "median", "p95", "min", "max")), v.get("published", ""))
     for k, v in summary.get("rates", {}).items():
         table.add_row(k, f"rate {v['rate']:.0%}", f"{v['count']} of {v['n']}", "", "", "", v.get("published", ""))
     console.print(table)
+    from visnav.analysis.outcome import outcome_text
+
+    if outcome_text(summary.get("outcomes", {})):
+        console.print(outcome_text(summary["outcomes"]), style="bold")
     console.print(f"campaign directory: {camp.out}")
     if summary["failed"]:
         raise typer.Exit(1)
@@ -291,6 +350,8 @@ def margins(
     identify_altitude: float = typer.Option(12.0, help="height \\[m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
     seeds: int = typer.Option(1, help="seeds per sweep, merged (weighted by coherence)"),
+    ident_seeds: Optional[int] = typer.Option(None, help="seeds of the identification sweeps (default max(seeds, 4))"),
+    min_delay_confidence: float = typer.Option(0.9, help="below it (P(|error| < 5 ms)) a delay is not compensated"),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
@@ -313,9 +374,11 @@ def margins(
         alts, dels = numbers(altitudes, "--altitudes"), numbers(delays, "--delays")
         if not alts or not dels:
             raise ValueError("--altitudes and --delays need at least one value each")
+        if not 0 <= min_delay_confidence <= 1 or (ident_seeds is not None and ident_seeds < 1):
+            raise ValueError("--min-delay-confidence takes a value in [0, 1] and --ident-seeds a count >= 1")
         check_margins_scenario(scenario, list(set_))
         out_dir = prepare_out_dir(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}", force=force,
-                                  clear=("margins.csv", "frf.npz"))
+                                  clear=("margins.csv", "frf.npz"), kind="a margins folder")
     except ValueError as exc:  # ScenarioError and OutputDirError are ValueErrors
         _fail(exc)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
@@ -324,7 +387,8 @@ def margins(
         frfs: dict = {}
         rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario, frf_sink=frfs,
                                 overrides=tuple(set_), workers=workers, laser_delay_s=laser_delay,
-                                identify_altitude_m=identify_altitude, seeds=seeds,
+                                identify_altitude_m=identify_altitude, seeds=seeds, ident_seeds=ident_seeds,
+                                min_delay_confidence=min_delay_confidence,
                                 progress=lambda *a, **k: prog.advance(task))
     cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
             "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]
@@ -386,9 +450,7 @@ def metrics(
     if json_:
         _print_json(m)
         return
-    table = Table(title=f"metrics from {run_dir}/log.h5")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"metrics from {run_dir}/log.h5", m, ">value")
     for k, v in m.items():
         table.add_row(k, escape(_fmt(v)))
     console.print(table)
@@ -448,7 +510,7 @@ def ahrs(
 
     out_dir = Path(out) if out else Path("runs") / f"ahrs-{Path(log).stem}"
     try:
-        prepare_out_dir(out_dir, force=True, clear=())  # writable? (ahrs overwrites its own two files)
+        prepare_out_dir(out_dir, force=True, clear=(), kind=None)  # writable? (ahrs overwrites its own two files)
         m = ahrs_check(log, out_dir, declination_deg)
     except (OSError, ValueError) as exc:
         _fail(exc)
@@ -528,9 +590,7 @@ def eval_(
     if json_:
         print(json.dumps(s, indent=2))
         return
-    table = Table(title=f"{est.name} vs {ref.name} (alignment {align}, {ev.matched} poses matched)")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"{est.name} vs {ref.name} (alignment {align}, {ev.matched} poses matched)", s, ">value")
     for k, v in s.items():
         table.add_row(k, _fmt(v))
     console.print(table)
@@ -551,6 +611,23 @@ def _bridge_origin(text: Optional[str]):
         return LocalTangentPlane(lat, lon, alt)
     except ValueError as exc:
         raise ValueError(f"--origin must be LAT_DEG,LON_DEG,ALT_M (AMSL), got {text!r} ({exc})") from None
+
+
+def _input_timeouts(items: list[str]):
+    from visnav.io.bridge_freshness import FreshnessConfig
+
+    cfg = FreshnessConfig()
+    for it in items:
+        k, _, v = it.partition("=")
+        try:
+            val = None if v.strip().lower() == "none" else float(v)
+            if val is not None and not 0.0 < val < 1e6:
+                raise ValueError
+            cfg = cfg.with_overrides(**{k.strip(): {"timeout_s": val}})
+        except ValueError as exc:
+            why = str(exc) if "unknown bridge input stream" in str(exc) else "seconds must be a positive number or none"
+            raise ValueError(f"--input-timeout {it!r}: {why}") from None
+    return cfg
 
 
 @app.command()
@@ -582,6 +659,9 @@ def bridge(
                                 "autopilot side (the SIL)"),
     gps_sigma: float = typer.Option(2.5, "--gps-sigma", help="1-sigma \\[m] the navigator gives a position fix whose "
                                     "message carries no accuracy (GLOBAL_POSITION_INT; GPS_RAW_INT without h_acc)"),
+    input_timeout: List[str] = typer.Option([], "--input-timeout", help="STREAM=SECONDS (imu, gps, height, "
+                                            "camera; 'none': never): no estimate is sent while that input is older "
+                                            "(defaults imu=1 camera=10, docs/autopilots.md)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
     import time
@@ -608,6 +688,15 @@ def bridge(
     if not 0.0 < gps_sigma < 1000.0:
         fail(f"--gps-sigma must be a positive number of metres, got {gps_sigma:g}")
     out_dir = Path(out or f"runs/bridge-{time.strftime('%Y%m%d-%H%M%S')}")
+    out_existed = out_dir.exists()
+    logf = None
+
+    def say(m: str) -> None:  # console, and bridge.log once the session is open
+        console.print(escape(m), soft_wrap=True)
+        if logf is not None:
+            logf.write(f"{time.strftime('%H:%M:%S')} {m}\n")
+            logf.flush()
+
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         (out_dir / ".write-test").touch()
@@ -616,16 +705,22 @@ def bridge(
         fail(f"log folder {out_dir} is not writable ({exc.strerror})")
     link = src = None
     try:
-        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
+        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), freshness=_input_timeouts(input_timeout), frame_log=out_dir / "frames" if log_frames else None,
                            send_health=health, gps_sigma_m=gps_sigma, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
-        link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=lambda m: console.print(m))
+        link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=say)
         built = build_navigator(navigator, map_, set_, recorder=navlog.record)
         src = open_source(camera, fps=fps or built.camera_hz, time_offset_s=offset)
     except (MavlinkLinkError, CameraSourceError, ScenarioError, FileNotFoundError, ValueError) as exc:
         if link is not None:
             link.close()
+            tlog = out_dir / "bridge.tlog"
+            if tlog.is_file() and tlog.stat().st_size == 0:
+                tlog.unlink()  # a session that did not start leaves no empty tlog behind
+        if not out_existed and out_dir.is_dir() and not any(out_dir.iterdir()):
+            out_dir.rmdir()  # nothing left behind by a session that did not start
         fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    logf = open(out_dir / "bridge.log", "a")
     console.print(f"bridge: {built.scenario} navigator, {mavlink_url} -> {output}, camera {camera} "
                   f"({fps or built.camera_hz:g} Hz); log {out_dir}")
     rec = None
@@ -637,7 +732,7 @@ def bridge(
             fail(f"cannot write the recording in {out_dir / 'recording'}: {exc}")
         nav = rec.navigator
     with Live(console=console, transient=False, auto_refresh=False) as live:
-        br = Bridge(link, src, nav, cfg, record=navlog.record, notify=lambda m: live.console.print(m),
+        br = Bridge(link, src, nav, cfg, record=navlog.record, notify=say,
                     on_status=lambda s: live.update(status_line(s), refresh=True))
         try:
             metrics = br.run(duration_s=duration)
@@ -647,6 +742,8 @@ def bridge(
         finally:
             link.close()
             src.close()
+    if not console.is_terminal:
+        console.line()  # Live leaves its last status line open off a terminal: the summary goes on its own line
     try:
         if rec is not None:
             rec.close()
@@ -655,11 +752,12 @@ def bridge(
         pass
     br.write_metrics(out_dir / "metrics.json")
     lat = metrics["latency_capture_to_send_ms"]
-    console.print(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
+    say(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
                   f"{lat['median']:.1f} ms, p95 {lat['p95']:.1f} ms; reset_counter {metrics['reset_counter']}; "
                   f"written {out_dir / 'metrics.json'}, {out_dir / 'bridge.tlog'}"
                   + (f", {out_dir / 'recording'} (visnav replay {out_dir / 'recording'} --navigator {built.name})"
                      if rec is not None else ""))
+    logf.close()
 
 
 @app.command("sil-autopilot")
@@ -767,8 +865,8 @@ def record_(
 
 @app.command("replay")
 def replay_(
-    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
-                                    "ROS bag"),
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, "
+                                    "PX4 .ulg, ArduPilot DataFlash .bin, MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
     navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
@@ -781,6 +879,8 @@ def replay_(
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
                                "there are removed first)"),
     no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
+    allow_truncated: bool = typer.Option(False, "--allow-truncated", help="a recording CSV cut while written (a "
+                                         "short last row): replay the rows before it"),
     frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock (needs "
                                          "--time-offset auto or seconds: t_imu = t_frame + offset)"),
     fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
@@ -794,6 +894,12 @@ def replay_(
     from visnav.scenarios.schema import ScenarioError
 
     err = Console(stderr=True)
+    out_dir = None
+    try:  # the output first (issue #32: --out FILE failed only after the replay's work)
+        out_dir = new_run_dir(f"replay-{navigator}", out, force)
+    except ValueError as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(2)
     try:
         offset = None
         if time_offset is not None and time_offset != "auto":
@@ -803,7 +909,9 @@ def replay_(
                 raise RecordingError(f"--time-offset must be 'auto' or seconds, got {time_offset!r}") from None
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
-        rec = open_recording(recording)
+        rec = open_recording(recording, allow_truncated)
+        if rec.summary:  # a log: what was read, to the end or to the damage
+            err.print(f"log: {escape(rec.summary)}", soft_wrap=True)
         if frames:
             from visnav.io.own_frames import attach_frames
 
@@ -822,17 +930,16 @@ def replay_(
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
             res = replay(rec, navigator, opts)
-        out_dir = write_replay(res, new_run_dir(f"replay-{navigator}", out, force),
-                               title=f"replay of {recording} on {navigator}")
+        write_replay(res, out_dir, title=f"replay of {recording} on {navigator}")
     except (RecordingError, ScenarioError, ValueError) as exc:
+        if not any(out_dir.iterdir()):
+            out_dir.rmdir()  # made for this replay: not left behind empty
         err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(2)
     except OSError as exc:
         err.print(f"[red]error:[/red] cannot write {escape(str(out))}: {escape(exc.strerror or str(exc))}")
         raise typer.Exit(2)
-    table = Table(title=f"replay of {escape(recording)} on {navigator}")
-    table.add_column("metric")
-    table.add_column("value", justify="right")
+    table = _metrics_table(f"replay of {escape(recording)} on {navigator}", res.metrics, ">value")
     for k, v in res.metrics.items():
         table.add_row(k, _fmt(v))
     console.print(table)

@@ -147,10 +147,14 @@ def _from_recording(path):
     s = rec.streams["imu"]
     e = np.column_stack([ref["roll_rad"], ref["pitch_rad"], ref["yaw_rad"]])
     q = Rotation.from_matrix(np.array([euler_to_dcm(x) for x in e])).as_quat()[:, [3, 0, 1, 2]]
+    mf = rec.streams.get("mag_field")  # a log's magnetometer field vectors (io/logs.py: DataFlash MAG, tlog IMU)
+    mag = np.column_stack([mf["mx_ga"], mf["my_ga"], mf["mz_ga"]]) if mf is not None and len(mf["t_s"]) > 1 else None
+    damaged = bool(rec.summary) and "; to the end (" not in rec.summary
     return SimpleNamespace(imu_t=s["t_s"], accel=np.column_stack([s[f"a{a}_mps2"] for a in "xyz"]),
                            gyro=np.column_stack([s[f"g{a}_radps"] for a in "xyz"]), att_t=ref["t_s"], att_quat=q,
-                           mag_t=None, mag=None, declination_deg=None, notes=list(rec.notes), mag_source=None,
-                           truncated=False, ref_kind=kind)
+                           mag_t=mf["t_s"] if mag is not None else None, mag=mag, declination_deg=None,
+                           notes=([rec.summary] if damaged else []) + list(rec.notes),
+                           mag_source="mag_field" if mag is not None else None, truncated=damaged, ref_kind=kind)
 
 
 def _reference_frame(data) -> dict:

@@ -167,8 +167,9 @@ def fault_row(name: str, rows: list[dict]) -> dict:
         "false_alarms": int(sum(_num(r.get("false_alarm_actions")) for r in ok
                                 if math.isfinite(_num(r.get("false_alarm_actions"))))),
         "navigator_alarms": int(sum(_num(r.get("false_alarms")) for r in ok if math.isfinite(_num(r.get("false_alarms"))))),
-        "safe": sum(r.get("outcome") == "safe" for r in rows),
-        "unsafe": sum(r.get("outcome") != "safe" for r in rows),  # a failed run without an outcome counts unsafe
+        "safe": sum(r.get("outcome") in ("safe", "aborted") for r in rows),  # an abort is the safe reaction
+        # a failed run without an outcome counts unsafe (analysis/outcome.py: the outcomes)
+        "unsafe": sum(r.get("outcome") not in ("safe", "aborted", "not_applicable") for r in rows),
         "worst_error_while_ok_m": max(worst) if worst else float("nan"),
     }
 

@@ -14,6 +14,28 @@ from visnav.guidance.speed_limits import descent_angle, max_descent_rate
 
 
 
+#: ``vrs_margin_min_mps`` of a path that never descends (no eq. 4.23 limit applies), in the table and in JSON
+NO_VRS_APPROACH = "no vortex-ring approach"
+
+
+def notes(log, scenario, metrics: dict) -> list[str]:
+    """Below the summary: by how much and how long the roll passed the planning bank limit phi_max (the turns
+    are planned within it, eq. 4.15; the roll command may go phi_max + roll_margin_deg for corrections in wind)."""
+    tr = log.get("truth")
+    m = scenario.mission
+    if not tr or "euler" not in tr:
+        return []
+    sel = _follow_mask(log, np.asarray(tr["t"], float))
+    roll = np.degrees(np.abs(np.asarray(tr["euler"], float)[sel, 0]))
+    if not roll.size or roll.max() <= m.phi_max_deg:
+        return []
+    dt = float(np.median(np.diff(tr["t"]))) if len(tr["t"]) > 1 else 0.0
+    return [f"max roll {roll.max():.1f} deg exceeds the bank limit phi_max {m.phi_max_deg:g} deg by "
+            f"{roll.max() - m.phi_max_deg:.1f} deg, for {np.sum(roll > m.phi_max_deg) * dt:.1f} s of the "
+            f"{roll.size * dt:.0f} s on the path: the turns are planned within phi_max (eq. 4.15), the roll command "
+            f"may reach phi_max + roll_margin_deg = {m.phi_max_deg + m.roll_margin_deg:g} deg to correct in wind"]
+
+
 def _follow_mask(log, t: np.ndarray) -> np.ndarray:
     """Samples from the start of path following to its completion (or the end of the run)."""
     modes = log.get("mode")
@@ -88,7 +110,8 @@ def pfcm_metrics(log, scenario, *, wall_time_s: float, error: str | None = None)
             over = e["descent"] - e["descent_limit"]
             dt = float(np.median(np.diff(truth["t"]))) if len(truth["t"]) > 1 else 0.0
             out["vrs_limit_exceeded_s"] = float(np.sum(over > 0) * dt)
-            out["vrs_margin_min_mps"] = float(-over.max())
+            # eq. 4.23 limits the descent only on a descending path: a level or climbing one has no limit (inf)
+            out["vrs_margin_min_mps"] = float(-over.max()) if np.isfinite(over.max()) else NO_VRS_APPROACH
             out["max_roll_deg"] = float(np.degrees(np.abs(truth["euler"][sel, 0]).max()))
             out["max_pitch_deg"] = float(np.degrees(np.abs(truth["euler"][sel, 1]).max()))
             out["max_speed_mps"] = float(np.linalg.norm(truth["velocity"][sel], axis=1).max())

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -38,6 +39,11 @@ class Published:
     per: tuple[str, float, str] | None = None
     over: tuple[str, str] | None = None
     band: tuple[float, float] | None = None
+    #: ``applies(scenario) -> bool``: the thesis figure describes this scenario's experiment (None: always);
+    #: where it does not, the metric is not scored and ``unlike`` says why (issue #32: one frame against
+    #: "RLS after 20-30 samples")
+    applies: Callable | None = None
+    unlike: str = ""
 
 
 @dataclass(frozen=True)
@@ -187,18 +193,35 @@ PAD = [
     Published("touchdown_speed_mps", "not given in the thesis"),
 ]
 
+def _many_frames(sc) -> bool:
+    return getattr(sc.mission, "experiment", "") != "single_frame"
+
+
+_ONE_FRAME = "this run geo-locates from one frame (§7.5); the figure is of an RLS over 20-30 samples"
 GEOLOCATION = [
-    Published("target_error_m", "2.3 m: RLS of the registration samples after 20-30 samples (Fig. 7.9)", limit=2.3),
+    Published("target_error_m", "2.3 m: RLS of the registration samples after 20-30 samples (Fig. 7.9)", limit=2.3,
+              applies=_many_frames, unlike=_ONE_FRAME),
     Published("map_based_error_m", "about 22 m: RLS of the map-based samples on the same data (Fig. 7.11); "
                                    "depends on the attitude errors of that airframe (no verdict)"),
     Published("false_match_rate", "sporadic false matches on the repetitive road system (Fig. 7.8; no number)"),
-    Published("samples_to_3m", "the RLS error settles after 20-30 samples (Fig. 7.9)", limit=30),
+    Published("samples_to_3m", "the RLS error settles after 20-30 samples (Fig. 7.9)", limit=30,
+              applies=_many_frames, unlike=_ONE_FRAME),
     Published("single_frame_error_median_m", "competition flight (MAV07): one noisy frame, 4 m (§7.5)", limit=4.0),
 ]
 
 
 def published(sc) -> tuple[list[Published], str]:
-    """The published figures for a scenario's mission, and which thesis they come from."""
+    """The published figures that apply to a scenario, and which thesis they come from."""
+    figs, source = _published(sc)
+    return [p for p in figs if p.applies is None or p.applies(sc)], source
+
+
+def not_compared(sc) -> dict[str, str]:
+    """metric -> why its thesis figure does not describe this scenario (its metric is not scored)."""
+    return {p.metric: p.unlike for p in _published(sc)[0] if p.applies is not None and not p.applies(sc)}
+
+
+def _published(sc) -> tuple[list[Published], str]:
     kind = getattr(sc.mission, "type", "")
     if kind == "palace":
         return PALACE_LANDING, SOURCES["000"]
@@ -256,9 +279,10 @@ def verdict(p: Published, value: float) -> str:
     if isinstance(value, (bool, np.bool_)):  # one run of a rate: a campaign compares the rate with the limit
         return "meets" if (float(value) >= p.limit if p.better == "higher" else float(value) <= p.limit) \
             else "does not meet"
+    by = f", by {abs(value - p.limit):.3g} {unit}".rstrip()  # how far past the bound (issue #32: 15.6 deg vs 15)
     if p.better == "higher":
-        return f"meets (>= {_bound(p, unit)})" if value >= p.limit else f"does not meet (< {_bound(p, unit)})"
-    return f"meets (<= {_bound(p, unit)})" if value <= p.limit else f"does not meet (> {_bound(p, unit)})"
+        return f"meets (>= {_bound(p, unit)})" if value >= p.limit else f"does not meet (< {_bound(p, unit)}{by})"
+    return f"meets (<= {_bound(p, unit)})" if value <= p.limit else f"does not meet (> {_bound(p, unit)}{by})"
 
 
 def row(p: Published | None, metric: str, value, metrics: dict) -> Row:
@@ -285,12 +309,16 @@ def summary_rows(sc, metrics: dict) -> tuple[list[Row], list[str], str]:
     (NaN or None), which thesis). Rows keep the order of ``metrics``."""
     figs, source = published(sc)
     by_metric = {p.metric: p for p in figs}
+    unlike = not_compared(sc)
     rows, omitted = [], []
     for k, v in metrics.items():
-        if k == "provenance" or isinstance(v, dict):
+        if k == "provenance" or isinstance(v, (dict, list, tuple)):  # lists (sil_notes) print as lines: run_notes
             continue
         if _missing(v):
             omitted.append(k)
+            continue
+        if k in unlike:
+            rows.append(Row(k, fmt(v), f"not compared: {unlike[k]}", "not scored"))
             continue
         rows.append(row(by_metric.get(k), k, v, metrics))
     return rows, omitted, source

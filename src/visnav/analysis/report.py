@@ -141,7 +141,8 @@ def run_notes(result) -> list[str]:
     """Lines below the metrics table: what a run cannot measure, and what its log shows beyond the metrics."""
     mod = _report_module(result.scenario)
     extra = getattr(mod, "notes", None)
-    return notes(result.scenario) + (extra(result.log, result.scenario, result.metrics) if extra else [])
+    sil = [f"SIL: {n}" for n in (result.metrics or {}).get("sil_notes", [])]  # one line each, not a list
+    return notes(result.scenario) + (extra(result.log, result.scenario, result.metrics) if extra else []) + sil
 
 
 def metrics_table_html(sc, metrics: dict) -> str:
@@ -151,6 +152,24 @@ def metrics_table_html(sc, metrics: dict) -> str:
     head = f"<tr><th>metric</th><th>this run</th><th>thesis: {html.escape(source)}</th><th>verdict</th></tr>"
     skipped = (f"<p>Not applicable to this run: {html.escape(', '.join(omitted))}.</p>" if omitted else "")
     return f"<table>{head}{body}</table>{skipped}"
+
+
+def headline_html(sc, metrics: dict) -> str:
+    """The top of a report (issue #32: the verdict was a row near the bottom of a 33-row table): the outcome
+    line, then the few metrics the thesis gives a bound for, with their verdicts."""
+    from visnav.analysis.outcome import verdict_line
+
+    rows, _, source = summary_rows(sc, metrics)
+    scored = [r for r in rows if r.verdict.startswith(("meets", "does not meet"))]
+    bad = "unsafe" in str(metrics.get("outcome")) or "HPL" in verdict_line(metrics)
+    out = (f"<p style='font-size:1.2em;padding:6px;background:{'#ffe0e0' if bad else '#e8f4e8'}'>"
+           f"<b>{html.escape(verdict_line(metrics))}</b></p>")
+    if scored:
+        out += (f"<table><tr><th>headline figure</th><th>this run</th><th>thesis: {html.escape(source)}</th>"
+                "<th>verdict</th></tr>" + "".join(
+                    f"<tr><td>{html.escape(r.metric)}</td><td>{html.escape(r.ours)}</td><td>{html.escape(r.thesis)}"
+                    f"</td><td><b>{html.escape(r.verdict)}</b></td></tr>" for r in scored) + "</table>")
+    return out
 
 
 def write_report(result, path: Path, provenance: dict | None = None) -> None:
@@ -179,6 +198,7 @@ def write_report(result, path: Path, provenance: dict | None = None) -> None:
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td,th{{padding:2px 10px;border-bottom:1px solid #ddd}}
 img{{max-width:100%}}</style></head><body>
 <h1>{html.escape(sc.run.name)} (seed {sc.run.seed})</h1><p>{html.escape(sc.run.description)}</p>{err}
+{headline_html(sc, m)}
 <h2>Metrics</h2>{metrics_table_html(sc, m)}{note}
 {timeline}{figs}{prov}</body></html>"""
     Path(path).write_text(doc)

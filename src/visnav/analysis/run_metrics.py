@@ -48,13 +48,23 @@ def metrics_function(mission_type: str) -> MetricsFn:
     return getattr(importlib.import_module(module), name)
 
 
-def compute_metrics(log, scenario, *, wall_time_s: float = math.nan, error: str | None = None) -> dict:
-    """The metrics of ``scenario``'s mission from ``log`` (a ``FlightLog``)."""
+def compute_metrics(log, scenario, *, wall_time_s: float = math.nan, error: str | None = None,
+                    interrupted: bool = False) -> dict:
+    """The metrics of ``scenario``'s mission from ``log`` (a ``FlightLog``); ``outcome`` as
+    ``analysis/outcome.py`` defines it (``interrupted``: the run was stopped by Ctrl-C)."""
     from visnav.analysis.integrity_metrics import integrity_metrics
+    from visnav.analysis.outcome import apply_outcome
+    from visnav.io.tum import trajectory_rmse, tum_frame
 
     out = metrics_function(scenario.mission.type)(log, scenario, wall_time_s=wall_time_s, error=error)
     out.update(integrity_metrics(log, scenario))  # issue #18: every R-MAX navigator logs its integrity
-    return out
+    if "ate_rmse_m" not in out and tum_frame(scenario) is not None:  # as a run's RunResult adds it (sim/loop.py)
+        ate = trajectory_rmse(log)
+        if ate is not None:
+            out["ate_rmse_m"] = ate
+    if interrupted:
+        out["interrupted"] = True
+    return apply_outcome(out, log, scenario, interrupted)
 
 
 def from_run_dir(run_dir: str | Path) -> dict:
@@ -80,11 +90,14 @@ def from_run_dir(run_dir: str | Path) -> dict:
         log = FlightLog.from_hdf5(d / "log.h5")
     except (OSError, KeyError, ValueError) as exc:
         raise RunDirError(f"{d / 'log.h5'}: not a readable flight log ({exc})") from None
-    wall = math.nan  # the run's own wall time, when its metrics.json says
+    wall, interrupted = math.nan, False  # the run's own wall time and Ctrl-C, when its metrics.json says
     try:
-        w = json.loads((d / "metrics.json").read_text()).get("wall_time_s")
+        own = json.loads((d / "metrics.json").read_text())
+        interrupted = own.get("interrupted") is True
+        w = own.get("wall_time_s")
         wall = float(w) if w is not None else math.nan
     except (OSError, ValueError, TypeError, AttributeError):
         pass  # no or a broken metrics.json: the metrics without the run's wall time
     err = log.get("error")  # the loop logs the exception that stopped a run
-    return compute_metrics(log, sc, wall_time_s=wall, error=str(err["message"][-1]) if err else None)
+    return compute_metrics(log, sc, wall_time_s=wall, error=str(err["message"][-1]) if err else None,
+                           interrupted=interrupted)

@@ -18,6 +18,7 @@ compare against to 1e-6 on the same files:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -84,7 +85,9 @@ def _frame_from_header(path: Path) -> str:
 
 def _read_tum(path: Path) -> Trajectory:
     try:
-        d = np.loadtxt(path, comments="#", ndmin=2)
+        with warnings.catch_warnings():  # an empty file: numpy's UserWarning, then "no poses" below
+            warnings.simplefilter("ignore", UserWarning)
+            d = np.loadtxt(path, comments="#", ndmin=2)
     except ValueError as exc:
         raise TrajectoryError(f"{path}: not a TUM file ({exc})") from None
     if d.size == 0:
@@ -109,7 +112,9 @@ def _read_csv(path: Path) -> Trajectory:
         raise TrajectoryError(f"{path}: empty CSV")
     cols = [h.strip().lower() for h in header]
     try:
-        data = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)
+        with warnings.catch_warnings():  # no rows: numpy's UserWarning, then "no rows" below
+            warnings.simplefilter("ignore", UserWarning)
+            data = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)
     except ValueError as exc:
         raise TrajectoryError(f"{path}: {exc}") from None
     if data.size == 0:

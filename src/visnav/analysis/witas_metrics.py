@@ -122,14 +122,16 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     ax.set_xlim(*lim_e), ax.set_ylim(*lim_n), ax.set_xlabel("east [m]"), ax.set_ylabel("north [m]")
     ax.legend(loc="best", fontsize=8), ax.set_title("Tracks (Fig. 5.17 top)")
     ax = axs[1]
-    ax.plot(tp[:, 1], tp[:, 0], "b", lw=0.8)
+    ax.plot(tp[:, 1], tp[:, 0], "b", lw=0.8, label="truth (GPS reference)")
     if pmf:
-        ax.plot(pmf["position"][:, 1], pmf["position"][:, 0], "r", lw=0.8)
+        ax.plot(pmf["position"][:, 1], pmf["position"][:, 0], "r", lw=0.8, label="PMF")
         for k in range(0, len(pmf["t"]), max(1, len(pmf["t"]) // 60)):
             C = pmf["cov"][k]
             sn, se = np.sqrt(max(C[0, 0], 0)), np.sqrt(max(C[1, 1], 0))
             ax.add_patch(Ellipse((pmf["position"][k, 1], pmf["position"][k, 0]), 2 * 3 * se, 2 * 3 * sn,
-                                 fill=False, color="orange", lw=0.8))
+                                 fill=False, color="orange", lw=0.8,
+                                 label="PMF 3-sigma north/east ellipse" if k == 0 else None))
+    ax.legend(loc="best", fontsize=8)  # issue #32: the panel had none
     ax.set_xlim(*lim_e), ax.set_ylim(*lim_n), ax.set_xlabel("east [m]")
     ax.set_title("PMF with 3-sigma north/east ellipses (Fig. 5.17 bottom)")
     out.append(("Map, tracks and PMF uncertainty", _fig_to_img(fig)))

@@ -17,6 +17,7 @@ A recording is a folder a user can fill from their own vehicle without our code:
     link.csv         t_s [, t_recv_s, seq]                      (CONDOR: uplink deliveries of the navigator's fixes)
     telemetry.csv    t_s, n_m, e_m, d_m, heading_rad, height_m, ground_speed_mps   (geo-location: the downlink)
     truth.csv        t_s, n_m, e_m, d_m [, roll_rad, pitch_rad, yaw_rad]   (where a reference exists)
+    mag_field.csv, optical_flow.csv, camera_trigger.csv   (from flight logs; kept, not delivered to navigators)
     commands.csv     t_s, seq, method, args  (simulated recordings: what the mission asked the navigator)
     scenario.toml    (simulated recordings: the resolved scenario)
 
@@ -30,6 +31,7 @@ significant digits (``%.17g``), so a replay reads back the very numbers the navi
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -53,6 +55,7 @@ class Stream:
     text: tuple[str, ...] = ()  # columns that stay strings
     alternatives: tuple[tuple[str, ...], ...] = ()  # other column sets accepted instead of ``required``
     written: tuple[str, ...] = ()  # what ``RecordingWriter`` writes (before t_recv_s, seq); default all
+    consumed: bool = True  # False: read and kept (a log's other sensors), never delivered to a navigator
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -80,6 +83,11 @@ STREAMS: dict[str, Stream] = {
     "link": Stream("link.csv", ("t_s",)),
     # MAV geo-location (seed 002 ch. 7): the autopilot's telemetry as the ground station receives it
     "telemetry": Stream("telemetry.csv", ("t_s", "n_m", "e_m", "d_m", "heading_rad", "height_m", "ground_speed_mps")),
+    # read from flight logs (io/logs.py) and kept for analysis; no navigator consumes them (never delivered)
+    "mag_field": Stream("mag_field.csv", ("t_s", "mx_ga", "my_ga", "mz_ga"), consumed=False),  # body FRD [gauss]
+    "optical_flow": Stream("optical_flow.csv", ("t_s", "flow_x_radps", "flow_y_radps", "body_x_radps", "body_y_radps",
+                                                "quality"), ("distance_m",), consumed=False),
+    "camera_trigger": Stream("camera_trigger.csv", ("t_s", "seq"), ("lat_deg", "lon_deg", "alt_m"), consumed=False),
 }
 TRUTH = Stream("truth.csv", ("t_s", "n_m", "e_m", "d_m"), ("vn_mps", "ve_mps", "vd_mps", "roll_rad", "pitch_rad",
                                                           "yaw_rad"))
@@ -98,9 +106,22 @@ def stream_of(m) -> str | None:
 
 
 # ---------------------------------------------------------------------------------------------- CSV
-def read_csv(path: Path, spec: Stream) -> dict[str, np.ndarray]:
+def _short_row(path: Path, n: int) -> tuple[int, int] | None:
+    """(line number, its column count) of the first data row of ``path`` whose column count is not ``n``."""
+    import csv
+
+    with open(path, newline="") as fh:
+        for i, r in enumerate(csv.reader(fh)):
+            if i and r and len(r) != n:
+                return i + 1, len(r)
+    return None
+
+
+def read_csv(path: Path, spec: Stream, allow_truncated: bool = False, notes: list | None = None) -> dict[str, np.ndarray]:
     """Columns of a CSV with a header line (vectorised parse); checks the required columns, finite
-    non-decreasing ``t_s`` and, where present, ``t_recv_s``."""
+    non-decreasing ``t_s`` and, where present, ``t_recv_s``. A row with another column count than the header
+    (a file cut while written) is an error naming its line, or with ``allow_truncated`` the rows before it
+    are read (said in ``notes``)."""
     try:
         with open(path, newline="") as fh:
             header = fh.readline().strip()
@@ -112,10 +133,24 @@ def read_csv(path: Path, spec: Stream) -> dict[str, np.ndarray]:
         alts = "".join(f" or {', '.join(a)}" for a in spec.alternatives)
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing)} (header: {header!r}; "
                              f"needed: {', '.join(spec.required)}{alts})")
+    def load(max_rows=None):
+        with warnings.catch_warnings():  # no rows: numpy's UserWarning (an empty stream is allowed)
+            warnings.simplefilter("ignore", UserWarning)
+            return np.loadtxt(path, delimiter=",", skiprows=1, dtype=str, ndmin=2, quotechar='"', comments=None,
+                              max_rows=max_rows)
+
     try:
-        raw = np.loadtxt(path, delimiter=",", skiprows=1, dtype=str, ndmin=2, quotechar='"', comments=None)
+        raw = load()
     except ValueError as exc:
-        raise RecordingError(f"{path}: {exc}") from None
+        bad = _short_row(path, len(names))
+        if bad is None:
+            raise RecordingError(f"{path}: {exc}") from None
+        what = f"line {bad[0]} has {bad[1]} columns, {len(names)} expected (truncated file?)"
+        if not allow_truncated:
+            raise RecordingError(f"{path}: {what}; --allow-truncated reads the rows before it") from None
+        raw = load(bad[0] - 2) if bad[0] > 2 else np.empty((0, len(names)), dtype=str)
+        if notes is not None:
+            notes.append(f"{path.name}: {what}: read the {bad[0] - 2} rows before it")
     if raw.size == 0:
         raw = np.empty((0, len(names)), dtype=str)
     if raw.shape[1] != len(names):
@@ -207,7 +242,8 @@ def write_camera_yaml(path: Path, camera: PinholeCamera, mount: FixedMount | Non
     path.write_text(head + yaml.safe_dump(doc, sort_keys=False))
 
 
-def read_camera_yaml(path: Path) -> CameraInfo:
+def read_camera_yaml(path: Path, default_mount: FixedMount | None = None) -> CameraInfo:
+    """``default_mount``: the mount of a camera.yaml that names none (a photo survey's: nadir), else one is needed."""
     import yaml
 
     if not path.is_file():
@@ -237,6 +273,8 @@ def read_camera_yaml(path: Path) -> CameraInfo:
             mount = FixedMount.depressed(float(doc["depression_deg"]), tuple(doc.get("lever_arm_m", (0, 0, 0))))
         elif doc.get("gimbal") is True:
             mount = None
+        elif default_mount is not None:
+            mount = default_mount
         else:
             raise ValueError("no mount: give R_cam_to_body (3x3, camera -> body FRD), depression_deg, or "
                              "gimbal: true (attitude from camera_attitude.csv and pan.csv)")
@@ -264,14 +302,17 @@ class Recording:
     time_offset_s: float = 0.0  # added to frame stamps (camera clock -> IMU clock); camera.yaml's by default
     images: list | None = None  # decoded frames held in memory (logs: rosbag images), else files
     color: bool = False  # frames decoded to RGB (a navigator that uses colour: CONDOR), else 8-bit gray
+    summary: str = ""  # a log's one line: what was read, to the end or to the damage (io/logs.py)
     _video: dict = field(default_factory=dict, repr=False)  # file -> [cv2.VideoCapture, next frame number]
 
     @classmethod
-    def open(cls, path: str | Path) -> "Recording":
+    def open(cls, path: str | Path, allow_truncated: bool = False) -> "Recording":
+        """``allow_truncated``: a CSV cut while written is read up to its first short row (said in ``notes``)."""
         d = Path(path)
         if not d.is_dir():
             raise RecordingError(f"{d}: not a recording folder (no such directory)")
-        streams = {k: read_csv(d / s.file, s) for k, s in STREAMS.items() if (d / s.file).is_file()}
+        cut: list[str] = []
+        streams = {k: read_csv(d / s.file, s, allow_truncated, cut) for k, s in STREAMS.items() if (d / s.file).is_file()}
         if not streams:
             raise RecordingError(f"{d}: no sensor CSV ({', '.join(s.file for s in STREAMS.values())})")
         cam = read_camera_yaml(d / "camera.yaml") if ("frames" in streams or (d / "camera.yaml").exists()) else None
@@ -287,10 +328,10 @@ class Recording:
                 if not cv2.VideoCapture(str(d / v)).isOpened():
                     raise RecordingError(f"{d / v}: cannot open the video (format or codec not supported by OpenCV)")
         _convert(streams, d)
-        truth = read_csv(d / TRUTH.file, TRUTH) if (d / TRUTH.file).is_file() else None
-        cmds = read_csv(d / COMMANDS.file, COMMANDS) if (d / COMMANDS.file).is_file() else None
+        truth = read_csv(d / TRUTH.file, TRUTH, allow_truncated, cut) if (d / TRUTH.file).is_file() else None
+        cmds = read_csv(d / COMMANDS.file, COMMANDS, allow_truncated, cut) if (d / COMMANDS.file).is_file() else None
         sc = (d / "scenario.toml").read_text() if (d / "scenario.toml").is_file() else None
-        return cls(d, cam, streams, truth, cmds, sc, time_offset_s=cam.time_offset_s if cam else 0.0)
+        return cls(d, cam, streams, truth, cmds, sc, notes=cut, time_offset_s=cam.time_offset_s if cam else 0.0)
 
     def require(self, names, who: str) -> None:
         """Raise a ``RecordingError`` naming what ``who`` needs and the folder lacks."""
@@ -304,7 +345,7 @@ class Recording:
 
     def delivery(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(t_recv, seq, stream index, row) of every sample, sorted in delivery order."""
-        names = list(self.streams)
+        names = [n for n in self.streams if n not in STREAMS or STREAMS[n].consumed]
         tr, sq, si, ri = [], [], [], []
         for j, n in enumerate(names):
             s = self.streams[n]

@@ -20,10 +20,52 @@ class OutputDirError(ValueError):
     """An output directory cannot be used; the message is one line for the user."""
 
 
+def folder_kind(d: str | Path) -> str:
+    """What a folder is, in words, by the files in it: "empty", "a run folder", "a campaign folder
+    (campaign.json)", "a fault campaign folder (faults.csv)", "a recording (imu.csv, ...)", "your home
+    directory", "the root directory", "a folder of other files (a.txt, ...)". ``--force`` replaces files only in
+    the kind of folder it writes (issue #32: a campaign's report.html, or six files in ``/``, were lost)."""
+    d = Path(d).expanduser()
+    try:
+        r = d.resolve()
+    except OSError:
+        r = d
+    if r == Path(r.anchor):
+        return "the root directory"
+    if r == Path.home().resolve():
+        return "your home directory"
+    try:
+        names = sorted(p.name for p in d.iterdir())
+    except OSError:
+        return "empty"
+    if not names:
+        return "empty"
+    if "campaign.json" in names:
+        return "a campaign folder (campaign.json)"
+    if "faults.csv" in names or "faults.md" in names:
+        return "a fault campaign folder (faults.csv)"
+    if "bridge.tlog" in names:
+        return "a bridge log folder (bridge.tlog)"
+    if "margins.csv" in names:
+        return "a margins folder (margins.csv)"
+    from visnav.io.recording import COMMANDS, STREAMS, TRUTH
+
+    rec = [n for n in names if n in {s.file for s in STREAMS.values()} | {TRUTH.file, COMMANDS.file, "camera.yaml"}]
+    if rec:
+        return f"a recording ({', '.join(rec[:3])}{', ...' if len(rec) > 3 else ''})"
+    if "scenario.toml" in names or any(n in RUN_FILES for n in names):
+        return "a run folder"
+    other = [n for n in names if not n.startswith(".")]
+    if not other:
+        return "empty"
+    return f"a folder of other files ({', '.join(other[:3])}{', ...' if len(other) > 3 else ''})"
+
+
 def prepare_out_dir(d: str | Path, *, force: bool = False, clear: tuple[str, ...] = RUN_FILES,
-                    what: str = "--out") -> Path:
+                    what: str = "--out", kind: str | None = "a run folder") -> Path:
     """Create ``d`` (and parents) and check that it is writable. A directory that already holds
-    files is refused unless ``force`` (then the files named in ``clear`` are removed)."""
+    files is refused unless ``force`` (then the files named in ``clear`` are removed); with ``force`` a
+    folder of another ``folder_kind`` than ``kind`` (None: any but home / root) is refused, naming what it is."""
     d = Path(d)
     if d.exists() and not d.is_dir():
         raise OutputDirError(f"{what} {d}: exists and is not a directory")
@@ -31,6 +73,10 @@ def prepare_out_dir(d: str | Path, *, force: bool = False, clear: tuple[str, ...
         if not force:
             raise OutputDirError(f"{what} {d}: directory is not empty; use --force to overwrite what visnav "
                                  "wrote there, or leave --out out for a new timestamped directory")
+        found = folder_kind(d)
+        if found in ("the root directory", "your home directory") or (kind is not None and found != "empty" and not found.startswith(kind)):
+            raise OutputDirError(f"{what} {d}: is {found}, not {kind or 'an output folder'}; --force replaces "
+                                 "files only in a folder of that kind: choose another --out")
         for name in clear:
             try:
                 (d / name).unlink(missing_ok=True)
@@ -81,9 +127,12 @@ def write_run(result, out_dir: Path, report: bool = True) -> Path:
     sc, log = result.scenario, result.log
     prov = provenance(sc)
     (out_dir / "scenario.toml").write_text(to_toml(sc))
+    from visnav.analysis.outcome import apply_outcome
+
     metrics = dict(result.metrics)
     if getattr(result, "interrupted", False):
         metrics["interrupted"] = True
+    result.metrics = apply_outcome(metrics, log, sc, bool(getattr(result, "interrupted", False)))
     (out_dir / "metrics.json").write_text(json.dumps(_jsonable({**metrics, "provenance": prov}), indent=2) + "\n")
     log.to_hdf5(out_dir / "log.h5", attrs={"seed": sc.run.seed,
                                            **{k: "" if v is None else v for k, v in prov.items()}})

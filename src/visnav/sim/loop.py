@@ -61,6 +61,9 @@ class RunResult:
             ate = trajectory_rmse(self.log)  # = evo_ape on the run's truth.tum / estimate.tum
             if ate is not None:
                 self.metrics["ate_rmse_m"] = ate
+        from visnav.analysis.outcome import apply_outcome
+
+        apply_outcome(self.metrics, self.log, self.scenario, self.interrupted)  # issue #30: one word for the run
 
 
 class Simulation:

@@ -122,7 +122,7 @@ def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool =
                                  "navigator in the loop; record an orbit (condor-orbit)")
     own = tuple(s.file for s in STREAMS.values()) + (TRUTH.file, COMMANDS.file, "camera.yaml", "scenario.toml")
     try:
-        prepare_out_dir(out_dir, force=force, clear=own)
+        prepare_out_dir(out_dir, force=force, clear=own, kind="a recording")
     except OutputDirError as exc:
         raise RecordingError(str(exc)) from None
     if force:
