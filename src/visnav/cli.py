@@ -526,7 +526,8 @@ def ahrs(
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
         table.add_row(k, "null (not observable)" if m[k] is None else _fmt(m[k]))
     for k in ("roll_mean_diff_deg", "roll_std_diff_deg", "pitch_mean_diff_deg", "pitch_std_diff_deg",
-              "reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
+              "reference_to_gyro_rotation_deg", "roll_rms_diff_deg_gyro_axes", "pitch_rms_diff_deg_gyro_axes",
+              "accel_minus_reference_gravity_mps2"):
         if k in m:
             table.add_row(k, _fmt(m[k]) if not isinstance(m[k], list) else str([round(x, 3) for x in m[k]]))
     if m.get("yaw_unobservable_reason"):

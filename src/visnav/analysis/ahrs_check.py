@@ -50,6 +50,17 @@ def ahrs_check(log_path, out_dir=None, declination_deg: float | None = None,
                   + (", and the reference's yaw is relative to an arbitrary world axis)" if getattr(data, "ref_kind", "") == "ground truth"
                      else ")"))
     frame = _reference_frame(data)
+    R_rg = frame.pop("_R", None)
+    if R_rg is not None and frame["reference_to_gyro_rotation_sigma_deg"] < 0.5:
+        # the reference attitude turned into the gyro's axes (C_n,gyro = C_n,ref R^T): what is left once the
+        # reference's own frame misalignment, measured by the gyro alone, is taken out
+        from scipy.spatial.transform import Rotation
+
+        C_ref = Rotation.from_quat(np.asarray(data.att_quat)[:, [1, 2, 3, 0]]).as_matrix()
+        e_g = quat_to_euler(Rotation.from_matrix(C_ref @ R_rg.T).as_quat()[:, [3, 0, 1, 2]])
+        cmp_r = attitude_differences(res["t"], res["euler"], data.att_t, e_g)
+        frame |= {"roll_rms_diff_deg_gyro_axes": cmp_r["roll_rms_diff_deg"],
+                  "pitch_rms_diff_deg_gyro_axes": cmp_r["pitch_rms_diff_deg"]}
     metrics = {
         "reference": getattr(data, "ref_kind", "PX4 vehicle_attitude"),
         "yaw_unobservable_reason": reason,
@@ -179,6 +190,11 @@ def _reference_frame(data) -> dict:
     C = sl(t0s + 0.5).as_matrix()
     f_ref = C.transpose(0, 2, 1) @ np.array([0.0, 0.0, -9.80665])
     f = np.array([data.accel[(t >= a) & (t < a + 1.0)].mean(0) for a in t0s])
-    return {"reference_to_gyro_rotation_deg": rotation_angle_deg(R),
+    psi = gyro_rotvecs(t, data.gyro, pairs)
+    rng = np.random.default_rng(0)
+    boot = [rotation_angle_deg(hand_eye_rotation(v_ref, psi, np.full(len(t0s), 0.25), w, iters=4)[0] @ R.T)
+            for w in rng.multinomial(len(t0s), np.full(len(t0s), 1 / len(t0s)), size=40).astype(float)]
+    return {"_R": R, "reference_to_gyro_rotation_deg": rotation_angle_deg(R),
+            "reference_to_gyro_rotation_sigma_deg": float(np.sqrt(np.mean(np.square(boot)))),
             "reference_to_gyro_rotvec_deg": np.degrees(Rotation.from_matrix(R).as_rotvec()).tolist(),
             "accel_minus_reference_gravity_mps2": np.nanmean(f - f_ref, axis=0).tolist()}
