@@ -284,3 +284,27 @@ def test_ahrs_on_a_recording_folder_without_magnetometer(recorded, tmp_path):
     assert m["yaw_rms_diff_deg"] is None and "not observable" in m["yaw_unobservable_reason"]
     assert m["reference_to_gyro_rotation_deg"] < 0.5
     assert (tmp_path / "ahrs.png").is_file()
+
+
+def test_gps_latency_is_found(tmp_path):
+    """A level vehicle swaying horizontally (a = A sin): the GPS reports the velocity of 120 ms before its
+    stamp; the lag that aligns its velocity changes with the integrated accelerometer is 0.12 s."""
+    d = tmp_path / "gps"
+    d.mkdir()
+    t = np.arange(0.0, 30.0, 0.005)
+    w1, w2 = 2 * np.pi * 0.3, 2 * np.pi * 0.17
+    acc = np.column_stack([1.5 * np.sin(w1 * t), 1.0 * np.sin(w2 * t + 0.5), 0 * t])
+    f = acc - np.array([0.0, 0.0, G])  # level: body = NED axes
+    z = np.zeros_like(t)
+    write_csv(d / "imu.csv", {"t_s": t, "ax_mps2": f[:, 0], "ay_mps2": f[:, 1], "az_mps2": f[:, 2],
+                              "gx_radps": z, "gy_radps": z, "gz_radps": z})
+    write_csv(d / "attitude.csv", {"t_s": t[::4], "roll_rad": z[::4], "pitch_rad": z[::4], "yaw_rad": z[::4]})
+    tg = np.arange(0.0, 30.0, 0.1)
+    lat = 0.12
+    vel = lambda s: np.column_stack([-1.5 / w1 * np.cos(w1 * s), -1.0 / w2 * np.cos(w2 * s + 0.5), 0 * s])  # noqa
+    v = vel(tg - lat) + np.random.default_rng(0).normal(0, 0.02, (len(tg), 3))
+    write_csv(d / "gps.csv", {"t_s": tg, "n_m": 0 * tg, "e_m": 0 * tg, "d_m": 0 * tg - 10, "vn_mps": v[:, 0],
+                              "ve_mps": v[:, 1], "vd_mps": v[:, 2]})
+    s = run_check(Recording.open(d)).summary
+    assert s["gps_latency_s"] == pytest.approx(lat, abs=0.01)
+    assert s["problems"] == []

@@ -416,27 +416,37 @@ def _check_gps(rec, out: CheckResult) -> None:
         out.add("GPS vs IMU", NA, f"{len(tg)} GPS fixes", "at least 20")
         return
     v = np.column_stack([g["vn_mps"], g["ve_mps"], g["vd_mps"]])
-    ag = np.column_stack([np.gradient(v[:, j], tg) for j in range(3)])
     t, f, _ = _imu(rec)
     ta, C, _ = att
     from scipy.spatial.transform import Rotation, Slerp
 
     Ci = Slerp(ta, Rotation.from_matrix(C))(np.clip(t, ta[0], ta[-1])).as_matrix()
     an = np.einsum("kij,kj->ki", Ci, f) + np.array([0.0, 0.0, G])
-    dtg = float(np.median(np.diff(tg)))
-    k = max(int(round(dtg / np.median(np.diff(t)))), 1)
-    an_s = np.column_stack([np.convolve(an[:, j], np.ones(k) / k, "same") for j in range(3)])
+    # velocity changes over +-m fixes (a matched filter: the same window on both sides): GPS differences
+    # against the integrated IMU acceleration over the same window moved by the candidate latency
+    V = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (an[1:] + an[:-1]) * np.diff(t)[:, None], axis=0)])
+    m = max(int(round(0.5 / float(np.median(np.diff(tg))))), 1)
+    k = np.arange(m, len(tg) - m)
     lags = np.arange(-0.5, 0.5001, 0.01)
-    inside = (tg > t[0] + 0.6) & (tg < t[-1] - 0.6)
-    if inside.sum() < 20 or np.std(ag[inside][:, :2]) < 0.05:
-        out.add("GPS vs IMU", NA, f"horizontal acceleration {np.std(ag[inside][:, :2]):.3f} m/s^2 RMS", "manoeuvres")
+    inside = (tg[k - m] - 0.5 > t[0]) & (tg[k + m] + 0.5 < t[-1])
+    k = k[inside]
+    if len(k) < 20:
+        out.add("GPS vs IMU", NA, f"{len(k)} GPS fixes inside the IMU's span", "at least 20")
+        return
+    dv_g = (v[k + m] - v[k - m])[:, :2]
+    if np.std(dv_g) < 0.1:
+        out.add("GPS vs IMU", NA, f"horizontal velocity changes {np.std(dv_g):.3f} m/s RMS per {2 * m} fixes",
+                "manoeuvres")
         return
     rho = []
     for lag in lags:  # GPS stamps late by `lag`: the GPS at tg saw the motion of tg - lag
-        ai = np.column_stack([np.interp(tg[inside] - lag, t, an_s[:, j]) for j in range(2)])
-        rho.append(np.corrcoef(ai.ravel(), ag[inside][:, :2].ravel())[0, 1])
+        Va = np.column_stack([np.interp(tg[k + m] - lag, t, V[:, j]) - np.interp(tg[k - m] - lag, t, V[:, j])
+                              for j in range(2)])
+        rho.append(np.corrcoef(Va.ravel(), dv_g.ravel())[0, 1])
     rho = np.array(rho)
-    lat = float(lags[int(np.argmax(rho))])
+    j = int(np.clip(np.argmax(rho), 1, len(lags) - 2))
+    den = rho[j - 1] - 2 * rho[j] + rho[j + 1]
+    lat = float(lags[j] + (0.5 * (rho[j - 1] - rho[j + 1]) / den * 0.01 if den < 0 else 0.0))
     out.summary["gps_latency_s"] = lat
     out.plots["gps"] = (lags, rho)
     out.add("GPS latency", OK if abs(lat) < 0.2 and rho.max() > 0.5 else WARN,
