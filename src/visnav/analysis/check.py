@@ -191,6 +191,7 @@ def _check_imu_axes(rec, out: CheckResult) -> None:
                 for w in rng.multinomial(len(dts), np.full(len(dts), 1 / len(dts)), size=40).astype(float)]
         sig = float(np.sqrt(np.mean(np.square(boot))))
         out.summary["gyro_attitude_rotation_deg"] = ang if sig < 2 else None
+        out.plots["gyro_bias"] = b if sig < 2 else None
         if not np.allclose(M, np.eye(3)) and r_best < 0.5 * r_id:
             out.add("gyro vs attitude", PROBLEM, f"gyro axes look {_name_axes(M)} against the {asrc} "
                     f"(RMS {np.degrees(r_best):.3f} vs {np.degrees(r_id):.3f} deg as is)", "identity")
@@ -366,7 +367,47 @@ def _raw_mag(rec) -> np.ndarray | None:
     return np.column_stack([m["t_s"], m["mx"], m["my"], m["mz"]]) if "mx" in m else None
 
 
+def _check_heading(rec, out: CheckResult) -> None:
+    """Magnetometer headings against the gyro's yaw: psi_dot = (q sin(phi) + r cos(phi)) / cos(theta)
+    integrated (roll, pitch from the attitude, else level), compared after removing a constant (the gyro
+    bias taken from the gyro vs attitude fit when it was determined, else a linear drift fitted too); a
+    hard-iron offset leaves an error that turns with the heading."""
+    m = rec.streams.get("magnetometer")
+    if m is None or "heading_rad" not in m or "imu" not in rec.streams or len(m["t_s"]) < 20:
+        out.add("heading vs gyro", NA, "no magnetometer heading and IMU", "magnetometer.csv and imu.csv")
+        return
+    t, _, w = _imu(rec)
+    att = _attitude(rec)
+    if att is not None:
+        ta, C, _ = att
+        e = np.array([[math.atan2(c[2, 1], c[2, 2]), -math.asin(np.clip(c[2, 0], -1, 1))] for c in C])
+        phi, th = np.interp(t, ta, e[:, 0]), np.interp(t, ta, e[:, 1])
+    else:
+        phi = th = np.zeros_like(t)
+    bias = out.plots.get("gyro_bias")  # from the gyro vs attitude fit when it was determined
+    if bias is not None:
+        w = w - bias
+    rate = (w[:, 1] * np.sin(phi) + w[:, 2] * np.cos(phi)) / np.cos(th)
+    yaw = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
+    tm = np.asarray(m["t_s"], float)
+    ok = (tm >= t[0]) & (tm <= t[-1]) & np.isfinite(m["heading_rad"])
+    tm, h = tm[ok], np.unwrap(np.asarray(m["heading_rad"], float)[ok])
+    if len(tm) < 20:
+        out.add("heading vs gyro", NA, f"{len(tm)} headings inside the IMU's span", "at least 20")
+        return
+    d = h - np.interp(tm, t, yaw)
+    res = d - (d.mean() if bias is not None else np.polyval(np.polyfit(tm, d, 1), tm))
+    how = "a constant (gyro bias from the attitude fit)" if bias is not None else "a constant and a drift"
+    turned = float(np.degrees(np.ptp(np.interp(tm, t, yaw))))
+    rms = float(np.degrees(np.sqrt(np.mean(res**2))))
+    out.summary["heading_gyro_rms_deg"] = rms
+    status = OK if rms < 5 else (WARN if rms < 10 or turned < 90 else PROBLEM)
+    out.add("heading vs gyro", status, f"{rms:.1f} deg RMS after {how} ({turned:.0f} deg of yaw "
+            "flown)", "< 5 deg (an error turning with the heading: hard iron)")
+
+
 def _check_mag(rec, out: CheckResult) -> None:
+    _check_heading(rec, out)
     out.summary["mag_offset"] = None
     raw = _raw_mag(rec)
     if raw is None:
