@@ -134,6 +134,11 @@ def _check_streams(rec, out: CheckResult) -> None:
             status = WARN
         out.add(f"{name} rate", status, msg, "steady rate, no gaps, increasing stamps")
         out.plots.setdefault("dt", {})[name] = d
+    repaired = [n for n in rec.notes if any(k in n for k in ("re-sorted", "out of order", "dropped", "truncated",
+                                                              "duplicate"))]
+    if repaired:  # a log reader repairs what a folder reader refuses: the repairs are named here
+        out.add("reader repairs", WARN, "; ".join(repaired[:5]) + (" ..." if len(repaired) > 5 else ""),
+                "stamps in order, nothing dropped")
     out.summary["imu_rate_hz"] = out.summary.get("rates_hz", {}).get("imu")
     out.summary["camera_rate_hz"] = out.summary.get("rates_hz", {}).get("frames")
 
