@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from visnav.analysis.real_frames import (klt_on_frames, load_euroc_frames, marker_photos, pad_on_photos,
-                                         palace_on_frames)
+                                         pad_on_tiles, palace_on_frames)
 
 
 def main(argv: list[str]) -> dict:
@@ -32,6 +32,7 @@ def main(argv: list[str]) -> dict:
                 out["trackers"].append(dict(tracker=f"{name}, guard {'off' if guard >= 1 else guard}",
                                             rate_hz=rate, **r))
     out["pad"] = pad_on_photos(marker_photos(data / "markers_downward"))
+    out["pad_tiles"] = pad_on_tiles(marker_photos(data / "markers_downward"))
     return out
 
 
@@ -45,7 +46,8 @@ def markdown(out: dict) -> str:
     p = out["pad"]
     lines += ["", f"pad detector: {p['photos']} photos, {p['false_poses']} false poses, reasons {p['reasons']}, "
               f"rings per photo median {p['rings_median']:.0f} max {p['rings_max']}; per frame (640x480) "
-              f"mean {p['ms_mean']:.1f} ms, median {p['ms_median']:.1f} ms, max {p['ms_max']:.1f} ms"]
+              f"mean {p['ms_mean']:.1f} ms, median {p['ms_median']:.1f} ms, max {p['ms_max']:.1f} ms",
+              f"2x2 mosaics of the photos with rings: {out['pad_tiles']}"]
     return "\n".join(lines)
 
 

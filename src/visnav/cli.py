@@ -277,6 +277,10 @@ def montecarlo(
     for k, v in summary.get("rates", {}).items():
         table.add_row(k, f"rate {v['rate']:.0%}", f"{v['count']} of {v['n']}", "", "", "", v.get("published", ""))
     console.print(table)
+    from visnav.analysis.outcome import outcome_text
+
+    if outcome_text(summary.get("outcomes", {})):
+        console.print(outcome_text(summary["outcomes"]), style="bold")
     console.print(f"campaign directory: {camp.out}")
     if summary["failed"]:
         raise typer.Exit(1)
@@ -521,7 +525,8 @@ def ahrs(
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
         table.add_row(k, "null (not observable)" if m[k] is None else _fmt(m[k]))
-    for k in ("reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
+    for k in ("roll_mean_diff_deg", "roll_std_diff_deg", "pitch_mean_diff_deg", "pitch_std_diff_deg",
+              "reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
         if k in m:
             table.add_row(k, _fmt(m[k]) if not isinstance(m[k], list) else str([round(x, 3) for x in m[k]]))
     if m.get("yaw_unobservable_reason"):
@@ -608,6 +613,23 @@ def _bridge_origin(text: Optional[str]):
         raise ValueError(f"--origin must be LAT_DEG,LON_DEG,ALT_M (AMSL), got {text!r} ({exc})") from None
 
 
+def _input_timeouts(items: list[str]):
+    from visnav.io.bridge_freshness import FreshnessConfig
+
+    cfg = FreshnessConfig()
+    for it in items:
+        k, _, v = it.partition("=")
+        try:
+            val = None if v.strip().lower() == "none" else float(v)
+            if val is not None and not 0.0 < val < 1e6:
+                raise ValueError
+            cfg = cfg.with_overrides(**{k.strip(): {"timeout_s": val}})
+        except ValueError as exc:
+            why = str(exc) if "unknown bridge input stream" in str(exc) else "seconds must be a positive number or none"
+            raise ValueError(f"--input-timeout {it!r}: {why}") from None
+    return cfg
+
+
 @app.command()
 def bridge(
     mavlink_url: str = typer.Option(..., "--mavlink", help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or a "
@@ -637,6 +659,9 @@ def bridge(
                                 "autopilot side (the SIL)"),
     gps_sigma: float = typer.Option(2.5, "--gps-sigma", help="1-sigma \\[m] the navigator gives a position fix whose "
                                     "message carries no accuracy (GLOBAL_POSITION_INT; GPS_RAW_INT without h_acc)"),
+    input_timeout: List[str] = typer.Option([], "--input-timeout", help="STREAM=SECONDS (imu, gps, height, "
+                                            "camera; 'none': never): no estimate is sent while that input is older "
+                                            "(defaults imu=1 camera=10, docs/autopilots.md)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
     import time
@@ -680,7 +705,7 @@ def bridge(
         fail(f"log folder {out_dir} is not writable ({exc.strerror})")
     link = src = None
     try:
-        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
+        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), freshness=_input_timeouts(input_timeout), frame_log=out_dir / "frames" if log_frames else None,
                            send_health=health, gps_sigma_m=gps_sigma, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
         link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=say)
@@ -856,6 +881,10 @@ def replay_(
     no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="a recording CSV cut while written (a "
                                          "short last row): replay the rows before it"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock (needs "
+                                         "--time-offset auto or seconds: t_imu = t_frame + offset)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -880,9 +909,15 @@ def replay_(
                 raise RecordingError(f"--time-offset must be 'auto' or seconds, got {time_offset!r}") from None
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
-        rec = open_recording(recording)
+        rec = open_recording(recording, allow_truncated)
         if rec.summary:  # a log: what was read, to the end or to the damage
             err.print(f"log: {escape(rec.summary)}", soft_wrap=True)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            if time_offset is None:
+                raise RecordingError("--frames on their own clock need --time-offset auto or seconds")
+            attach_frames(rec, frames, fps, camera_yaml)
         if not no_check:  # issue 29: a recording whose conventions or calibration are wrong is refused
             from visnav.analysis.check import run_check
 
@@ -891,7 +926,6 @@ def replay_(
             if problems:
                 raise RecordingError(f"{recording}: `visnav check` found {len(problems)} problem(s) "
                                      "(replay anyway with --no-check):\n  " + "\n  ".join(problems))
-        rec = open_recording(recording, allow_truncated)
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
@@ -926,6 +960,10 @@ def check_(
     out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
                                       "(default runs/check-<name>)"),
     max_frames: Optional[int] = typer.Option(None, help="use at most this many frames (the most rotating stretch)"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock "
+                                         "(replaces the recording's frames; the offset is searched over every lag)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
 ) -> None:
     """Verify a recording's conventions and calibration from the flight itself (docs/check.md)."""
     from visnav.analysis.check import run_check, write_check
@@ -934,6 +972,10 @@ def check_(
 
     try:
         rec = open_recording(recording)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            attach_frames(rec, frames, fps, camera_yaml)
         with console.status(f"checking {escape(recording)}"):
             res = run_check(rec, max_frames=max_frames)
         out_dir = Path(out) if out else Path("runs") / f"check-{Path(recording).resolve().name}"

@@ -42,6 +42,8 @@ def test_campaign_identifies_once_on_gps_then_compensates_both_delays(monkeypatc
     key = {(r["altitude_m"], r["delay_s"], r["compensated"]): r for r in rows}
     assert len(rows) == 2 * (1 + 2 * 2)  # per altitude: GPS + (late, compensated) per delay
     assert key[12.0, None, "gps"]["lateral_pm_deg"] == 45.0
+    assert key[12.0, None, "gps"]["lateral_pm_seeds_deg"] == "45.0"  # one seed: its PM, no spread
+    assert math.isnan(key[12.0, None, "gps"]["lateral_pm_seed_sd_deg"])
     # uncompensated: 90 ms of IMU and 10 ms of laser mismatch
     assert key[30.0, 0.1, False]["longitudinal_pm_deg"] == pytest.approx(45.0 - 300 * 0.1)
     for a in (12.0, 30.0):

@@ -93,3 +93,16 @@ def test_pad_detector_gives_no_pose_on_any_real_marker_photo():
     assert r["photos"] == 100
     assert r["false_poses"] == 0, r["false_pose_photos"]
     assert np.isfinite(r["ms_median"]) and r["ms_max"] >= r["ms_median"] > 0
+
+
+def test_pad_validation_rejects_three_real_rings_of_different_markers():
+    """2x2 mosaics of the photos with rings put 3+ real rings in one frame, so they reach the association
+    and the homography checks (single photos never do: at most 2 rings); still no pose."""
+    if not MARKERS.is_dir():
+        pytest.skip(missing_reason(MARKERS))
+    from visnav.analysis.real_frames import marker_photos, pad_on_tiles
+
+    r = pad_on_tiles(marker_photos(MARKERS), limit=40)
+    assert r["photos_with_rings"] >= 10 and r["tiles"] == 40
+    assert r["tiles_with_3_rings"] >= 10
+    assert r["false_poses"] == 0, r["reasons"]

@@ -29,6 +29,7 @@ def _one_line_error(r, text):
     (lambda d: (d / "campaign.json").write_text("{}") or (d / "report.html").write_text("x"), "a campaign folder"),
     (lambda d: (d / "imu.csv").write_text("t_s\n") or (d / "camera.yaml").write_text(""), "a recording"),
     (lambda d: (d / "faults.csv").write_text("fault\n"), "a fault campaign folder"),
+    (lambda d: (d / "bridge.tlog").write_bytes(b"") or (d / "metrics.json").write_text("{}"), "a bridge log folder"),
     (lambda d: (d / "thesis.txt").write_text("mine"), "a folder of other files (thesis.txt)"),
 ])
 def test_force_refuses_a_folder_that_is_not_a_run_folder(tmp_path, make, text):
@@ -357,3 +358,15 @@ def test_the_witas_pmf_map_panel_has_a_legend(monkeypatch):
     panels = figs[0].axes[:2]
     texts = [[x.get_text() for x in a.get_legend().get_texts()] if a.get_legend() else [] for a in panels]
     assert "PMF 3-sigma north/east ellipse" in texts[1] and "PMF" in texts[1], texts
+
+
+def test_a_campaign_counts_its_outcomes_and_its_runs_over_the_hpl():
+    from visnav.analysis.montecarlo import summarize
+    from visnav.analysis.outcome import outcome_text
+
+    rows = [{"seed": "1", "status": "ok", "outcome": "safe", "hpl_bound_violations": "0"},
+            {"seed": "2", "status": "ok", "outcome": "safe", "hpl_bound_violations": "6"},
+            {"seed": "3", "status": "ok", "outcome": "aborted", "hpl_bound_violations": "0"}]
+    s = summarize(rows, [])
+    assert s["outcomes"] == {"safe": 2, "aborted": 1, "hpl_violated_while_ok": 1}
+    assert outcome_text(s["outcomes"]) == "outcomes: 2 safe, 1 aborted; 1 run with steps over the HPL while ok"

@@ -74,11 +74,13 @@ def test_quality_and_fix_fall_with_age_and_stop_past_the_timeout():
         q.append(mm.quality_from(a.estimate, None))
         sig.append(mm.horizontal_sigma(a.estimate.covariance))
         fix.append(f.fix_type(a))
-        assert a.send == (age <= 1.0) and ("imu" in a.stale) == (age > 0.1)
+        assert a.send == (age <= 1.0) and ("imu" in a.stale) == (age > 0.2)
     assert all(np.diff(q) <= 0) and q[0] > 85 and q[-2] < 75, q
     assert all(np.diff(sig) > 0) and sig[0] == pytest.approx(0.2)  # the filter's own sigma when fresh
     assert fix == [mavlink.GPS_FIX_TYPE_3D_FIX] * 2 + [mavlink.GPS_FIX_TYPE_2D_FIX] * 3 + [mavlink.GPS_FIX_TYPE_NO_FIX]
     assert f.assess(_est(10.0)).reason() == "no IMU/attitude for 1.2 s"
+    f.newest["imu"] = 10.0 - 0.15  # within the 0.2 s budget: 3D, but already wider
+    assert f.fix_type(f.assess(_est(10.0))) == mavlink.GPS_FIX_TYPE_3D_FIX
     # an unknown covariance stays unknown (quality 0), never made up
     a = f.assess(_est(10.0, P=np.full((6, 6), np.nan)))
     assert mm.quality_from(a.estimate, None) == 0

@@ -50,3 +50,19 @@ def test_readme_desk_recipe_uses_a_frame_folder():
     assert following.startswith("visnav bridge ") and "udpin:127.0.0.1:14540" in following
     camera = re.search(r"--camera (\S+)", following).group(1)
     assert not camera.isdigit() and "folder of images" in following
+
+
+def test_input_timeout_option_bad_values_one_line(tmp_path):
+    for bad, why in (("lidar=2", "unknown bridge input stream 'lidar'"), ("imu=-1", "positive number or none"),
+                     ("imu", "positive number or none")):
+        r = CliRunner().invoke(app, ["bridge", "--mavlink", "udpin:127.0.0.1:1", "--camera", "0", "--input-timeout",
+                                     bad, "--out", str(tmp_path / "o")])
+        assert r.exit_code == 2 and why in r.output and len([ln for ln in r.output.splitlines() if ln.strip()]) == 1
+
+
+def test_input_timeout_option_sets_the_budget():
+    from visnav.cli import _input_timeouts
+
+    cfg = _input_timeouts(["camera=4", "gps=none", "imu=0.5"])
+    assert cfg.budgets["camera"].timeout_s == 4.0 and cfg.budgets["gps"].timeout_s is None
+    assert cfg.budgets["imu"].timeout_s == 0.5 and cfg.budgets["imu"].accel_mps2 == 2.0

@@ -57,6 +57,12 @@ def ahrs_check(log_path, out_dir=None, declination_deg: float | None = None,
         "roll_rms_diff_deg": cmp["roll_rms_diff_deg"],
         "pitch_rms_diff_deg": cmp["pitch_rms_diff_deg"],
         "yaw_rms_diff_deg": None if reason else cmp["yaw_rms_diff_deg"],
+        # the constant part of the difference and what is left around it (a constant part is an
+        # accelerometer bias or a frame misalignment; docs/real-data.md, EuRoC)
+        "roll_mean_diff_deg": float(np.degrees(cmp["diff"][:, 0].mean())),
+        "pitch_mean_diff_deg": float(np.degrees(cmp["diff"][:, 1].mean())),
+        "roll_std_diff_deg": float(np.degrees(cmp["diff"][:, 0].std())),
+        "pitch_std_diff_deg": float(np.degrees(cmp["diff"][:, 1].std())),
         "roll_max_diff_deg": float(np.degrees(np.abs(cmp["diff"][:, 0]).max())),
         "pitch_max_diff_deg": float(np.degrees(np.abs(cmp["diff"][:, 1]).max())),
         "yaw_max_diff_deg": float(np.degrees(np.abs(cmp["diff"][:, 2]).max())),

@@ -25,6 +25,8 @@ def write_campaign_report(out: Path, rows: list[dict], summary: dict, grid_keys:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from visnav.analysis.outcome import outcome_text
+
     ok = [r for r in rows if r.get("status") == "ok"]
     metrics = [k for k in summary.get("metrics", {}) if k not in ("sim_time_s",)][:12]
     imgs = []
@@ -57,7 +59,8 @@ def write_campaign_report(out: Path, rows: list[dict], summary: dict, grid_keys:
                     for r in rows if r.get("status") != "ok")
     doc = f"""<!doctype html><html><head><meta charset="utf-8"><title>campaign {html.escape(scenario)}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
-</head><body><h1>Campaign: {html.escape(scenario)}</h1><p>{summary['count']} runs, {summary['failed']} failed.
+</head><body><h1>Campaign: {html.escape(scenario)}</h1><p><b>{html.escape(outcome_text(summary.get('outcomes', {})))}</b></p>
+<p>{summary['count']} runs, {summary['failed']} failed.
 Grid: {html.escape(', '.join(grid_keys) or 'none')}.</p>
 <table><tr><th>metric</th><th>mean</th><th>median</th><th>p95</th><th>min</th><th>max</th><th>n</th>
 <th>{html.escape(summary.get('published_source', 'thesis'))}</th></tr>{table}</table>

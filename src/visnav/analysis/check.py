@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from visnav.estimation.timesync import (calibrate_camera_imu, gyro_rotvecs, hand_eye_rotation,
-                                        rotation_angle_deg)
+                                        rotation_angle_deg, wide_offset)
 from visnav.geometry.rotations import euler_to_dcm
 
 __all__ = ["run_check", "camera_imu", "CheckResult", "write_check"]
@@ -67,7 +67,9 @@ def _attitude(rec):
     for src, s in (("attitude.csv", rec.streams.get("attitude")), ("ground truth", rec.truth)):
         if s is not None and "roll_rad" in s and len(s["t_s"]) > 10:
             e = np.column_stack([s["roll_rad"], s["pitch_rad"], s["yaw_rad"]])
-            return s["t_s"], np.array([euler_to_dcm(x) for x in e]), src
+            ok = np.all(np.isfinite(e), axis=1) & np.isfinite(s["t_s"])  # an attitude without yaw is not enough
+            if ok.sum() > 10:
+                return s["t_s"][ok], np.array([euler_to_dcm(x) for x in e[ok]]), src
     return None
 
 
@@ -115,14 +117,18 @@ def _check_streams(rec, out: CheckResult) -> None:
         med = float(np.median(pos)) if len(pos) else math.nan
         rate = 1.0 / med if med > 0 else math.nan
         out.summary.setdefault("rates_hz", {})[name] = rate
-        back, rep = int((d < 0).sum()), int((d == 0).sum())
+        back = int((d < 0).sum())
+        if "sensor" in s:  # several sensors in one stream (range: sonar and laser) may share an instant
+            rep = sum(int((np.diff(t[s["sensor"] == k]) == 0).sum()) for k in np.unique(s["sensor"]))
+        else:
+            rep = int((d == 0).sum())
         gaps = d > 3 * med
         msg = f"{rate:.2f} Hz, {len(t)} samples"
         if gaps.any():
             msg += f", {int(gaps.sum())} gaps (longest {d.max():.3f} s)"
         status = OK
         if back or rep:
-            status = PROBLEM
+            status = PROBLEM if back else WARN
             msg += f", {back} out of order, {rep} repeated stamps"
         elif gaps.sum() > max(1, 0.01 * len(d)):
             status = WARN
@@ -210,8 +216,8 @@ def _frames_window(rec, max_frames: int | None) -> np.ndarray:
     """Indices of the frames to use: all, or the ``max_frames`` consecutive ones with the most gyro rotation."""
     tf = rec.streams["frames"]["t_s"]
     n = len(tf)
-    if max_frames is None or n <= max_frames:
-        return np.arange(n)
+    if max_frames is None or n <= max_frames or getattr(rec, "frames_own_clock", False):
+        return np.arange(n) if max_frames is None or n <= max_frames else np.arange(max_frames)
     t, _, w = _imu(rec)
     ang = np.interp(tf, t, np.concatenate([[0], np.cumsum(np.linalg.norm(w[1:], axis=1) * np.diff(t))]))
     score = np.abs(np.diff(ang))
@@ -238,10 +244,15 @@ def camera_imu(rec, max_offset_s: float = 0.25, max_frames: int | None = None, k
             ts.append(tf[k])
     if len(imgs) < 12:
         return None, f"{len(imgs)} decodable frames (at least 12 needed)"
-    fr = frame_rotations(ts, imgs, rec.camera.camera)
+    R_cb = rec.camera.mount.R_cam_to_body
+    down_cam = R_cb.T @ np.array([0.0, 0.0, 1.0])  # body down seen from the camera
+    plane = down_cam if down_cam[2] > math.cos(math.radians(45.0)) else None  # looking down: ground plane
+    fr = frame_rotations(ts, imgs, rec.camera.camera, plane_normal_cam=plane)
     t, _, w = _imu(rec)
     try:
-        cal = calibrate_camera_imu(t, w, fr.t_pairs, fr.rotvec, rec.camera.mount.R_cam_to_body, max_offset_s)
+        center = wide_offset(t, w, fr.t_pairs, fr.rotvec) if getattr(rec, "frames_own_clock", False) else 0.0
+        cal = calibrate_camera_imu(t, w, fr.t_pairs, fr.rotvec, rec.camera.mount.R_cam_to_body,
+                                   min(max_offset_s, 0.05) if center else max_offset_s, center_s=center)
     except ValueError as exc:
         return None, str(exc)
     cal.extra["frames"] = fr
@@ -266,7 +277,7 @@ def _check_camera(rec, out: CheckResult, max_frames: int | None) -> None:
         out.add("camera vs IMU", NA, f"rotation per frame interval {exc:.3f} deg RMS, rate correlation "
                 f"{cal.coarse.peak:.2f}, rotation sigma {cal.rotation_sigma_deg:.1f} deg", "turns entered and left")
         return
-    amb = _translation_ambiguity(rec, cal)
+    amb = _translation_ambiguity(rec, cal) if not np.any(cal.extra["frames"].method == "homography") else None
     if amb is not None and amb > 0.3 * exc:
         out.add("camera vs IMU", NA, f"the translation looks like {amb:.2f} deg of rotation per frame pair against "
                 f"{exc:.2f} deg of rotation (a distant scene: rotation and translation cannot be told apart); found "
@@ -282,7 +293,7 @@ def _check_camera(rec, out: CheckResult, max_frames: int | None) -> None:
             f"{cal.rotation_error_deg:.2f} +- {cal.rotation_sigma_deg:.2f} deg from the declared mount "
             f"({cal.intervals} frame pairs, residual {cal.residual_deg:.3f} deg)", "< 2 deg (or within 3 sigma)")
     d = cal.offset_s - declared
-    bad_t = abs(d) > max(0.005, 3 * cal.offset_sigma_s)
+    bad_t = abs(d) > max(0.005, 3 * cal.offset_sigma_s) and not getattr(rec, "frames_own_clock", False)
     out.add("camera clock offset", PROBLEM if bad_t else OK,
             f"{cal.offset_s * 1e3:.1f} +- {cal.offset_sigma_s * 1e3:.1f} ms (t_imu = t_camera + offset; declared "
             f"{declared * 1e3:.1f} ms)", "within 5 ms of the declared")

@@ -139,10 +139,12 @@ def merge_sweeps(results: list[dict], sweep: SweepSettings) -> dict:
     windows weigh), whose sum S gives the merged coherence S/(1 + S) (the information of the
     records adds); margins from the merged response; delays inverse-variance averaged. A seed
     whose sweep did not complete is named in the notes and left out."""
+    pm_seeds = [float(r["pm_deg"]) for r in results]
     if len(results) == 1:
-        return dict(results[0], **{f"{k}_estimates": _estimates(results, k) for k in ("delay_s", "laser_delay_s")})
+        return dict(results[0], pm_seeds=pm_seeds,
+                    **{f"{k}_estimates": _estimates(results, k) for k in ("delay_s", "laser_delay_s")})
     notes = [f"seed {i + 1}: {n}" for i, r in enumerate(results) for n in r["notes"]]
-    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, notes=notes)
+    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, notes=notes, pm_seeds=pm_seeds)
     for k in ("delay_s", "laser_delay_s"):
         out[f"{k}_estimates"] = est = _estimates(results, k)
         c = combine_delays(*zip(*est)) if est else combine_delays([], [])
@@ -317,6 +319,10 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         for name, c in (("imu", tau), ("laser", ltau)):
             r[f"identified_{name}_delay_std_s"] = c.std_s
             r[f"identified_{name}_delay_confidence"] = c.confidence
+        for ax, res in zip(axes, pair):  # each seed's own PM: the spread the merged PM hides
+            pm = np.array([p for p in res.get("pm_seeds", [res["pm_deg"]]) if np.isfinite(p)], float)
+            r[f"{ax}_pm_seeds_deg"] = " ".join(f"{p:.1f}" for p in pm)
+            r[f"{ax}_pm_seed_sd_deg"] = float(pm.std(ddof=1)) if pm.size > 1 else math.nan
         for ax, res in zip(axes, pair):
             r[f"{ax}_gm_wc_rps"] = res["w_pc"]
         r["notes"] = "; ".join(notes + [f"{ax}: {n}" for ax, res in zip(axes, pair) for n in res["notes"]])

@@ -168,6 +168,16 @@ def _append_csv(path: Path, row: dict) -> None:
 _BOOL = {"True": True, "False": False, "true": True, "false": False}
 
 
+def outcome_counts(rows: list[dict]) -> dict[str, int]:
+    """outcome (analysis/outcome.py) -> runs, and ``hpl_violated_while_ok``: runs with a step over the HPL while ok."""
+    out: dict[str, int] = {}
+    for r in rows:
+        if r.get("outcome"):
+            out[str(r["outcome"])] = out.get(str(r["outcome"]), 0) + 1
+    n = sum((_as_number(r.get("hpl_bound_violations")) or 0) > 0 for r in rows)
+    return out | ({"hpl_violated_while_ok": n} if n else {})
+
+
 def summarize(rows: list[dict], grid_keys: list[str], published: dict | None = None) -> dict:
     """count, failures, and mean / median / p95 / min / max of every numeric metric, the rate of
     every boolean one (landed, aborted, returned_home, ...), overall and per grid point; with
@@ -198,7 +208,7 @@ def summarize(rows: list[dict], grid_keys: list[str], published: dict | None = N
 
     metrics, rates = stats(rows)
     summary = {"count": len(rows), "failed": sum(r.get("status") != "ok" for r in rows), "metrics": metrics,
-               "rates": rates}
+               "rates": rates, "outcomes": outcome_counts(rows)}
     if grid_keys:
         groups: dict[str, list] = {}
         for r in rows:

@@ -86,3 +86,12 @@ def verdict_line(metrics: dict) -> str:
                  + " with the true error over the HPL while the navigator claimed ok"
                  + (f" (worst error while ok {worst:.1f} m)" if isinstance(worst, float) and math.isfinite(worst) else ""))
     return line
+
+
+def outcome_text(counts: dict[str, int]) -> str:
+    """'outcomes: 18 safe, 2 aborted; 3 runs over the HPL while ok' ('' when no run has an outcome)."""
+    hpl = counts.get("hpl_violated_while_ok", 0)
+    words = ", ".join(f"{v} {k}" for k, v in counts.items() if k != "hpl_violated_while_ok")
+    if not words:
+        return ""
+    return f"outcomes: {words}" + (f"; {hpl} run{'s' if hpl != 1 else ''} with steps over the HPL while ok" if hpl else "")

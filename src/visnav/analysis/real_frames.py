@@ -12,6 +12,7 @@
   ``vision.correlation.self_coherence``).
 - ``pad_on_photos``: the three-circle pad detector (``vision/pad.py``) on real photos that hold no
   such pad: every pose it returns is a false pose; per-frame time at the photo's size.
+  ``pad_on_tiles``: the same on 2x2 mosaics of the photos with rings (3+ real rings per frame).
 
 No synthetic input: every figure is measured on the files given (``../shared/data``).
 """
@@ -29,7 +30,7 @@ from visnav.vision.correlation import PnccTracker, self_coherence
 from visnav.vision.interest import forstner_top_k
 from visnav.vision.klt import KltTracker
 
-__all__ = ["load_euroc_frames", "klt_on_frames", "palace_on_frames", "pad_on_photos", "marker_photos"]
+__all__ = ["load_euroc_frames", "klt_on_frames", "palace_on_frames", "pad_on_photos", "pad_on_tiles", "marker_photos"]
 
 #: The reference LK: independent settings from the KLT tracker's (21 px window, 3 levels, 20 iterations).
 REFERENCE_LK = dict(winSize=(31, 31), maxLevel=4,
@@ -252,3 +253,37 @@ def pad_on_photos(paths, detector=None, size: tuple[int, int] = (640, 480)) -> d
                 ms_mean=float(t.mean()) if t.size else float("nan"),
                 ms_median=float(np.median(t)) if t.size else float("nan"),
                 ms_max=float(t.max()) if t.size else float("nan"))
+
+
+def pad_on_tiles(paths, detector=None, per_tile: int = 4, limit: int = 300, size: tuple[int, int] = (640, 480)) -> dict:
+    """A harder case for the pad detector's validation than single photos: 2x2 mosaics of the
+    photos in which the ring detector found a ring (each photo at half size), so that three or more
+    real rings of *different* markers are in one frame and reach the association (radius ratio,
+    right isosceles triangle, 27-point homography residual, camera above the plane, ambiguity).
+    Every pose is false. The first ``limit`` combinations of ``per_tile`` such photos (sorted)."""
+    import itertools
+
+    from visnav.geometry.camera import PinholeCamera
+    from visnav.geometry.pad import PadLayout
+    from visnav.vision.pad import PadDetector
+
+    if per_tile != 4:
+        raise ValueError(f"per_tile must be 4 (a 2x2 mosaic), got {per_tile}")
+    w, h = size
+    det = detector or PadDetector(PadLayout(), PinholeCamera.ideal(w, h, float(w)).K)
+    small = []
+    for p in paths:
+        img = cv2.resize(cv2.imread(str(p), cv2.IMREAD_GRAYSCALE), (w, h), interpolation=cv2.INTER_AREA)
+        if det.detect(img).rings:
+            small.append(cv2.resize(img, (w // 2, h // 2), interpolation=cv2.INTER_AREA))
+    false, n3, reasons, n = 0, 0, {}, 0
+    for c in itertools.islice(itertools.combinations(range(len(small)), 4), limit):
+        tile = np.vstack([np.hstack([small[c[0]], small[c[1]]]), np.hstack([small[c[2]], small[c[3]]])])
+        d = det.detect(tile)
+        n += 1
+        n3 += len(d.rings) >= 3
+        false += d.pose is not None
+        key = "pose" if d.pose is not None else (d.reason if len(d.rings) >= 3 else "< 3 rings")
+        reasons[key] = reasons.get(key, 0) + 1
+    return dict(photos_with_rings=len(small), tiles=n, tiles_with_3_rings=int(n3), false_poses=int(false),
+                reasons=reasons)

@@ -33,7 +33,7 @@ import numpy as np
 from visnav.geometry.rotations import kabsch
 
 __all__ = ["TimeOffset", "CameraImuCalibration", "estimate_offset", "gyro_angles", "gyro_rotvecs",
-           "hand_eye_rotation", "calibrate_camera_imu", "rotation_angle_deg", "kabsch"]
+           "hand_eye_rotation", "calibrate_camera_imu", "wide_offset", "rotation_angle_deg", "kabsch"]
 
 
 @dataclass(frozen=True)
@@ -162,35 +162,59 @@ def _residual_ss(t_gyro, gyro, tp, phi, R, b, taus, W) -> np.ndarray:
     return out
 
 
+def _scan(t_gyro, phi_int, tp, phi, dt, taus) -> np.ndarray:
+    """Hand-eye residual sum of squares per candidate offset (R and b fitted per candidate)."""
+    ss = np.empty(len(taus))
+    for k, tau in enumerate(taus):
+        psi = _phi_at(t_gyro, phi_int, tp[:, 1] + tau) - _phi_at(t_gyro, phi_int, tp[:, 0] + tau)
+        R, b = hand_eye_rotation(phi, psi, dt, iters=4)
+        ss[k] = float(((psi - phi @ R.T - b * dt[:, None]) ** 2).sum())
+    return ss
+
+
+def wide_offset(t_gyro, gyro, t_pairs, cam_rotvec, step_s: float = 0.01) -> float:
+    """Frames on their own clock: the offset over every lag that puts all frames inside the gyro's span
+    (step 1 of the module docstring on a coarse grid); the start for ``calibrate_camera_imu(center_s=)``."""
+    t_gyro, gyro = np.asarray(t_gyro, float), np.asarray(gyro, float)
+    ok = np.all(np.isfinite(cam_rotvec), axis=1)
+    tp, phi = np.asarray(t_pairs, float)[ok], np.asarray(cam_rotvec, float)[ok]
+    if len(tp) < 10:
+        raise ValueError(f"{len(tp)} frame intervals with a camera rotation; at least 10 are needed")
+    lo, hi = t_gyro[0] - tp[0, 0], t_gyro[-1] - tp[-1, 1]
+    if hi < lo:
+        raise ValueError(f"the frames span {tp[-1, 1] - tp[0, 0]:.1f} s, more than the gyro's "
+                         f"{t_gyro[-1] - t_gyro[0]:.1f} s")
+    taus = np.arange(lo, hi + step_s / 2, step_s)
+    ss = _scan(t_gyro, _integrated_rate(t_gyro, gyro), tp, phi, tp[:, 1] - tp[:, 0], taus)
+    return float(taus[int(np.argmin(ss))])
+
+
 def calibrate_camera_imu(t_gyro, gyro, t_pairs, cam_rotvec, R_declared: np.ndarray | None = None,
                          max_offset_s: float = 0.25, step_s: float = 0.002, bootstrap: int = 200,
-                         rng: np.random.Generator | None = None) -> CameraImuCalibration:
-    """Steps 1-3 of the module docstring. ``R_declared``: the camera -> IMU rotation the recording
-    declares (its error is reported)."""
+                         rng: np.random.Generator | None = None, center_s: float = 0.0) -> CameraImuCalibration:
+    """Steps 1-3 of the module docstring, offsets searched in ``center_s ± max_offset_s``. ``R_declared``: the
+    camera -> IMU rotation the recording declares (its error is reported)."""
     rng = rng if rng is not None else np.random.default_rng(0)
     t_gyro, gyro = np.asarray(t_gyro, float), np.asarray(gyro, float)
     phi_all = np.asarray(cam_rotvec, float)
     ok = np.all(np.isfinite(phi_all), axis=1)
     tp, phi = np.asarray(t_pairs, float)[ok], phi_all[ok]
-    inside = (tp[:, 0] - max_offset_s >= t_gyro[0]) & (tp[:, 1] + max_offset_s <= t_gyro[-1])
+    inside = (tp[:, 0] + center_s - max_offset_s >= t_gyro[0]) & (tp[:, 1] + center_s + max_offset_s <= t_gyro[-1])
     tp, phi = tp[inside], phi[inside]
     if len(tp) < 10:
         raise ValueError(f"{len(tp)} frame intervals with a camera rotation inside the gyro's span; at least 10 "
                          "are needed")
     dt = tp[:, 1] - tp[:, 0]
     # step 1: every candidate offset with its own hand-eye fit (R and b free: no rotation assumed)
-    taus = np.arange(-max_offset_s, max_offset_s + step_s / 2, step_s)
-    phi_int = _integrated_rate(t_gyro, gyro)
-    ss = np.empty(len(taus))
-    for k, tau in enumerate(taus):
-        psi = _phi_at(t_gyro, phi_int, tp[:, 1] + tau) - _phi_at(t_gyro, phi_int, tp[:, 0] + tau)
-        R, b = hand_eye_rotation(phi, psi, dt, iters=4)
-        ss[k] = float(((psi - phi @ R.T - b * dt[:, None]) ** 2).sum())
+    taus = center_s + np.arange(-max_offset_s, max_offset_s + step_s / 2, step_s)
+    ss = _scan(t_gyro, _integrated_rate(t_gyro, gyro), tp, phi, dt, taus)
     tau = float(_peak(taus, -ss[None, :])[0])
     R, b = hand_eye_rotation(phi, gyro_rotvecs(t_gyro, gyro, tp, tau), dt)
     # the magnitudes' correlation (the gyro bias removed): how well the rotation rates agree, rotation-free
-    coarse = estimate_offset(t_gyro, gyro - b, tp, np.linalg.norm(phi, axis=1), max_offset_s, step_s, bootstrap,
-                             rng)
+    coarse = estimate_offset(t_gyro, gyro - b, tp + center_s, np.linalg.norm(phi, axis=1), max_offset_s, step_s,
+                             bootstrap, rng)
+    coarse = TimeOffset(coarse.offset_s + center_s, coarse.sigma_s, coarse.peak, coarse.intervals,
+                        coarse.taus + center_s, coarse.rho)
     half = max(4 * step_s, 0.01)
     sig = float("nan")
     for _ in range(2):  # step 3: the offset refined at the fitted R, b; sigma by bootstrap of the intervals

@@ -275,6 +275,7 @@ class Bridge:
     # ------------------------------------------------------------------ main loop
     def run(self, duration_s: float | None = None, max_frames: int | None = None) -> dict:
         """Run until ``duration_s`` / ``max_frames`` / ``self.stop``; returns the metrics."""
+        self.counts["stale_discarded"] += self.link.discard_pending()  # queued before we listened
         threads = [threading.Thread(target=self._reader, daemon=True, name="mavlink-reader")]
         if self.camera is not None:
             threads.append(threading.Thread(target=self._camera_reader, daemon=True, name="camera-reader"))

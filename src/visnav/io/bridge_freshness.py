@@ -13,7 +13,7 @@ Streams (``STREAMS``) and their defaults (``DEFAULT_BUDGETS``, every figure conf
 ============  ==========  ==========  ===========  ======  ===============================================
 stream        budget [s]  timeout [s] a [m/s^2]    axes    applies while the estimate's source is
 ============  ==========  ==========  ===========  ======  ===============================================
-imu           0.1         1.0         2.0          x y z   any (IMU and attitude: the propagation itself)
+imu           0.2         1.0         2.0          x y z   any (IMU and attitude: the propagation itself)
 gps           0.5         --          0.1          x y z   ``gps`` (a GPS-following estimate)
 height        0.5         --          0.1          z       any (range finder and barometer)
 camera        1.0         10.0        0.1          x y z   a vision source (mpe, vision, registration, camera)
@@ -75,7 +75,7 @@ class StreamBudget:
 
 
 DEFAULT_BUDGETS = {
-    "imu": StreamBudget(0.1, 1.0, 2.0),
+    "imu": StreamBudget(0.2, 1.0, 2.0),  # 0.2 s: ten samples at 50 Hz (a busy companion computer's hiccup)
     "gps": StreamBudget(0.5, None, 0.1, sources=("gps",)),
     "height": StreamBudget(0.5, None, 0.1, axes=(2,)),
     "camera": StreamBudget(1.0, 10.0, 0.1, sources=VISION_SOURCES),

@@ -190,6 +190,14 @@ class MavlinkLink:
                 cb()
 
     # ------------------------------------------------------------------ receiving
+    def discard_pending(self, max_n: int = 100000) -> int:
+        """Drop what queued up in the socket before anyone read it (e.g. while a navigator was being built):
+        stale samples, and a burst that would make the link-up rates wrong. Returns how many."""
+        n = 0
+        while n < max_n and self.conn.recv_match(blocking=False) is not None:
+            n += 1
+        return n
+
     def poll(self, timeout_s: float = 0.01) -> list:
         """Messages received within ``timeout_s`` as (t_recv_s, msg), HEARTBEAT/TIMESYNC/BAD_DATA handled here."""
         out = []

@@ -62,6 +62,8 @@ class CircleTruth:
 @dataclass
 class SilStats:
     received: dict = field(default_factory=dict)
+    sent: dict = field(default_factory=dict)  # messages sent by type (muted ones not counted)
+    send_span: list = field(default_factory=lambda: [None, None])  # monotonic instants of the first and last send
     ext_errors_m: list = field(default_factory=list)  # |external position - truth(time_usec)|
     ext_stamps_usec: list = field(default_factory=list)
     fused_errors_m: list = field(default_factory=list)  # |own solution - truth| after each correction
@@ -136,6 +138,10 @@ class SilAutopilot:
         now = time.monotonic()
         if now >= self._mute_until and (now >= self._data_mute_until or msg.get_type() == "HEARTBEAT"):
             self.mav.send(msg)
+            typ = msg.get_type()
+            self.stats.sent[typ] = self.stats.sent.get(typ, 0) + 1
+            self.stats.send_span[0] = now if self.stats.send_span[0] is None else self.stats.send_span[0]
+            self.stats.send_span[1] = now
 
     def _run(self, duration_s: float) -> None:
         period = {"hb": 1.0, "imu": 0.02, "att": 0.02, "baro": 0.1, "rng": 0.1, "gps": 0.1}
@@ -147,8 +153,8 @@ class SilAutopilot:
             bn = self.boot_ns(mono)
             p, v, e, f = self.truth.at(t)
             due = [k for k in period if t >= nxt[k]]
-            for k in due:
-                nxt[k] += period[k]
+            for k in due:  # a starved loop skips what it missed (an autopilot sends no burst of old samples)
+                nxt[k] = max(nxt[k] + period[k], t)
             if "hb" in due:
                 self._send(self.mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4,
                                                      mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0,

@@ -178,9 +178,13 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
                     "link_fixes_missing": counts["fixes_missing"]}
         if counts["fixes_missing"]:
             notes.append(f"link.csv: {counts['fixes_missing']} delivered fix(es) the replayed navigator did not make")
+    if hasattr(nav, "replay_metrics"):  # a navigator's own figures (vo: pairs_registered_share)
+        metrics |= nav.replay_metrics()
     if reference:
         metrics["reference"] = reference
         metrics |= _accuracy(log, True)
+        if opts.gps_until_s is not None:
+            metrics |= denied_metrics(log, opts.gps_until_s)
     metrics |= {"replay_wall_s": wall, "replay_cpu_s": cpu,
                 "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
                 "replay_real_time_factor_cpu": dur / cpu if cpu > 0 else float("nan"), "flight_duration_s": dur}
@@ -372,6 +376,27 @@ def _accuracy(log: FlightLog, has_truth: bool) -> dict:
     except TrajectoryError as exc:
         return {"ate_note": str(exc)}
     return {"ate_rmse_m": s["ate_rmse_m"], "ate_max_m": s["ate_max_m"], "rpe_rmse_m": s["rpe_rmse_m"]}
+
+
+def denied_metrics(log: FlightLog, t_cut: float) -> dict:
+    """The GPS-denied part of a replay (after ``t_cut``) against the reference, horizontally (a GPS altitude is
+    too noisy to score a height): ``final_error_m`` at the last reference sample, ``final_error_pct_of_distance``
+    = that over the reference's path length since ``t_cut`` in %, ``ate_rmse_denied_m`` over the denied part."""
+    est, ref = trajectories(log)
+    if est is None or ref is None or len(est) < 2:
+        return {}
+    keep = (ref.t > t_cut) & (ref.t >= est.t[0]) & (ref.t <= est.t[-1])
+    if not keep.any():
+        return {"denied_note": f"no reference sample after {t_cut:g} s within the estimate"}
+    t = ref.t[keep]
+    p_ref = ref.p[keep, :2]
+    p_est = np.column_stack([np.interp(t, est.t, est.p[:, j]) for j in range(2)])
+    start = np.array([np.interp(t_cut, ref.t, ref.p[:, j]) for j in range(2)])
+    dist = float(np.linalg.norm(np.diff(np.vstack([start, p_ref]), axis=0), axis=1).sum())
+    err = np.linalg.norm(p_est - p_ref, axis=1)
+    return {"final_error_m": float(err[-1]), "distance_denied_m": dist,
+            "final_error_pct_of_distance": float(100 * err[-1] / dist) if dist > 0 else float("nan"),
+            "ate_rmse_denied_m": float(np.sqrt(np.mean(err ** 2))), "denied_s": float(t[-1] - t_cut)}
 
 
 def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title: str = "visnav replay") -> Path:

@@ -44,6 +44,8 @@ def folder_kind(d: str | Path) -> str:
         return "a campaign folder (campaign.json)"
     if "faults.csv" in names or "faults.md" in names:
         return "a fault campaign folder (faults.csv)"
+    if "bridge.tlog" in names:
+        return "a bridge log folder (bridge.tlog)"
     if "margins.csv" in names:
         return "a margins folder (margins.csv)"
     from visnav.io.recording import COMMANDS, STREAMS, TRUTH

@@ -6,7 +6,8 @@ radial-tangential model of the camera) into normalised image coordinates; the re
 the essential matrix (five-point RANSAC, ``cv2.findEssentialMat`` / ``cv2.recoverPose``, Nistér 2004)
 when the pair has parallax, and from the rotation-only model ``b2 = R b1`` on unit bearings
 (orthogonal Procrustes / Kabsch inside RANSAC) when it has none (the essential matrix is degenerate for
-a pure rotation). The result is the camera's *motion*: the rotation vector ``phi`` (camera frame of
+a pure rotation); for a camera looking down on flat ground, from the plane's homography decomposed
+into rotation, translation and normal (the solution whose normal is nearest the expected ground). The result is the camera's *motion*: the rotation vector ``phi`` (camera frame of
 the earlier frame) with ``C_c1_c2 = exp([phi x])``, the same quantity as the integrated gyro of a
 rigidly attached IMU, up to the camera-to-IMU rotation (``R_imu_cam phi``).
 
@@ -31,7 +32,7 @@ class FrameRotations:
     t_pairs: np.ndarray  # (N-1, 2) stamps of the two frames of each pair (camera clock)
     rotvec: np.ndarray  # (N-1, 3) camera motion, camera frame of the earlier frame [rad]; NaN: no estimate
     inliers: np.ndarray  # (N-1,) inlier tracks per pair
-    method: np.ndarray  # (N-1,) "essential", "rotation" or ""
+    method: np.ndarray  # (N-1,) "essential", "rotation", "homography" or ""
     tracks: list  # per pair: (uv1, uv2) inlier pixel positions (distorted, as tracked) or None
 
 
@@ -56,11 +57,25 @@ def _rotation_ransac(b1, b2, thr_rad: float, rng, iters: int = 200):
     return kabsch(b1[best], b2[best]), best
 
 
+def _plane_rotation(x1, x2, normal, thr):
+    """Rotation from the plane-induced homography H = R + t n^T / d (normalised coordinates; Faugeras &
+    Lustman 1988, ``cv2.decomposeHomographyMat``), the solution whose normal is closest to ``normal``."""
+    H, m = cv2.findHomography(x1, x2, cv2.RANSAC, thr)
+    if H is None:
+        return None, np.zeros(len(x1), bool)
+    _, Rs, _, ns = cv2.decomposeHomographyMat(H / H[2, 2], np.eye(3))
+    best = int(np.argmax([abs(float(n.ravel() @ normal)) for n in ns]))
+    return Rs[best], m.ravel() > 0
+
+
 def frame_rotations(times, images, camera, min_inliers: int = 15, max_features: int = 200,
-                    sigma_px: float = 1.0, min_parallax_px: float = 1.0,
+                    sigma_px: float = 1.0, min_parallax_px: float = 1.0, plane_normal_cam=None,
                     rng: np.random.Generator | None = None) -> FrameRotations:
     """Rotation of the camera between consecutive frames (module docstring). ``camera``: a
-    ``PinholeCamera`` (K and OpenCV distortion) or a 3x3 K without distortion."""
+    ``PinholeCamera`` (K and OpenCV distortion) or a 3x3 K without distortion. ``plane_normal_cam``: the
+    expected normal of a ground plane in the camera frame (a camera looking down on flat ground, far
+    away): the rotation then comes from the plane's homography, which keeps the translation out of it
+    (a translation over a distant plane otherwise looks like a rotation)."""
     rng = rng if rng is not None else np.random.default_rng(0)
     if isinstance(camera, np.ndarray):
         K, dist, f = np.asarray(camera, float), np.zeros(5), float(camera[0, 0])
@@ -81,9 +96,13 @@ def frame_rotations(times, images, camera, min_inliers: int = 15, max_features: 
         x2 = cv2.undistortPoints(uv2.reshape(-1, 1, 2), K, dist).reshape(-1, 2)
         b1, b2 = _bearings(x1), _bearings(x2)
         # points in the second camera's frame: p2 = R p1 + t (R = C_c2_c1); the camera's motion is R^T
-        R, inl = _rotation_ransac(b1, b2, 3 * thr, rng)
-        method = "rotation"
-        if R is not None:
+        if plane_normal_cam is not None:
+            R, inl = _plane_rotation(x1, x2, np.asarray(plane_normal_cam, float), 2 * thr)
+            method = "homography"
+        else:
+            R, inl = _rotation_ransac(b1, b2, 3 * thr, rng)
+            method = "rotation"
+        if R is not None and plane_normal_cam is None:
             # parallax left after removing the best rotation: worth an essential matrix?
             resid = np.linalg.norm(b2 - b1 @ R.T, axis=1)
             if np.median(resid) * f > min_parallax_px:
