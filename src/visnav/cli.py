@@ -866,8 +866,9 @@ def record_(
 
 @app.command("replay")
 def replay_(
-    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, "
-                                    "PX4 .ulg, ArduPilot DataFlash .bin, MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, an "
+                                    "EuRoC folder, a folder of geotagged photos, PX4 .ulg, ArduPilot DataFlash .bin, "
+                                    "MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
     navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
@@ -956,7 +957,7 @@ def replay_(
 # ------------------------------------------------------------------ check (issue 29)
 @app.command("check")
 def check_(
-    recording: str = typer.Argument(..., help="recording folder, EuRoC folder, .bin, .ulg or ROS bag"),
+    recording: str = typer.Argument(..., help="recording folder, EuRoC folder, .ulg, .bin, .tlog or ROS bag"),
     json_: bool = typer.Option(False, "--json", help="print check.json on stdout"),
     out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
                                       "(default runs/check-<name>)"),

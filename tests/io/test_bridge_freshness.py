@@ -15,7 +15,7 @@ from visnav.io.bridge_freshness import (DEFAULT_BUDGETS, Freshness, FreshnessCon
 from visnav.io.camera_source import Captured
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_messages import mavlink
-from visnav.measurements import AttitudeSample, BaroSample, GpsSample, ImuSample, NavEstimate
+from visnav.measurements import AttitudeSample, BaroSample, GpsSample, ImuSample, NavEstimate, RangeSample
 
 
 def _est(t=10.0, source="gps", P=None):
@@ -118,9 +118,12 @@ def _odo(sent):
 
 def test_imu_out_of_order_dropped_and_late_imu_inflates_then_stops_and_resumes():
     br, nav, sent, notes = _bridge()
-    for t in (100.00, 100.02, 100.04, 100.03, 100.04, 100.06):  # 100.03 overtaken, 100.04 repeated
+    for t in (100.00, 100.02, 100.04, 100.03, 100.01, 100.06):  # 100.03 and 100.01 overtaken
         br._consume(_imu(t))
     assert nav.imu_t == [100.00, 100.02, 100.04, 100.06] and br.counts["samples_out_of_order"] == 2
+    for sensor in ("laser", "sonar", "laser"):  # two range finders at one instant: both kept
+        br._consume(RangeSample(t=100.05, range=10.0, sensor=sensor))
+    assert nav.others == 3 and br.counts["samples_out_of_order"] == 2
     assert sum("ImuSample out of order" in n for n in notes) == 1
     br._consume(_gps(100.06))
     br._consume(_frame(100.07, 0))  # IMU 10 ms old

@@ -115,3 +115,17 @@ def test_damaged_tlogs_say_how_much_was_read(tmp_path):
     (tmp_path / "junk.tlog").write_bytes(b"\x00" * 100)
     r = CliRunner().invoke(app, ["replay", str(tmp_path / "junk.tlog"), "--navigator", "palace"])
     assert r.exit_code == 2 and "not a MAVLink telemetry log" in r.stderr
+
+
+def test_replay_help_names_the_formats_it_reads():
+    import re
+
+    from typer.testing import CliRunner
+
+    from visnav.cli import app
+
+    r = CliRunner().invoke(app, ["replay", "--help"], env={"COLUMNS": "200"}, terminal_width=200)
+    text = " ".join(re.sub(r"[│╭╮╰╯─]", " ", r.output).split())
+    for fmt in (".ulg", "DataFlash .bin", "MAVLink .tlog", "ROS bag", "EuRoC folder", "geotagged photos",
+                "bridge log folder"):
+        assert fmt in text, fmt

@@ -341,11 +341,12 @@ class Bridge:
         if isinstance(item, NavRequest):
             return self._apply_request(item)
         if not hasattr(item, "capture_t"):  # a MAVLink measurement
-            kind, t = type(item), float(getattr(item, "t", np.nan))
-            if t <= self._last_sample_t.get(kind, -np.inf):  # late and overtaken, or repeated: never backwards
+            # one key per sensor (a laser and a sonar stream the same message type, stamps may be equal)
+            kind, t = (type(item), getattr(item, "sensor", None)), float(getattr(item, "t", np.nan))
+            if t < self._last_sample_t.get(kind, -np.inf):  # late and overtaken: never integrate backwards
                 self.counts["samples_out_of_order"] += 1
                 if self.counts["samples_out_of_order"] in (1, 10, 100, 1000):
-                    self.notify(f"{kind.__name__} out of order (t {t:.3f} s not after {self._last_sample_t[kind]:.3f}"
+                    self.notify(f"{kind[0].__name__} out of order (t {t:.3f} s before {self._last_sample_t[kind]:.3f}"
                                 f" s): dropped ({self.counts['samples_out_of_order']} so far)")
                 return
             self._last_sample_t[kind] = t

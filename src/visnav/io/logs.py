@@ -116,7 +116,8 @@ def _df_type(reader, name: str, notes: list, fmtu: dict | None = None) -> dict[s
     out = {}
     for i, (c, mul) in enumerate(zip(fmt.columns, fmt.msg_mults)):
         v = rec[c]
-        if mul is None and mult_ids and i < len(mult_ids) and c not in ("TimeUS", "TimeMS", "T") and v.dtype.kind in "iuf":
+        raw_units = mul is None and c not in ("TimeUS", "TimeMS", "T") and v.dtype.kind in "iuf"
+        if raw_units and mult_ids and i < len(mult_ids):
             mul = reader.mult_lookup.get(mult_ids[i])
             mul = None if mul in (None, 0.0, 1.0) else mul
         out[c] = v.astype(float) * mul if mul is not None else v
@@ -183,15 +184,17 @@ def read_dataflash(path: Path) -> Recording:
         raise RecordingError(f"{path}: {imu_name} messages have neither TimeUS nor TimeMS") from None
     ts = lambda d: _df_time(d) - t0  # noqa: E731
     streams: dict[str, dict] = {}
-    streams["imu"] = sorted_stream({"t_s": ts(imu), **{f"a{a}_mps2": imu[f"Acc{a.upper()}"].astype(float) for a in "xyz"},
-                              **{f"g{a}_radps": imu[f"Gyr{a.upper()}"].astype(float) for a in "xyz"}}, notes, imu_name)
+    streams["imu"] = sorted_stream({"t_s": ts(imu),
+                                    **{f"a{a}_mps2": imu[f"Acc{a.upper()}"].astype(float) for a in "xyz"},
+                                    **{f"g{a}_radps": imu[f"Gyr{a.upper()}"].astype(float) for a in "xyz"}},
+                                   notes, imu_name)
     att_name = next((n for n in ("ATT", "AHR2", "XKF1", "NKF1", "EKF1") if get[n] is not None), None)
     if att_name is not None:
         a = first(get[att_name])
         streams["attitude"] = sorted_stream({"t_s": ts(a), "roll_rad": np.radians(a["Roll"].astype(float)),
-                                       "pitch_rad": np.radians(a["Pitch"].astype(float)),
-                                       "yaw_rad": np.angle(np.exp(1j * np.radians(a["Yaw"].astype(float))))},
-                                      notes, att_name)
+                                             "pitch_rad": np.radians(a["Pitch"].astype(float)),
+                                             "yaw_rad": np.angle(np.exp(1j * np.radians(a["Yaw"].astype(float))))},
+                                            notes, att_name)
         if att_name != "ATT":
             notes.append(f"no ATT messages: the attitude is {att_name}'s")
     if get["BARO"] is not None:
@@ -206,7 +209,7 @@ def read_dataflash(path: Path) -> Recording:
                 crs = np.radians(g["GCrs"].astype(float))
                 vel = np.column_stack([g["Spd"] * np.cos(crs), g["Spd"] * np.sin(crs), g["VZ"]]).astype(float)
             streams["gps"] = sorted_stream(gps_stream(ts(g), g["Lat"].astype(float), g["Lng"].astype(float),
-                                                g["Alt"].astype(float), vel), notes, "GPS")
+                                                      g["Alt"].astype(float), vel), notes, "GPS")
         else:
             notes.append("GPS: no 3D fix in the log")
     r = first(get["RFND"])
@@ -218,7 +221,7 @@ def read_dataflash(path: Path) -> Recording:
             dist = dist * 0.01  # an integer distance without a multiplier: centimetres (older logs)
         orient = r.get("Orient", r.get("Orient1", np.full(len(dist), 25)))
         streams["range"] = sorted_stream({"t_s": ts(r), "range_m": np.where(dist > 0, dist, np.nan),
-                                    "sensor": np.where(orient == 25, "sonar", "laser")}, notes, "RFND")
+                                          "sensor": np.where(orient == 25, "sonar", "laser")}, notes, "RFND")
     mag_name = "MAG" if get["MAG"] is not None else "MAG2" if get["MAG2"] is not None else None
     if mag_name is not None:
         m = first(get[mag_name])
@@ -391,27 +394,27 @@ def read_rosbag(path: Path) -> Recording:
     gyr = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for m in msgs])
     acc, gyr = acc @ _T_FLU_FRD, gyr @ _T_FLU_FRD  # FLU -> FRD (a diagonal, its own transpose)
     streams["imu"] = sorted_stream({"t_s": sec(ts), **{f"a{a}_mps2": acc[:, i] for i, a in enumerate("xyz")},
-                              **{f"g{a}_radps": gyr[:, i] for i, a in enumerate("xyz")}, "t_recv_s": sec(tr)},
-                             notes, "Imu")
+                                    **{f"g{a}_radps": gyr[:, i] for i, a in enumerate("xyz")}, "t_recv_s": sec(tr)},
+                                   notes, "Imu")
     q = np.array([[m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w] for m in msgs])
     qn = np.linalg.norm(q, axis=1)
     if np.all(qn > 0.5):  # orientation present (all zeros = 'not provided', REP 145)
         C = _T_NED_ENU @ Rotation.from_quat(q / qn[:, None]).as_matrix() @ _T_FLU_FRD
         e = dcm_to_euler(C)
-        streams["attitude"] = sorted_stream({"t_s": sec(ts), "roll_rad": e[:, 0], "pitch_rad": e[:, 1], "yaw_rad": e[:, 2],
-                                       "t_recv_s": sec(tr)}, notes, "Imu orientation")
+        streams["attitude"] = sorted_stream({"t_s": sec(ts), "roll_rad": e[:, 0], "pitch_rad": e[:, 1],
+                                             "yaw_rad": e[:, 2], "t_recv_s": sec(tr)}, notes, "Imu orientation")
     fix = [r for r in rows["sensor_msgs/msg/NavSatFix"] if r[2].status.status >= 0]
     if fix:
         tr, ts, msgs = zip(*fix)
         lla = np.array([[m.latitude, m.longitude, m.altitude] for m in msgs])
-        streams["gps"] = sorted_stream(gps_stream(sec(ts), lla[:, 0], lla[:, 1], lla[:, 2]) | {"t_recv_s": sec(tr)}, notes,
-                                 "NavSatFix")
+        streams["gps"] = sorted_stream(gps_stream(sec(ts), lla[:, 0], lla[:, 1], lla[:, 2]) | {"t_recv_s": sec(tr)},
+                                       notes, "NavSatFix")
     if rows["sensor_msgs/msg/Range"]:
         tr, ts, msgs = zip(*rows["sensor_msgs/msg/Range"])
         r = np.array([m.range if m.min_range <= m.range <= m.max_range else np.nan for m in msgs])
         sensor = np.array(["sonar" if m.radiation_type == 0 else "laser" for m in msgs])
-        streams["range"] = sorted_stream({"t_s": sec(ts), "range_m": r, "sensor": sensor, "t_recv_s": sec(tr)}, notes,
-                                   "Range")
+        streams["range"] = sorted_stream({"t_s": sec(ts), "range_m": r, "sensor": sensor, "t_recv_s": sec(tr)},
+                                         notes, "Range")
     images = None
     frames = rows["sensor_msgs/msg/Image"] or rows["sensor_msgs/msg/CompressedImage"]
     if frames:

@@ -142,14 +142,14 @@ def read_tlog(path: Path) -> Recording:
     mag = np.array([[m.xmag, m.ymag, m.zmag] for _, m in v], float) * (1.0 if f else 1e-3)  # milligauss
     streams: dict[str, dict] = {}
     streams["imu"] = sorted_stream({"t_s": t_imu - t0, **{f"a{a}_mps2": acc[:, i] for i, a in enumerate("xyz")},
-                              **{f"g{a}_radps": gyr[:, i] for i, a in enumerate("xyz")}}, notes, imu_name)
+                                    **{f"g{a}_radps": gyr[:, i] for i, a in enumerate("xyz")}}, notes, imu_name)
     if np.any(np.abs(mag) > 0):
         streams["mag_field"] = sorted_stream(mag_field_stream(t_imu - t0, mag), notes, imu_name + " magnetometer")
     if rows["ATTITUDE"]:
         v = rows["ATTITUDE"]
         e = np.array([[m.roll, m.pitch, m.yaw] for _, m in v], float)
         streams["attitude"] = sorted_stream({"t_s": times(v) - t0, "roll_rad": e[:, 0], "pitch_rad": e[:, 1],
-                                       "yaw_rad": np.angle(np.exp(1j * e[:, 2]))}, notes, "ATTITUDE")
+                                             "yaw_rad": np.angle(np.exp(1j * e[:, 2]))}, notes, "ATTITUDE")
     if "attitude" in streams and "mag_field" in streams:
         mf = streams["mag_field"]
         streams["magnetometer"] = heading_stream(mf["t_s"], np.column_stack([mf["mx_ga"], mf["my_ga"], mf["mz_ga"]]),
@@ -178,7 +178,8 @@ def read_tlog(path: Path) -> Recording:
         d = np.array([[m.current_distance, m.min_distance, m.max_distance, m.orientation] for _, m in v], float)
         ok = (d[:, 0] >= d[:, 1]) & (d[:, 0] <= d[:, 2]) & (d[:, 0] > 0)
         streams["range"] = sorted_stream({"t_s": times(v) - t0, "range_m": np.where(ok, d[:, 0] * 0.01, np.nan),
-                                    "sensor": np.where(d[:, 3] == 25, "sonar", "laser")}, notes, "DISTANCE_SENSOR")
+                                          "sensor": np.where(d[:, 3] == 25, "sonar", "laser")}, notes,
+                                         "DISTANCE_SENSOR")
     fl = [(t, m) for t, m in rows["OPTICAL_FLOW_RAD"] if m.integration_time_us > 0]
     if fl:
         dt = np.array([m.integration_time_us for _, m in fl], float) * 1e-6
@@ -187,13 +188,13 @@ def read_tlog(path: Path) -> Recording:
         q = np.array([m.quality for _, m in fl], float)
         dist = np.array([m.distance if m.distance > 0 else np.nan for _, m in fl], float)
         streams["optical_flow"] = sorted_stream(flow_stream(times(fl) - t0, np.column_stack([f, q]), dist), notes,
-                                          "OPTICAL_FLOW_RAD")
+                                                "OPTICAL_FLOW_RAD")
     if rows["CAMERA_FEEDBACK"]:  # its time_usec is UTC: the arrival time is used
         v = rows["CAMERA_FEEDBACK"]
         lla = np.array([[m.lat * 1e-7, m.lng * 1e-7, m.alt_msl] for _, m in v], float)
         streams["camera_trigger"] = sorted_stream(camera_stream(np.array([t + offset for t, _ in v]) - t0,
-                                                           np.array([m.img_idx for _, m in v]), lla), notes,
-                                            "CAMERA_FEEDBACK")
+                                                                 np.array([m.img_idx for _, m in v]), lla), notes,
+                                                  "CAMERA_FEEDBACK")
     cam = p.parent / "camera.yaml"
     rec = Recording(p, read_camera_yaml(cam) if cam.is_file() else None, streams)
     s = streams["imu"]["t_s"]

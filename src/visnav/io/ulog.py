@@ -192,7 +192,8 @@ def read_ulog(path) -> ULogData:
     if damaged:
         secs = max(0.0, (u.last_timestamp - u.start_timestamp) * 1e-6)
         cut = at is not None and _cut_at_end(p, at, size)
-        what = "truncated (it ends inside a message)" if cut else f"corrupt from byte {at}" if at else "corrupt in places"
+        what = ("truncated (it ends inside a message)" if cut else f"corrupt from byte {at}" if at
+                else "corrupt in places")
         notes.append(f"the file is {what}: read up to the damage, {size} bytes, {secs:.1f} s of data, "
                      f"{n_topics} topics")
     topics = {d.name: d for d in u.data_list if d.multi_id == 0}
@@ -393,7 +394,8 @@ def _events(out: ULogData, topics: dict, notes: list[str], sec) -> None:
         except ValueError as exc:
             notes.append(f"{name}: no optical flow from it ({exc})")
             continue
-        out.flow_t, out.flow, out.flow_dist, out.flow_source = sec(tf), v[:, :5], np.where(v[:, 5] > 0, v[:, 5], np.nan), name
+        out.flow_t, out.flow, out.flow_source = sec(tf), v[:, :5], name
+        out.flow_dist = np.where(v[:, 5] > 0, v[:, 5], np.nan)
         break
     for name in ("camera_capture", "camera_trigger"):
         d = topics[name].data if name in topics else None
