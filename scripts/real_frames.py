@@ -46,7 +46,8 @@ def markdown(out: dict) -> str:
     p = out["pad"]
     lines += ["", f"pad detector: {p['photos']} photos, {p['false_poses']} false poses, reasons {p['reasons']}, "
               f"rings per photo median {p['rings_median']:.0f} max {p['rings_max']}; per frame (640x480) "
-              f"mean {p['ms_mean']:.1f} ms, median {p['ms_median']:.1f} ms, max {p['ms_max']:.1f} ms",
+              f"mean {p['ms_mean']:.1f} ms, median {p['ms_median']:.1f} ms, max {p['ms_max']:.1f} ms wall; CPU mean "
+              f"{p['cpu_ms_mean']:.1f} ms, median {p['cpu_ms_median']:.1f} ms, max {p['cpu_ms_max']:.1f} ms",
               f"2x2 mosaics of the photos with rings: {out['pad_tiles']}"]
     return "\n".join(lines)
 

@@ -222,23 +222,25 @@ def pad_on_photos(paths, detector=None, size: tuple[int, int] = (640, 480)) -> d
     are resized to ``size`` when they differ; ``detector`` defaults to ``PadDetector(PadLayout(),
     K)`` with f = the image width (a 53° field of view, a typical downward camera). Returns the
     number of photos, false poses (with the photo names), rings found per photo, the reasons the
-    detector gave, and the per-frame time of ``detect`` (mean, median, max, in ms)."""
+    detector gave, and the per-frame time of ``detect`` (mean, median, max, in ms; wall clock ``ms_*``
+    and this process's CPU time ``cpu_ms_*``, all threads: on a loaded machine the wall clock waits)."""
     from visnav.geometry.camera import PinholeCamera
     from visnav.geometry.pad import PadLayout
     from visnav.vision.pad import PadDetector
 
     w, h = size
     det = detector or PadDetector(PadLayout(), PinholeCamera.ideal(w, h, float(w)).K)
-    times, rings, reasons, false = [], [], {}, []
+    times, cpu, rings, reasons, false = [], [], [], {}, []
     for p in paths:
         img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
         if img is None:
             raise ValueError(f"{p}: not a readable image")
         if img.shape != (h, w):
             img = cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         d = det.detect(img)
         times.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
         rings.append(len(d.rings))
         if d.pose is not None:
             false.append(Path(p).name)
@@ -252,7 +254,10 @@ def pad_on_photos(paths, detector=None, size: tuple[int, int] = (640, 480)) -> d
                 photos_with_3_rings=int(np.sum(r >= 3)),
                 ms_mean=float(t.mean()) if t.size else float("nan"),
                 ms_median=float(np.median(t)) if t.size else float("nan"),
-                ms_max=float(t.max()) if t.size else float("nan"))
+                ms_max=float(t.max()) if t.size else float("nan"),
+                cpu_ms_mean=float(np.mean(cpu) * 1e3) if cpu else float("nan"),
+                cpu_ms_median=float(np.median(cpu) * 1e3) if cpu else float("nan"),
+                cpu_ms_max=float(np.max(cpu) * 1e3) if cpu else float("nan"))
 
 
 def pad_on_tiles(paths, detector=None, per_tile: int = 4, limit: int = 300, size: tuple[int, int] = (640, 480)) -> dict:
