@@ -445,6 +445,9 @@ def metrics(
     if json_:
         _print_json(m)
         return
+    from visnav.analysis.outcome import verdict_line
+
+    console.print(escape(verdict_line(m)), style="bold", soft_wrap=True)
     table = _metrics_table(f"metrics from {run_dir}/log.h5", m, ">value")
     for k, v in m.items():
         table.add_row(k, escape(_fmt(v)))

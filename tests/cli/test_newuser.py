@@ -185,6 +185,7 @@ def test_no_vortex_ring_approach_in_table_and_json_and_metrics_has_ate(segment_r
     again = json.loads(r.stdout)
     assert again["vrs_margin_min_mps"] == "no vortex-ring approach"
     assert again["ate_rmse_m"] == pytest.approx(m["ate_rmse_m"], rel=1e-9)
+    assert _invoke("metrics", d).stdout.startswith("outcome: safe")  # the table opens with the verdict too
 
 
 def test_the_summary_opens_with_the_verdict(segment_run):
