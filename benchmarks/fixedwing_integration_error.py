@@ -12,15 +12,21 @@ import math
 
 import numpy as np
 
-from visnav.vehicles.fixedwing import FixedWingModel, _derivatives_fast, default_trim
+from visnav.measurements import Controls
+from visnav.vehicles.fixedwing import FixedWingModel, default_trim, derivatives
 
 
 def main(T: float = 30.0) -> None:
     p, tr = default_trim(17.0)
     m = FixedWingModel.from_trim(p, tr, np.zeros(3), 0.3)
-    k, f = m._k, _derivatives_fast
-    u0 = m._clipped(tr.controls)
-    w = (2.0, -1.5, 0.2)
+    u0 = m._clip(tr.controls)
+    u0 = (u0.aileron, u0.elevator, u0.rudder, u0.throttle)
+    w = np.array([2.0, -1.5, 0.2])
+
+    def f(_k, x, uc, wind):  # the model's one derivative function (eq. 3.14-3.17), as a list
+        return derivatives(p, np.asarray(x, float), Controls(*uc), wind)[0].tolist()
+
+    k = None
 
     def ctrl(t):  # held over each 0.02 s control period, as the autopilot does
         tc = math.floor(t / 0.02 + 1e-9) * 0.02

@@ -350,6 +350,8 @@ def margins(
     identify_altitude: float = typer.Option(12.0, help="height \\[m] of the identification sweeps (on GPS)"),
     seed: int = typer.Option(1),
     seeds: int = typer.Option(1, help="seeds per sweep, merged (weighted by coherence)"),
+    ident_seeds: Optional[int] = typer.Option(None, help="seeds of the identification sweeps (default max(seeds, 4))"),
+    min_delay_confidence: float = typer.Option(0.9, help="below it (P(|error| < 5 ms)) a delay is not compensated"),
     workers: int = typer.Option(2),
     set_: List[str] = typer.Option([], "--set", help="override a key for every run"),
     out: Optional[str] = typer.Option(None, help="output directory (default runs/margins-<time>)"),
@@ -372,6 +374,8 @@ def margins(
         alts, dels = numbers(altitudes, "--altitudes"), numbers(delays, "--delays")
         if not alts or not dels:
             raise ValueError("--altitudes and --delays need at least one value each")
+        if not 0 <= min_delay_confidence <= 1 or (ident_seeds is not None and ident_seeds < 1):
+            raise ValueError("--min-delay-confidence takes a value in [0, 1] and --ident-seeds a count >= 1")
         check_margins_scenario(scenario, list(set_))
         out_dir = prepare_out_dir(out or f"runs/margins-{_time.strftime('%Y%m%d-%H%M%S')}", force=force,
                                   clear=("margins.csv", "frf.npz"), kind="a margins folder")
@@ -383,7 +387,8 @@ def margins(
         frfs: dict = {}
         rows = margins_campaign(alts, dels, compensate=compensate, seed=seed, scenario=scenario, frf_sink=frfs,
                                 overrides=tuple(set_), workers=workers, laser_delay_s=laser_delay,
-                                identify_altitude_m=identify_altitude, seeds=seeds,
+                                identify_altitude_m=identify_altitude, seeds=seeds, ident_seeds=ident_seeds,
+                                min_delay_confidence=min_delay_confidence,
                                 progress=lambda *a, **k: prog.advance(task))
     cols = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",
             "longitudinal_pm_deg", "longitudinal_pm_wc_rps", "longitudinal_gm_db", "identified_imu_delay_s"]
@@ -496,7 +501,7 @@ def keys(
 
 @app.command()
 def ahrs(
-    log: str = typer.Argument(..., help="PX4 ULog file (.ulg)"),
+    log: str = typer.Argument(..., help="PX4 ULog (.ulg), or a recording / EuRoC folder / log with a reference attitude"),
     out: Optional[str] = typer.Option(None, "--out", help="output directory (default: runs/ahrs-<log name>)"),
     declination_deg: Optional[float] = typer.Option(
         None, "--declination-deg", help="magnetic declination \\[deg]; default: the log's EKF2_MAG_DECL, else 0"),
@@ -514,7 +519,7 @@ def ahrs(
         _fail(exc)
     for note in m["log_notes"]:
         err_console.print(f"[yellow]log:[/yellow] {escape(note)}", soft_wrap=True)
-    table = Table(title=f"AHRS vs PX4 vehicle_attitude ({Path(log).name})")
+    table = Table(title=f"AHRS vs {m['reference']} ({Path(log).name})")
     table.add_column("metric")
     table.add_column("value", justify="right")
     if m.get("log_truncated"):
@@ -522,8 +527,13 @@ def ahrs(
     table.add_row("magnetometer", m.get("magnetometer_source") or "NOT FOUND (yaw gyro-only)")
     for k in ("roll_rms_diff_deg", "pitch_rms_diff_deg", "yaw_rms_diff_deg", "gyro_only_yaw_rms_diff_deg",
               "declination_deg", "imu_samples", "imu_rate_hz", "ahrs_wall_s"):
-        gyro_only = k == "yaw_rms_diff_deg" and not m["magnetometer"]
-        table.add_row(k, _fmt(m[k]) + (" (gyro-only: no magnetometer)" if gyro_only else ""))
+        table.add_row(k, "null (not observable)" if m[k] is None else _fmt(m[k]))
+    for k in ("roll_mean_diff_deg", "roll_std_diff_deg", "pitch_mean_diff_deg", "pitch_std_diff_deg",
+              "reference_to_gyro_rotation_deg", "accel_minus_reference_gravity_mps2"):
+        if k in m:
+            table.add_row(k, _fmt(m[k]) if not isinstance(m[k], list) else str([round(x, 3) for x in m[k]]))
+    if m.get("yaw_unobservable_reason"):
+        table.add_row("yaw", escape(m["yaw_unobservable_reason"]))
     console.print(table)
     console.print(f"written: {out_dir / 'metrics.json'}, {out_dir / 'ahrs.png'}")
 
@@ -606,6 +616,23 @@ def _bridge_origin(text: Optional[str]):
         raise ValueError(f"--origin must be LAT_DEG,LON_DEG,ALT_M (AMSL), got {text!r} ({exc})") from None
 
 
+def _input_timeouts(items: list[str]):
+    from visnav.io.bridge_freshness import FreshnessConfig
+
+    cfg = FreshnessConfig()
+    for it in items:
+        k, _, v = it.partition("=")
+        try:
+            val = None if v.strip().lower() == "none" else float(v)
+            if val is not None and not 0.0 < val < 1e6:
+                raise ValueError
+            cfg = cfg.with_overrides(**{k.strip(): {"timeout_s": val}})
+        except ValueError as exc:
+            why = str(exc) if "unknown bridge input stream" in str(exc) else "seconds must be a positive number or none"
+            raise ValueError(f"--input-timeout {it!r}: {why}") from None
+    return cfg
+
+
 @app.command()
 def bridge(
     mavlink_url: str = typer.Option(..., "--mavlink", help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or a "
@@ -635,6 +662,9 @@ def bridge(
                                 "autopilot side (the SIL)"),
     gps_sigma: float = typer.Option(2.5, "--gps-sigma", help="1-sigma \\[m] the navigator gives a position fix whose "
                                     "message carries no accuracy (GLOBAL_POSITION_INT; GPS_RAW_INT without h_acc)"),
+    input_timeout: List[str] = typer.Option([], "--input-timeout", help="STREAM=SECONDS (imu, gps, height, "
+                                            "camera; 'none': never): no estimate is sent while that input is older "
+                                            "(defaults imu=1 camera=10, docs/autopilots.md)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
     import time
@@ -661,6 +691,15 @@ def bridge(
     if not 0.0 < gps_sigma < 1000.0:
         fail(f"--gps-sigma must be a positive number of metres, got {gps_sigma:g}")
     out_dir = Path(out or f"runs/bridge-{time.strftime('%Y%m%d-%H%M%S')}")
+    out_existed = out_dir.exists()
+    logf = None
+
+    def say(m: str) -> None:  # console, and bridge.log once the session is open
+        console.print(escape(m), soft_wrap=True)
+        if logf is not None:
+            logf.write(f"{time.strftime('%H:%M:%S')} {m}\n")
+            logf.flush()
+
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         (out_dir / ".write-test").touch()
@@ -669,16 +708,22 @@ def bridge(
         fail(f"log folder {out_dir} is not writable ({exc.strerror})")
     link = src = None
     try:
-        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), frame_log=out_dir / "frames" if log_frames else None,
+        cfg = BridgeConfig(output=output, origin=_bridge_origin(origin), freshness=_input_timeouts(input_timeout), frame_log=out_dir / "frames" if log_frames else None,
                            send_health=health, gps_sigma_m=gps_sigma, frame_id=mavlink.MAV_FRAME_LOCAL_FRD if frame == "frd" else mavlink.MAV_FRAME_LOCAL_NED)
         offset = read_time_offset(camera_yaml)
-        link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=lambda m: console.print(m))
+        link = MavlinkLink(mavlink_url, baud=baud, tlog=out_dir / "bridge.tlog", notify=say)
         built = build_navigator(navigator, map_, set_, recorder=navlog.record)
         src = open_source(camera, fps=fps or built.camera_hz, time_offset_s=offset)
     except (MavlinkLinkError, CameraSourceError, ScenarioError, FileNotFoundError, ValueError) as exc:
         if link is not None:
             link.close()
+            tlog = out_dir / "bridge.tlog"
+            if tlog.is_file() and tlog.stat().st_size == 0:
+                tlog.unlink()  # a session that did not start leaves no empty tlog behind
+        if not out_existed and out_dir.is_dir() and not any(out_dir.iterdir()):
+            out_dir.rmdir()  # nothing left behind by a session that did not start
         fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    logf = open(out_dir / "bridge.log", "a")
     console.print(f"bridge: {built.scenario} navigator, {mavlink_url} -> {output}, camera {camera} "
                   f"({fps or built.camera_hz:g} Hz); log {out_dir}")
     rec = None
@@ -690,7 +735,7 @@ def bridge(
             fail(f"cannot write the recording in {out_dir / 'recording'}: {exc}")
         nav = rec.navigator
     with Live(console=console, transient=False, auto_refresh=False) as live:
-        br = Bridge(link, src, nav, cfg, record=navlog.record, notify=lambda m: live.console.print(m),
+        br = Bridge(link, src, nav, cfg, record=navlog.record, notify=say,
                     on_status=lambda s: live.update(status_line(s), refresh=True))
         try:
             metrics = br.run(duration_s=duration)
@@ -700,6 +745,8 @@ def bridge(
         finally:
             link.close()
             src.close()
+    if not console.is_terminal:
+        console.line()  # Live leaves its last status line open off a terminal: the summary goes on its own line
     try:
         if rec is not None:
             rec.close()
@@ -708,11 +755,12 @@ def bridge(
         pass
     br.write_metrics(out_dir / "metrics.json")
     lat = metrics["latency_capture_to_send_ms"]
-    console.print(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
+    say(f"sent {metrics.get('estimates_out', 0)} estimates; capture-to-send latency median "
                   f"{lat['median']:.1f} ms, p95 {lat['p95']:.1f} ms; reset_counter {metrics['reset_counter']}; "
                   f"written {out_dir / 'metrics.json'}, {out_dir / 'bridge.tlog'}"
                   + (f", {out_dir / 'recording'} (visnav replay {out_dir / 'recording'} --navigator {built.name})"
                      if rec is not None else ""))
+    logf.close()
 
 
 @app.command("sil-autopilot")
@@ -820,8 +868,9 @@ def record_(
 
 @app.command("replay")
 def replay_(
-    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
-                                    "ROS bag"),
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, an "
+                                    "EuRoC folder, a folder of geotagged photos, PX4 .ulg, ArduPilot DataFlash .bin, "
+                                    "MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
     navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
@@ -833,8 +882,13 @@ def replay_(
                                               "real flight; the fixes stay the reference when there is no truth.csv)"),
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (the files of an earlier run "
                                "there are removed first)"),
+    no_check: bool = typer.Option(False, "--no-check", help="skip `visnav check` (replay even with problems)"),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="a recording CSV cut while written (a "
                                          "short last row): replay the rows before it"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock (needs "
+                                         "--time-offset auto or seconds: t_imu = t_frame + offset)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
 ) -> None:
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
@@ -860,6 +914,22 @@ def replay_(
         if not (rate > 0):
             raise RecordingError(f"--rate must be > 0 Hz, got {rate}")
         rec = open_recording(recording, allow_truncated)
+        if rec.summary:  # a log: what was read, to the end or to the damage
+            err.print(f"log: {escape(rec.summary)}", soft_wrap=True)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            if time_offset is None:
+                raise RecordingError("--frames on their own clock need --time-offset auto or seconds")
+            attach_frames(rec, frames, fps, camera_yaml)
+        if not no_check:  # issue 29: a recording whose conventions or calibration are wrong is refused
+            from visnav.analysis.check import run_check
+
+            with console.status(f"checking {escape(recording)}"):
+                problems = run_check(rec, max_frames=60).summary["problems"]
+            if problems:
+                raise RecordingError(f"{recording}: `visnav check` found {len(problems)} problem(s) "
+                                     "(replay anyway with --no-check):\n  " + "\n  ".join(problems))
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
         with console.status(f"replaying {escape(recording)} on {navigator}"):
@@ -884,6 +954,53 @@ def replay_(
         raise typer.Exit(130)
     if "error" in res.metrics:
         raise typer.Exit(1)
+
+
+# ------------------------------------------------------------------ check (issue 29)
+@app.command("check")
+def check_(
+    recording: str = typer.Argument(..., help="recording folder, EuRoC folder, .ulg, .bin, .tlog or ROS bag"),
+    json_: bool = typer.Option(False, "--json", help="print check.json on stdout"),
+    out: Optional[str] = typer.Option(None, "--out", help="write check.json and check.html here "
+                                      "(default runs/check-<name>)"),
+    max_frames: Optional[int] = typer.Option(None, help="use at most this many frames (the most rotating stretch)"),
+    frames: Optional[str] = typer.Option(None, "--frames", help="frame folder or video on its own clock "
+                                         "(replaces the recording's frames; the offset is searched over every lag)"),
+    fps: Optional[float] = typer.Option(None, "--fps", help="frame rate of --frames when the names are not stamps"),
+    camera_yaml: Optional[str] = typer.Option(None, "--camera-yaml", help="camera.yaml for --frames"),
+) -> None:
+    """Verify a recording's conventions and calibration from the flight itself (docs/check.md)."""
+    from visnav.analysis.check import run_check, write_check
+    from visnav.io.logs import open_recording
+    from visnav.io.recording import RecordingError
+
+    try:
+        rec = open_recording(recording)
+        if frames:
+            from visnav.io.own_frames import attach_frames
+
+            attach_frames(rec, frames, fps, camera_yaml)
+        with console.status(f"checking {escape(recording)}"):
+            res = run_check(rec, max_frames=max_frames)
+        out_dir = Path(out) if out else Path("runs") / f"check-{Path(recording).resolve().name}"
+        doc = write_check(res, out_dir, f"visnav check: {recording}")
+    except (RecordingError, ValueError) as exc:
+        _fail(exc)
+    except OSError as exc:
+        _fail(f"cannot write {out}: {exc.strerror or exc}")
+    if json_:
+        _print_json(doc)
+        return
+    table = Table(title=f"check of {escape(recording)}")
+    for c in ("check", "status", "measured", "expected"):
+        table.add_column(c)
+    colour = {"ok": "green", "warning": "yellow", "problem": "red", "not observable": "dim"}
+    for n, s, m, e in res.rows:
+        table.add_row(escape(n), f"[{colour[s]}]{s}[/{colour[s]}]", escape(str(m)), escape(str(e)))
+    console.print(table)
+    for p in res.summary["problems"]:
+        console.print(f"[red]problem:[/red] {escape(p)}", soft_wrap=True)
+    console.print(f"written: {out_dir / 'check.json'}, {out_dir / 'check.html'}")
 
 
 def main() -> None:  # pragma: no cover

@@ -91,3 +91,50 @@ def test_laser_attitude_inverts_the_range_to_flat_ground():
     est = laser_attitude(r, off, dep)
     # up to a constant (the height is taken from the record's mean)
     assert np.std((est - est.mean()) - (theta - theta.mean())) < np.radians(0.02)
+
+
+# ------------------------------------------------------------------ combining identifications (issue 30 item 5)
+def test_combine_delays_weighted_mean_and_birge_inflation():
+    from visnav.analysis.delay_id import combine_delays
+
+    # consistent estimates: the inverse-variance mean, sigma (Σ 1/σ²)^-½, no inflation below R = 1
+    c = combine_delays([0.090, 0.091, 0.0895], [0.001, 0.002, 0.001])
+    w = np.array([1e6, 0.25e6, 1e6])
+    assert c.delay_s == pytest.approx(np.sum(w * [0.090, 0.091, 0.0895]) / w.sum())
+    chi2 = np.sum(w * (np.array([0.090, 0.091, 0.0895]) - c.delay_s) ** 2)
+    assert c.birge_ratio == pytest.approx(math.sqrt(chi2 / 2))
+    assert c.std_s == pytest.approx(w.sum() ** -0.5 * max(1.0, c.birge_ratio))
+    assert c.n_used == 3 and c.n_rejected == 0
+    # seeds scattering 10x their formal sigma: the sigma grows by the Birge ratio (≈ the sample sd / √n)
+    d = np.array([0.080, 0.100, 0.085, 0.095])
+    c = combine_delays(d, [0.001] * 4)
+    assert c.delay_s == pytest.approx(d.mean())
+    assert c.std_s == pytest.approx(d.std(ddof=1) / 2)
+    assert c.confidence == pytest.approx(math.erf(0.005 / (math.sqrt(2) * c.std_s)))
+    assert not c.usable(0.9) and combine_delays([0.09] * 4, [0.001] * 4).usable(0.9)
+
+
+def test_combine_delays_drops_an_outlier_with_a_too_small_sigma():
+    from visnav.analysis.delay_id import combine_delays
+
+    # a laser sweep whose phase slope came from range noise: -133 ms "± 2 ms" among -8..-10 ms
+    c = combine_delays([-0.0083, -0.133, -0.0095, -0.0090, -0.0102], [0.0022] * 5)
+    assert c.n_rejected == 1 and c.n_used == 4
+    assert c.delay_s == pytest.approx(np.mean([-0.0083, -0.0095, -0.0090, -0.0102]))
+    # never the majority: two far apart groups keep the half nearer the weighted median
+    c = combine_delays([0.0, 0.0, 0.1, 0.1, 0.1], [0.001] * 5)
+    assert c.n_used >= 3 and c.delay_s == pytest.approx(0.1)
+
+
+def test_combine_delays_edge_cases():
+    from visnav.analysis.delay_id import combine_delays
+
+    c = combine_delays([math.nan, 0.05], [0.001, math.nan])  # nothing usable
+    assert math.isnan(c.delay_s) and c.confidence == 0.0 and c.n_used == 0 and not c.usable(0.0)
+    c = combine_delays([0.05], [0.01])  # one estimate: its own sigma, confidence erf(0.5/√2)
+    assert (c.delay_s, c.std_s, c.birge_ratio) == (0.05, 0.01, 1.0)
+    assert c.confidence == pytest.approx(math.erf(0.5 / math.sqrt(2)))
+    with pytest.raises(ValueError, match="one length"):
+        combine_delays([0.1, 0.2], [0.01])
+    with pytest.raises(ValueError, match="tolerance_s"):
+        combine_delays([0.1], [0.01], tolerance_s=0)

@@ -22,7 +22,7 @@ def _fake_sweeps(calls, fail_at=None):
     def fake_sweep(altitude_m, axis, source, imu_delay_s, attitude_delay_s, laser_delay_s=0.0,
                    laser_compensation_s=0.0, **kw):
         calls.append((altitude_m, axis, source, imu_delay_s, round(attitude_delay_s, 6),
-                      round(laser_compensation_s, 6), kw["sweep"] is mc.IDENT_SWEEP))
+                      round(laser_compensation_s, 6), kw["sweep"] is mc.IDENT_SWEEP, kw["seed"]))
         fail = altitude_m == fail_at and imu_delay_s > 0
         seen = math.nan if fail else imu_delay_s - cam + 0.001
         lseen = math.nan if fail or axis == "lateral" else laser_delay_s - cam + 0.001
@@ -42,6 +42,8 @@ def test_campaign_identifies_once_on_gps_then_compensates_both_delays(monkeypatc
     key = {(r["altitude_m"], r["delay_s"], r["compensated"]): r for r in rows}
     assert len(rows) == 2 * (1 + 2 * 2)  # per altitude: GPS + (late, compensated) per delay
     assert key[12.0, None, "gps"]["lateral_pm_deg"] == 45.0
+    assert key[12.0, None, "gps"]["lateral_pm_seeds_deg"] == "45.0"  # one seed: its PM, no spread
+    assert math.isnan(key[12.0, None, "gps"]["lateral_pm_seed_sd_deg"])
     # uncompensated: 90 ms of IMU and 10 ms of laser mismatch
     assert key[30.0, 0.1, False]["longitudinal_pm_deg"] == pytest.approx(45.0 - 300 * 0.1)
     for a in (12.0, 30.0):
@@ -51,21 +53,27 @@ def test_campaign_identifies_once_on_gps_then_compensates_both_delays(monkeypatc
         assert comp["lateral_pm_deg"] == pytest.approx(45.0 - 0.6) and not comp["notes"]
         # 0 ms IMU: the camera is the late one, the attitude looked up 9 ms earlier than the stamp
         assert key[a, 0.0, True]["identified_imu_delay_s"] == pytest.approx(-0.009)
-    assert (30.0, "lateral", "mpe", 0.1, 0.091, 0.011, False) in calls  # flown with both compensations
-    assert (30.0, "lateral", "mpe", 0.0, -0.009, 0.011, False) in calls
-    ident = [c for c in calls if c[-1]]
+    assert (30.0, "lateral", "mpe", 0.1, 0.091, 0.011, False, 1) in calls  # flown with both compensations
+    assert (30.0, "lateral", "mpe", 0.0, -0.009, 0.011, False, 1) in calls
+    ident = [c for c in calls if c[-2]]
     assert {c[:3] for c in ident} == {(12.0, ax, "gps") for ax in ("lateral", "longitudinal")}
-    assert len(ident) == 4  # identified once per delay, at 12 m, on GPS
+    assert len(ident) == 2 * 2 * 4  # identified once per delay, at 12 m, on GPS, with 4 seeds
+    assert {c[-1] for c in ident} == {1, 2, 3, 4} and {c[-1] for c in calls if not c[-2]} == {1}
     assert len(calls) == len(set(calls))  # no sweep flown twice
 
 
-def test_campaign_falls_back_to_the_true_delays(monkeypatch):
+def test_campaign_falls_back_to_no_compensation(monkeypatch):
     calls = []
     monkeypatch.setattr(mc, "sweep_run", _fake_sweeps(calls, fail_at=30.0))
     rows = margins_campaign([30.0], [0.1], compensate=True, identify_altitude_m=30.0)
     fallback = [r for r in rows if r["compensated"] is True][0]
-    assert math.isnan(fallback["identified_imu_delay_s"]) and "true delays" in fallback["notes"]
-    assert (30.0, "lateral", "mpe", 0.1, 0.1, 0.0, False) in calls  # the true delays (the camera's unknown)
+    late = [r for r in rows if r["compensated"] is False][0]
+    assert math.isnan(fallback["identified_imu_delay_s"]) and fallback["identified_imu_delay_confidence"] == 0.0
+    assert "IMU delay not compensated" in fallback["notes"] and "laser delay not compensated" in fallback["notes"]
+    # no compensation: the same sweeps as the late row (flown once), not the true delays (unknown in a real flight)
+    assert fallback["lateral_pm_deg"] == late["lateral_pm_deg"]
+    assert not [c for c in calls if c[2] == "mpe" and (c[4] != 0.0 or c[5] != 0.0)]
+    assert len(calls) == len(set(calls))
     with pytest.raises(ValueError, match="altitudes"):
         margins_campaign([], [0.1])
     with pytest.raises(ValueError, match="delays"):

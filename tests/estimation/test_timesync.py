@@ -6,7 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from visnav.estimation.timesync import estimate_offset, frame_rotation_angles, gyro_angles
+from visnav.estimation.timesync import (calibrate_camera_imu, estimate_offset, gyro_angles, gyro_rotvecs,
+                                        rotation_angle_deg)
+from visnav.vision.frame_rotation import frame_rotation_angles
 
 
 def _gyro(t):
@@ -64,3 +66,27 @@ def test_frame_rotation_from_rendered_pure_rotations():
     pairs, ang = frame_rotation_angles(np.arange(len(imgs)) * 0.2, imgs, K)
     assert pairs.shape == (4, 2)
     np.testing.assert_allclose(ang, truth[1:], atol=1.5e-3)
+
+
+@pytest.mark.parametrize("offset", [0.0, -0.03, 0.08])
+def test_hand_eye_rotation_offset_and_bias_recovered(offset):
+    """Camera rotations = R^T (gyro rotation at t_cam + offset - bias dt) + noise: R (10 deg off the identity), the
+    offset and the bias come back, the declared identity's error is the 10 deg, and the sigmas are honest."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 12.0, 0.005)
+    bias = np.array([0.01, -0.02, 0.005])
+    w = _gyro(t) + bias
+    tc = np.arange(0.5, 11.5, 0.05)
+    pairs = np.column_stack([tc[:-1], tc[1:]])
+    R = Rotation.from_rotvec(np.radians(10.0) * np.array([0.6, 0.0, 0.8])).as_matrix()
+    psi = gyro_rotvecs(t, w - bias, pairs, offset)
+    cam = psi @ R + rng.normal(0, 2e-4, psi.shape)  # R^T psi per row
+    cal = calibrate_camera_imu(t, w, pairs, cam, np.eye(3), max_offset_s=0.2)
+    assert cal.offset_s == pytest.approx(offset, abs=2e-3)
+    assert 0 < cal.offset_sigma_s < 3e-3
+    assert rotation_angle_deg(cal.R_imu_cam @ R.T) < 0.3
+    assert cal.rotation_error_deg == pytest.approx(10.0, abs=0.3)
+    assert 0 < cal.rotation_sigma_deg < 0.5
+    np.testing.assert_allclose(cal.gyro_bias, bias, atol=2e-3)

@@ -21,9 +21,7 @@ from visnav.guidance.pfcm import (
     max_path_speed,
     nz_max_for_mass,
 )
-from visnav.guidance.pfcm import _clip, heading_rotation  # the issue #19 reference below
 from visnav.measurements import NavEstimate
-from tests.guidance.test_hermite import _frame_at_reference  # frame_at before issue #19
 
 G = 9.81
 PHI, R_MAX, THETA = math.radians(15), math.radians(40), math.radians(15)
@@ -212,166 +210,13 @@ def test_bad_limits():
         PfcmGuidance(path, PfcmLimits(v_cruise=5.0), iterations=0)
 
 
-class _PfcmReference(PfcmGuidance):
-    """``PfcmGuidance`` before issue #19's scalar forms (``_row``, ``set_lateral_bias``, ``update_control_point``,
-    ``step``): the array expressions, kept as the reference the live code must equal bit for bit."""
-
-    def _row(self, l: float) -> np.ndarray:  # noqa: D401
-        """The table row (envelope2, envelope3, lateral curvature) at arc length l, interpolated."""
-        L = self.profile_table["l"]
-        j = min(max(int(L.searchsorted(l)) - 1, 0), len(L) - 2)
-        f = min(max((l - L[j]) / (L[j + 1] - L[j]), 0.0), 1.0)
-        return self._rows[j] * (1.0 - f) + self._rows[j + 1] * f
-
-
-    def set_lateral_bias(self, accel_ne: ArrayLike) -> None:
-        """The horizontal acceleration [m/s², N/E] the outer loop's integrators spend against the
-        wind; the roll it costs is taken off φ_max for v_targ2 (see ``step``)."""
-        a = np.asarray(accel_ne, float)[:2]
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"accel_ne must be finite, got {accel_ne!r}")
-        self.lateral_bias_ne = a
-
-    # -- eq. 4.6-4.10 ----------------------------------------------------------------------------
-    def update_control_point(self, p_heli: ArrayLike) -> tuple[int, float]:
-        """Advance (segment, s) by the local feedback of eq. 4.7-4.10."""
-        p = np.asarray(p_heli, float)
-        segs = self.path.segments
-        for _ in range(self.iterations):
-            while True:
-                A, B, C, D = segs[self.segment].coeffs
-                u = self.s
-                t = (3.0 * A * u + 2.0 * B) * u + C
-                nt = math.sqrt(t @ t)
-                e_f = float((((A * u + B) * u + C) * u + D - p) @ t) / nt  # eq. 4.7-4.8
-                s = u - e_f / nt  # eq. 4.10
-                if s > 1.0 and self.segment < len(segs) - 1:
-                    self.segment += 1  # next segment: the parameter restarts at 0 (§4.3.3 item 1)
-                    self.s = 0.0
-                    continue
-                break
-            self.s = min(max(float(s), 0.0), 1.0)
-        return self.segment, self.s
-
-    # -- v_targ1 (Fig. 4.5, eq. 4.19-4.20) -------------------------------------------------------
-    def step(self, t: float, nav: NavEstimate) -> PathReference:
-        """Trajectory-generator output for the navigation solution ``nav`` at time t."""
-        if self._t is not None and abs(t - self._t) < 1e-9 and self.last is not None:
-            return self.last
-        dt = 0.0 if self._t is None else max(t - self._t, 0.0)
-        self._t = t
-        pos = np.asarray(nav.position, float)
-        vel = np.asarray(nav.velocity, float)
-        psi = float(nav.attitude[2])
-        lim = self.limits
-        i, s = self.update_control_point(pos)
-        sg = self.path.segments[i]
-        p_cp, t_n, k_n = _frame_at_reference(sg, s)
-        tau = t_n / math.sqrt(t_n @ t_n)
-        l_now = self.path.arc_position(i, s)
-        l_total = self.path.length
-        l_left = max(l_total - l_now, 0.0)
-        C = heading_rotation(psi)
-        tau_b, k_b = C @ tau, C @ k_n  # eq. 4.24
-        # v_targ2 (eq. 4.21) with R_y^b = 1/k_y^b, and v_targ3 (eq. 4.23)
-        ky = float(k_b[1])
-        # roll headroom: the bank the wind correction adds in this turn's direction is not available
-        # for turning (the remedy §3.5 suggests when the roll input saturates, Fig. 3.8)
-        lim_phi = lim.phi_max
-        if self.roll_headroom:
-            bias = float(C[1, 0] * self.lateral_bias_ne[0] + C[1, 1] * self.lateral_bias_ne[1]) / G
-            lim_phi = max(lim.phi_max - max(math.copysign(1.0, ky) * bias, 0.0), 0.5 * lim.phi_max)
-            env_scale = math.sqrt(max(lim.phi_max - math.hypot(*self.lateral_bias_ne) / G, 0.5 * lim.phi_max)
-                                  / lim.phi_max)
-        else:
-            env_scale = 1.0
-        u_max = self._u_max(abs(ky), lim_phi)
-        v2 = u_max / tau_b[0] if tau_b[0] > 1e-3 else math.inf
-        v3 = math.inf
-        if tau[2] > 1e-9:  # eq. 4.23
-            gamma = math.atan2(tau[2], math.hypot(tau[0], tau[1]))
-            v3 = (lim.w_descent_steep if gamma >= lim.vrs_steep_angle else lim.w_descent_shallow) / tau[2]
-        u = max(float(vel @ tau), 0.0)
-        l_brake = min(l_now + u * self.brake_lead_s, l_total)  # braking lead: the pitch lag
-        if lim.anticipate:
-            env = self._row(l_brake)
-            v2 = min(v2, env_scale * float(env[0]) if env[0] < 1e5 else math.inf)
-            v3 = min(v3, float(env[1]) if env[1] < 1e5 else math.inf)
-        v1 = self._v_targ1(dt, self._v_brake(l_brake))
-        v = min(v1, v2, v3)
-        v = min(v, self.v_prev + lim.accel * dt)  # rises at most at Acc, also after a limit ends
-        finished = i == len(self.path) - 1 and s >= 1.0
-        if finished:
-            v, self.phase = 0.0, "end"
-        if dt > 0:  # d v_targ/dt, low-passed (v_brake follows the measured position)
-            a = _clip((v - self.v_prev) / dt, -2.0 * lim.accel, lim.accel)
-            self._accel += dt / (self.accel_tau + dt) * (a - self._accel)
-        accel = self._accel
-        self.v_prev = v
-        # heading (§4.3.3 item 3) and feed-forward (eq. 4.14, 4.24), u = along-path speed
-        horiz = math.hypot(t_n[0], t_n[1])
-        yaw = math.atan2(t_n[1], t_n[0]) if horiz > 1e-6 * math.sqrt(t_n @ t_n) else psi
-        d_psi = (yaw - psi + math.pi) % (2 * math.pi) - math.pi
-        # the curvature a channel lag ahead (roll, yaw); the roll's lateral acceleration u² k_y is
-        # rate-limited (a curvature step at a joint becomes a ramp)
-        def k_ahead(lead: float) -> float:
-            if lead <= 0:
-                return ky
-            return float(self._row(min(l_now + u * lead, l_total))[2])  # in the path's own frame there
-
-        a_ff = u * u * k_ahead(self.roll_lead_s)
-        if self.ff_jerk > 0 and dt > 0:
-            a_ff = _clip(a_ff, self._a_ff - self.ff_jerk * dt, self._a_ff + self.ff_jerk * dt)
-        self._a_ff = a_ff
-        # trimmed turn: tan φ = u²/(g R), body yaw rate r = ψ̇ cos φ (eq. 4.14 is the small-angle form)
-        phi_ff = math.atan(a_ff / G)
-        r_ff = u * k_ahead(self.yaw_lead_s) * math.cos(phi_ff)
-        self.last = PathReference(
-            t=t, position=p_cp, velocity=v * tau, yaw=yaw, tangent=tau, curvature=k_n, segment=i, s=s,
-            v_target=v, accel_target=accel, v_targ1=v1, v_targ2=v2, v_targ3=v3, phase=self.phase, heading_error=d_psi,
-            r_ff=r_ff, phi_ff=phi_ff, distance_to_end=l_left, arc_position=l_now, finished=finished,
-            source=getattr(nav, "source", "gps"))
-        return self.last
-
-
-
-def _same(a, b) -> bool:
-    """Equal to the bit (NaN equal to NaN), numpy arrays and scalars alike."""
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        a, b = np.asarray(a), np.asarray(b)
-        return a.shape == b.shape and a.tobytes() == b.tobytes()
-    return type(a) is type(b) and repr(a) == repr(b) if isinstance(a, str) else repr(float(a)) == repr(float(b))
-
-
-@pytest.mark.parametrize("headroom", [True, False])
-def test_step_equals_the_array_expressions_bit_for_bit(headroom):
-    """A noisy flight over a climbing helix and a straight, lateral biases set at random: every output field
-    of the live generator equals the reference's, and so do the control point and the table rows."""
+def test_profile_row_interpolates_the_table_and_clamps_at_its_ends():
+    """``_row`` is the linear interpolation of the look-ahead table (np.interp per column), held at the ends."""
     P, T = helix_waypoints((0, 30), 30.0, -math.pi / 2, 1.5 * math.pi, -20.0, -32.0, 3)
-    P = np.vstack([P, P[-1] + 40.0 * T[-1]])
-    T = np.vstack([T, T[-1]])
-    path = HermitePath.from_waypoints(P, T)
-    new, old = (cls(path, PfcmLimits(v_cruise=8.0), iterations=2, roll_headroom=headroom)
-                for cls in (PfcmGuidance, _PfcmReference))
+    g = PfcmGuidance(HermitePath.from_waypoints(P, T), PfcmLimits(v_cruise=8.0))
+    tab = g.profile_table
+    cols = [tab["envelope2"], tab["envelope3"], tab["lateral_curvature"]]
     rng = np.random.default_rng(7)
-    p = path.start.copy()
-    for k in range(5000):
-        t = 0.02 * k
-        v = (old.last.velocity if old.last is not None else np.zeros(3)) + rng.normal(0, 0.5, 3)
-        yaw = (old.last.yaw if old.last is not None else 0.0) + rng.normal(0, 0.1)
-        nav = _nav(t, p + rng.normal(0, 0.5, 3), v, yaw)
-        want, got = old.step(t, nav), new.step(t, nav)
-        for f in PathReference.__dataclass_fields__:
-            assert _same(getattr(got, f), getattr(want, f)), (k, f, getattr(got, f), getattr(want, f))
-        if want.finished:
-            break
-        p = p + v * 0.02 if k % 50 else want.position  # drift off the path, back on it now and then
-        if rng.uniform() < 0.3:
-            b = rng.normal(0, 0.5, 2)
-            old.set_lateral_bias(b)
-            new.set_lateral_bias(b)
-    assert k > 1000
-    for l in [*rng.uniform(-5, path.length + 5, 500).tolist(), 0.0, path.length, -math.inf, math.inf, math.nan]:
-        assert _same(np.array(new._row(l)), old._row(l))
-    with pytest.raises(ValueError):
-        new.set_lateral_bias([0.0, math.nan])
+    for l in [*rng.uniform(-5, g.path.length + 5, 200).tolist(), 0.0, g.path.length]:
+        want = [np.interp(l, tab["l"], c) for c in cols]
+        np.testing.assert_allclose(g._row(l), want, rtol=1e-12, atol=1e-12)

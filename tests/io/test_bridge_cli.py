@@ -2,6 +2,7 @@
 live run against the SIL stand-in on 127.0.0.1 writes metrics.json with the issue's keys and a tlog."""
 
 import json
+import re
 
 import cv2
 import numpy as np
@@ -66,6 +67,10 @@ def test_bridge_cli_live_run_writes_metrics(tmp_path):
     finally:
         sil.stop()
     assert r.exit_code == 0, r.output
+    lines = _lines(r.output)  # off a terminal: the live status line and the summary are separate lines
+    assert lines[-1].startswith("sent ") and not any(re.search(r"frames \d+sent", ln) for ln in lines), r.output
+    log = (tmp_path / "log" / "bridge.log").read_text()  # what the console said, also in the log folder
+    assert "seen on udpin" in log and "sent " in log.splitlines()[-1]
     m = json.loads((tmp_path / "log" / "metrics.json").read_text())
     for key in ("link_ok", "rate_in_hz", "rate_out_hz", "latency_capture_to_send_ms", "timesync_offset_ms",
                 "timesync_rtt_ms", "reset_counter"):

@@ -163,7 +163,7 @@ def test_a_log_without_magnetometer_says_so_in_the_ahrs_table(tmp_path):
     assert r.exit_code == 0, r.output
     rows = {ln.split("│")[1].strip(): ln.split("│")[2].strip() for ln in r.stdout.splitlines() if ln.count("│") == 3}
     assert rows["magnetometer"].startswith("NOT FOUND")
-    assert "gyro-only" in rows["yaw_rms_diff_deg"]
+    assert rows["yaw_rms_diff_deg"] == "null (not observable)"  # issue 28: yaw null without a magnetometer
 
 
 @needs_log

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from visnav.guidance.hermite import HermitePath
-from visnav.mission.witas import fit_loop, loop_waypoints
+from visnav.mission.witas import loop_waypoints
+from visnav.world.witas_map import fit_loop
 from visnav.scenarios.config_witas import WitasPathConfig
 
 

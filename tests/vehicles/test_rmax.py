@@ -252,27 +252,33 @@ def test_other_step_sizes_are_rediscretised():
     np.testing.assert_allclose(a.state.position, b.state.position, atol=1e-6)
 
 
-def test_scalar_rk4_equals_the_numpy_derivative_bit_for_bit():
-    """The 100 Hz path (``_deriv_fast`` on tuples) against RK4 on the numpy ``_deriv`` (eq. 3.9 as
-    written), step by step with moving commands in gusty wind: the same operations in the same order."""
+def test_translational_derivative_is_eq_3_9_component_by_component():
+    """``_deriv`` (eq. 3.9 in matrix form) against the thesis' component form, written out here, at random
+    states, attitudes and winds: u' = X_u u_a - q w + r v - g sin(theta), v' = Y_v v_a - r u + p w
+    + g cos(theta) sin(phi), w' = Z_w (w_a - w_yacs) - g (1 + dAz) - p v + q u + g cos(theta) cos(phi), with
+    (u_a, v_a, w_a) the air-relative body velocity; position rate C_bn v; psi' of eq. 3.7."""
     model = RmaxModel(position=(0, 0, -30), yaw=2.0)
+    P = model.params
     rng = np.random.default_rng(7)
-    for _ in range(300):
-        cmd = YacsCommand(0.0, *rng.normal(0.0, 80.0, 4))
+    for _ in range(200):
+        y = rng.normal(0.0, 3.0, 8)
+        phi, theta, p, q, r, az = *rng.normal(0, 0.3, 2), *rng.normal(0, 0.5, 3), rng.normal(0, 0.1)
         wind = rng.normal(0.0, 3.0, 3)
-        Ad, Bd, _, _, Ah, Bh = model._matrices(DT)
-        u, x0 = model._saturate(cmd), model._x
-        a0, ah, a1 = model._attitudes(x0, Ah @ x0 + Bh @ u, Ad @ x0 + Bd @ u)
-        y = np.array(model._y)
-        k1, _ = model._deriv(y, a0, wind)
-        k2, _ = model._deriv(y + 0.5 * DT * k1, ah, wind)
-        k3, _ = model._deriv(y + 0.5 * DT * k2, ah, wind)
-        k4, _ = model._deriv(y + DT * k3, a1, wind)
-        want = y + DT * (k1 + 2 * k2 + 2 * k3 + k4) / 6.0
-        s = model.step(cmd, DT, Environment(wind))
-        np.testing.assert_array_equal(model._y, want)
-        np.testing.assert_allclose(s.euler[:2], a1[:2], rtol=0, atol=1e-15)
-        np.testing.assert_allclose(s.specific_force, model._deriv(want, a1, wind)[1], rtol=0, atol=1e-15)
+        d, f = model._deriv(y, (phi, theta, p, q, r, az), wind)
+        cf, sf, ct, st, cp, sp = np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta), np.cos(y[6]), np.sin(y[6])
+        Rx = np.array([[1, 0, 0], [0, cf, -sf], [0, sf, cf]])
+        Ry = np.array([[ct, 0, st], [0, 1, 0], [-st, 0, ct]])
+        Rz = np.array([[cp, -sp, 0], [sp, cp, 0], [0, 0, 1]])
+        C = Rz @ Ry @ Rx  # body -> NED, yaw-pitch-roll
+        ua, va, wa = y[0:3] - C.T @ wind
+        u, v, w = y[0:3]
+        want = [P.Xu * ua - q * w + r * v - P.g * st,
+                P.Yv * va - r * u + p * w + P.g * ct * sf,
+                P.Zw * (wa - y[7]) - P.g * (1 + az) - p * v + q * u + P.g * ct * cf,
+                *(C @ y[0:3]), (q * sf + r * cf) / ct, -P.g * az]
+        np.testing.assert_allclose(d, want, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(f, [P.Xu * ua, P.Yv * va, P.Zw * (wa - y[7]) - P.g * (1 + az)], rtol=1e-12,
+                                   atol=1e-12)
 
 
 def test_the_discretisation_is_computed_once_per_step_size_and_shared_read_only():

@@ -181,3 +181,64 @@ def identify_laser_delays(log, focal_px: float, principal_point: tuple[float, fl
     out["laser_vs_camera"] = identify_delay_series(tc, cam, tl, las, f_lo, min(fmax, 0.45 / np.median(np.diff(tc))),
                                                    **kw)
     return out
+
+
+@dataclass(frozen=True)
+class CombinedDelay:
+    """Several identifications of one delay (seeds, axes) combined (``combine_delays``)."""
+
+    delay_s: float  # weighted mean of the estimates kept (NaN: none usable)
+    std_s: float  # its 1-sigma: the formal one inflated by the Birge ratio when the estimates disagree
+    n_used: int  # estimates kept
+    n_rejected: int  # finite estimates dropped as outliers
+    birge_ratio: float  # sqrt(chi^2 / (n - 1)) of the kept estimates about the mean (1 when n = 1)
+    confidence: float  # P(|error| < tolerance) for a normal error of std_s: erf(tol / (sqrt(2) std))
+    tolerance_s: float
+
+    def usable(self, min_confidence: float) -> bool:
+        return bool(np.isfinite(self.delay_s) and self.confidence >= min_confidence)
+
+
+def combine_delays(delays, stds, tolerance_s: float = 0.005, outlier_sigma: float = 4.0) -> CombinedDelay:
+    """One delay from several identifications with their formal sigmas (e.g. the same sweep flown
+    with several seeds, and the lateral and longitudinal sweeps).
+
+    1. Estimates that are not finite or have no positive sigma are dropped.
+    2. Outliers: the robust centre is the weighted median m (weights 1/σ_i²) and the robust
+       spread s = 1.4826 · median|τ_i − m| (MAD); τ_i is dropped when |τ_i − m| > ``outlier_sigma``
+       · sqrt(σ_i² + s²) (a sweep whose coherent bins were not the sensor's: the phase slope of a
+       track jump or of range noise, with a formal sigma far too small). Never more than half.
+    3. τ = Σ τ_i/σ_i² / Σ 1/σ_i² over the kept ones, σ_f = (Σ 1/σ_i²)^−½; the Birge ratio
+       R = sqrt(χ²/(n − 1)), χ² = Σ (τ_i − τ)²/σ_i², inflates it where the estimates scatter more
+       than their formal sigmas say: σ = σ_f · max(1, R) (the coherence-based sigma of one sweep
+       knows nothing of the seed-to-seed spread of the sweep itself).
+    4. confidence = erf(tol / (√2 σ)): the probability that the combined delay is within
+       ``tolerance_s`` of the truth.
+    """
+    d = np.asarray(delays, float).ravel()
+    s = np.asarray(stds, float).ravel()
+    if d.shape != s.shape:
+        raise ValueError(f"delays and stds must have one length, got {d.size} and {s.size}")
+    if not (np.isfinite(tolerance_s) and tolerance_s > 0):
+        raise ValueError(f"tolerance_s must be > 0, got {tolerance_s}")
+    ok = np.isfinite(d) & np.isfinite(s) & (s > 0)
+    d, s = d[ok], s[ok]
+    if d.size == 0:
+        return CombinedDelay(math.nan, math.nan, 0, 0, math.nan, 0.0, float(tolerance_s))
+    w = 1.0 / s**2
+    order = np.argsort(d)
+    cw = np.cumsum(w[order])
+    m = float(d[order][np.searchsorted(cw, 0.5 * cw[-1])])  # weighted median
+    mad = 1.4826 * float(np.median(np.abs(d - m)))
+    z = np.abs(d - m) / np.sqrt(s**2 + mad**2)
+    keep = z <= outlier_sigma
+    if keep.sum() < max(1, math.ceil(d.size / 2)):  # never reject the majority: keep the half nearest m
+        keep = z <= np.sort(z)[math.ceil(d.size / 2) - 1]
+    dk, wk = d[keep], w[keep]
+    tau = float(np.sum(wk * dk) / np.sum(wk))
+    sf = float(1.0 / np.sqrt(np.sum(wk)))
+    n = int(dk.size)
+    birge = float(np.sqrt(np.sum(wk * (dk - tau) ** 2) / (n - 1))) if n > 1 else 1.0
+    sigma = sf * max(1.0, birge)
+    conf = float(math.erf(tolerance_s / (math.sqrt(2.0) * sigma)))
+    return CombinedDelay(tau, sigma, n, int(d.size - n), birge, conf, float(tolerance_s))

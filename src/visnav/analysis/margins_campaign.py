@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from visnav.analysis.delay_id import identify_imu_delay, identify_laser_delays
+from visnav.analysis.delay_id import CombinedDelay, combine_delays, identify_imu_delay, identify_laser_delays
 from visnav.analysis.frequency import AXIS_INDEX, broken_loop_response, margins_from_frd
 
 
@@ -139,15 +139,16 @@ def merge_sweeps(results: list[dict], sweep: SweepSettings) -> dict:
     windows weigh), whose sum S gives the merged coherence S/(1 + S) (the information of the
     records adds); margins from the merged response; delays inverse-variance averaged. A seed
     whose sweep did not complete is named in the notes and left out."""
+    pm_seeds = [float(r["pm_deg"]) for r in results]
     if len(results) == 1:
-        return results[0]
+        return dict(results[0], pm_seeds=pm_seeds,
+                    **{f"{k}_estimates": _estimates(results, k) for k in ("delay_s", "laser_delay_s")})
     notes = [f"seed {i + 1}: {n}" for i, r in enumerate(results) for n in r["notes"]]
-    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, notes=notes)
+    out = dict(pm_deg=math.nan, w_gc=math.nan, gm_db=math.nan, w_pc=math.nan, notes=notes, pm_seeds=pm_seeds)
     for k in ("delay_s", "laser_delay_s"):
-        d = _combine_delays(*results, key=k)
-        s = np.array([r.get(k[:-2] + "_std_s", math.nan) for r in results], float)
-        ok = np.isfinite(s) & (s > 0) & np.isfinite([r.get(k, math.nan) for r in results])
-        out[k], out[k[:-2] + "_std_s"] = d, (float(1 / np.sqrt(np.sum(1 / s[ok] ** 2))) if ok.any() else math.nan)
+        out[f"{k}_estimates"] = est = _estimates(results, k)
+        c = combine_delays(*zip(*est)) if est else combine_delays([], [])
+        out[k], out[k[:-2] + "_std_s"] = c.delay_s, c.std_s
     il = np.array([r.get("imu_vs_laser_s", math.nan) for r in results], float)
     out["imu_vs_laser_s"] = float(np.nanmean(il)) if np.isfinite(il).any() else math.nan
     frfs = [r["frf"] for r in results if r.get("frf") is not None]
@@ -168,12 +169,22 @@ def merge_sweeps(results: list[dict], sweep: SweepSettings) -> dict:
     return out
 
 
-def _combine_delays(*runs: dict, key: str = "delay_s") -> float:
-    """Inverse-variance mean of the finite delay estimates of several sweeps (NaN if none)."""
-    d = np.array([r.get(key, math.nan) for r in runs], float)
-    s = np.array([r.get(key[:-2] + "_std_s", math.nan) for r in runs], float)
-    ok = np.isfinite(d) & np.isfinite(s) & (s > 0)
-    return float(np.sum(d[ok] / s[ok] ** 2) / np.sum(1 / s[ok] ** 2)) if ok.any() else math.nan
+def _estimates(results: list[dict], key: str) -> list[tuple[float, float]]:
+    """(delay, sigma) of each sweep (each seed) of ``key`` ("delay_s", "laser_delay_s")."""
+    out = []
+    for r in results:
+        if f"{key}_estimates" in r:
+            out.extend(r[f"{key}_estimates"])
+        else:
+            out.append((float(r.get(key, math.nan)), float(r.get(key[:-2] + "_std_s", math.nan))))
+    return out
+
+
+def _combine(*runs: dict, key: str = "delay_s", tolerance_s: float = 0.005) -> CombinedDelay:
+    """``delay_id.combine_delays`` over every seed's estimate of ``key`` in ``runs`` (merged sweeps
+    keep their seeds' estimates)."""
+    est = _estimates(list(runs), key)
+    return combine_delays(*zip(*est), tolerance_s=tolerance_s) if est else combine_delays([], [], tolerance_s)
 
 
 def _call(kwargs: dict) -> dict:
@@ -203,14 +214,19 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
                      overrides: tuple[str, ...] = (), workers: int = 1, executor=None,
                      progress=None, identify_altitude_m: float = 12.0, laser_delay_s: float = 0.0,
                      ident_sweep: SweepSettings = IDENT_SWEEP, seeds: int = 1,
-                     frf_sink: dict | None = None) -> list[dict]:
+                     frf_sink: dict | None = None, ident_seeds: int | None = None,
+                     delay_tolerance_s: float = 0.005, min_delay_confidence: float = 0.9) -> list[dict]:
     """Tables 5.1/5.2: per altitude a GPS row and per IMU ``delay`` an MPE row, uncompensated;
     with ``compensate`` also an MPE row flown with the delays identified from a lateral and a
     longitudinal ``ident_sweep`` on GPS at ``identify_altitude_m`` (MPE open loop, so the identification
     never rides on a loop the delay may destabilise; once per delay, as the thesis identified its
     sensors once, on the ground): ``navigation.mpe.attitude_delay_s`` = the IMU's delay behind the
-    camera, ``navigation.mpe.laser_delay_s`` = the laser's. Where identification fails the true
-    delays are used and the row's notes say so. ``laser_delay_s``: a simulated laser delay for
+    camera, ``navigation.mpe.laser_delay_s`` = the laser's. Each delay is identified from
+    ``ident_seeds`` seeds (default max(``seeds``, 4)) of both sweeps, every estimate with its
+    coherence sigma, combined by ``delay_id.combine_delays`` (outliers dropped, weighted mean,
+    sigma inflated by the seeds' scatter, ``confidence`` = P(|error| < ``delay_tolerance_s``)); a
+    delay whose confidence is below ``min_delay_confidence`` is not compensated (0) and the row's
+    notes say so. Rows carry ``identified_*_delay_s``, ``..._std_s`` and ``..._confidence``. ``laser_delay_s``: a simulated laser delay for
     every sweep. Each row is two sweeps (lateral, longitudinal). ``executor``: anything with
     ``submit`` (a process pool, a Dask client's executor); else ``workers`` local processes.
     ``seeds``: each sweep flown with seeds ``seed`` .. ``seed + seeds − 1`` and merged
@@ -227,36 +243,48 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         raise ValueError(f"workers must be >= 1, got {workers}")
     if seeds < 1:
         raise ValueError(f"seeds must be >= 1, got {seeds}")
+    n_ident = max(seeds, 4) if ident_seeds is None else int(ident_seeds)
+    if n_ident < 1:
+        raise ValueError(f"ident_seeds must be >= 1, got {ident_seeds}")
+    if not (np.isfinite(delay_tolerance_s) and delay_tolerance_s > 0):
+        raise ValueError(f"delay_tolerance_s must be > 0 s, got {delay_tolerance_s}")
+    if not 0 <= min_delay_confidence <= 1:
+        raise ValueError(f"min_delay_confidence must be in [0, 1], got {min_delay_confidence}")
     if not (np.isfinite(laser_delay_s) and 0 <= laser_delay_s <= 1):
         raise ValueError(f"laser_delay_s must be in [0, 1] s, got {laser_delay_s}")
     check_margins_scenario(scenario, overrides)
     base = dict(scenario=scenario, overrides=tuple(overrides), laser_delay_s=laser_delay_s)
     runs: dict[tuple, dict] = {}
+    done = [0]
 
     def key(alt, src, delay, comp, axis, lcomp=0.0):
         return (alt, src, delay, round(comp, 6), axis, round(lcomp, 6))
 
     def execute(keys: list[tuple]) -> None:
         todo = [k for k in dict.fromkeys(keys) if k not in runs]
+        n_of = {k: n_ident if k[1] == "ident" else seeds for k in todo}
         jobs = [dict(base, altitude_m=k[0], source="gps" if k[1] == "ident" else k[1], imu_delay_s=k[2],
                      attitude_delay_s=k[3], axis=k[4], laser_compensation_s=k[5], seed=seed + i,
-                     sweep=ident_sweep if k[1] == "ident" else sweep) for k in todo for i in range(seeds)]
+                     sweep=ident_sweep if k[1] == "ident" else sweep) for k in todo for i in range(n_of[k])]
         pool = executor
         own = pool is None and workers > 1
         if own:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
-        total = (len(runs) + len(todo)) * seeds
+        total = done[0] + len(jobs)
         try:
             futures = [pool.submit(_call, j) for j in jobs] if pool is not None else None
-            for i, k in enumerate(todo):
+            j = 0
+            for k in todo:
                 res = []
-                for j in range(i * seeds, (i + 1) * seeds):
+                for _ in range(n_of[k]):
                     res.append(futures[j].result() if futures is not None else _call(jobs[j]))
+                    j += 1
+                    done[0] += 1
                     if progress is not None:
-                        progress(len(runs) * seeds + len(res), total)
-                runs[k] = merge_sweeps(res, jobs[i * seeds]["sweep"])
+                        progress(done[0], total)
+                runs[k] = merge_sweeps(res, jobs[j - 1]["sweep"])
         finally:
             if own:
                 pool.shutdown()
@@ -271,23 +299,30 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
     ident = {}
 
     def comp_key(a, d, ax):
-        ca, cl = _compensation(ident[d], d, laser_delay_s)
+        ca, cl = _compensation(ident[d], min_delay_confidence)
         return key(a, "mpe", d, ca, ax, cl)
 
     if compensate:
         for d in dls:
             pair = [runs[key(ia, "ident", d, 0.0, ax)] for ax in axes]
-            tau, lt = _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s")
-            ok = np.isfinite(tau) and np.isfinite(lt)
-            ident[d] = (tau if np.isfinite(tau) else math.nan, lt if np.isfinite(lt) else math.nan, bool(ok))
+            ident[d] = (_combine(*pair, tolerance_s=delay_tolerance_s),
+                        _combine(*pair, key="laser_delay_s", tolerance_s=delay_tolerance_s))
         execute([comp_key(a, d, ax) for a in alts for d in dls for ax in axes])
 
     def row(a, delay, comp, pair, tau, ltau, notes):
+        """``tau``, ``ltau``: the CombinedDelay of the IMU and of the laser."""
         r = dict(altitude_m=a, delay_s=delay, compensated=comp)
         for ax, res in zip(axes, pair):
             r.update({f"{ax}_pm_deg": res["pm_deg"], f"{ax}_pm_wc_rps": res["w_gc"], f"{ax}_gm_db": res["gm_db"]})
-        r["identified_imu_delay_s"] = tau
-        r["identified_laser_delay_s"] = ltau
+        r["identified_imu_delay_s"] = tau.delay_s
+        r["identified_laser_delay_s"] = ltau.delay_s
+        for name, c in (("imu", tau), ("laser", ltau)):
+            r[f"identified_{name}_delay_std_s"] = c.std_s
+            r[f"identified_{name}_delay_confidence"] = c.confidence
+        for ax, res in zip(axes, pair):  # each seed's own PM: the spread the merged PM hides
+            pm = np.array([p for p in res.get("pm_seeds", [res["pm_deg"]]) if np.isfinite(p)], float)
+            r[f"{ax}_pm_seeds_deg"] = " ".join(f"{p:.1f}" for p in pm)
+            r[f"{ax}_pm_seed_sd_deg"] = float(pm.std(ddof=1)) if pm.size > 1 else math.nan
         for ax, res in zip(axes, pair):
             r[f"{ax}_gm_wc_rps"] = res["w_pc"]
         r["notes"] = "; ".join(notes + [f"{ax}: {n}" for ax, res in zip(axes, pair) for n in res["notes"]])
@@ -300,25 +335,25 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
     rows = []
     for a in alts:
         pair = [runs[key(a, "gps", 0.0, 0.0, ax)] for ax in axes]
-        rows.append(row(a, None, "gps", pair, _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s"),
-                        []))
+        tol = dict(tolerance_s=delay_tolerance_s)
+        rows.append(row(a, None, "gps", pair, _combine(*pair, **tol), _combine(*pair, key="laser_delay_s", **tol), []))
         for d in dls:
             pair = [runs[key(a, "mpe", d, 0.0, ax)] for ax in axes]
-            rows.append(row(a, d, False, pair, _combine_delays(*pair), _combine_delays(*pair, key="laser_delay_s"),
+            rows.append(row(a, d, False, pair, _combine(*pair, **tol), _combine(*pair, key="laser_delay_s", **tol),
                             []))
             if compensate:
-                tau, ltau, ok = ident[d]
+                tau, ltau = ident[d]
                 pair = [runs[comp_key(a, d, ax)] for ax in axes]
-                rows.append(row(a, d, True, pair, tau, ltau,
-                                [] if ok else ["identification failed: compensated with the true delays"]))
+                notes = [f"{name} delay not compensated: identified {c.delay_s * 1e3:.1f} ± {c.std_s * 1e3:.1f} ms, "
+                         f"confidence {c.confidence:.2f} < {min_delay_confidence}"
+                         for name, c in (("IMU", tau), ("laser", ltau)) if not c.usable(min_delay_confidence)]
+                rows.append(row(a, d, True, pair, tau, ltau, notes))
     return rows
 
 
-def _compensation(ident: tuple[float, float, bool], imu_delay_s: float, laser_delay_s: float) -> tuple[float, float]:
-    """(attitude_delay_s, laser_delay_s) for the navigator: the identified delays behind the camera
-    (the true ones, without the camera's unknown delay, where identification failed), clipped to
-    the config's range."""
-    tau, ltau, ok = ident
-    a = tau if ok else imu_delay_s
-    b = ltau if ok else laser_delay_s
-    return float(np.clip(a, -0.5, 1.0)), float(np.clip(b, -0.5, 1.0))
+def _compensation(ident: tuple[CombinedDelay, CombinedDelay], min_confidence: float) -> tuple[float, float]:
+    """(attitude_delay_s, laser_delay_s) for the navigator: each identified delay behind the camera
+    where its confidence is at least ``min_confidence``, else 0 (no compensation: a wrong delay
+    can cost more phase than none), clipped to the config's range."""
+    a, b = (float(np.clip(c.delay_s, -0.5, 1.0)) if c.usable(min_confidence) else 0.0 for c in ident)
+    return a, b

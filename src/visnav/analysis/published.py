@@ -312,7 +312,7 @@ def summary_rows(sc, metrics: dict) -> tuple[list[Row], list[str], str]:
     unlike = not_compared(sc)
     rows, omitted = [], []
     for k, v in metrics.items():
-        if k == "provenance" or isinstance(v, dict):
+        if k == "provenance" or isinstance(v, (dict, list, tuple)):  # lists (sil_notes) print as lines: run_notes
             continue
         if _missing(v):
             omitted.append(k)

@@ -141,7 +141,8 @@ def run_notes(result) -> list[str]:
     """Lines below the metrics table: what a run cannot measure, and what its log shows beyond the metrics."""
     mod = _report_module(result.scenario)
     extra = getattr(mod, "notes", None)
-    return notes(result.scenario) + (extra(result.log, result.scenario, result.metrics) if extra else [])
+    sil = [f"SIL: {n}" for n in (result.metrics or {}).get("sil_notes", [])]  # one line each, not a list
+    return notes(result.scenario) + (extra(result.log, result.scenario, result.metrics) if extra else []) + sil
 
 
 def metrics_table_html(sc, metrics: dict) -> str:

@@ -237,7 +237,7 @@ class PathFollowingController:
         xb, yb = C[0], C[1]  # body x and y axes in NED (rows of the NED -> heading rotation)
         dp = C @ (np.asarray(r.position, float) - np.asarray(nav.position, float))
         dv = C @ (np.asarray(r.velocity, float) - np.asarray(nav.velocity, float))
-        dp0, dp1, dp2 = dp.tolist()  # the scalar arithmetic below in Python floats (the same IEEE operations)
+        dp0, dp1, dp2 = dp.tolist()  # heading frame: along, across, down
         dv0, dv1, dv2 = dv.tolist()
         if not k.world_integrators:  # body-frame integrators: re-express the stored ones on the new axes
             self._i_lon = xb * (xb @ self._i_lon)

@@ -33,12 +33,11 @@ the rotating-frame derivative, which is the state v itself, so the term is not a
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from visnav.geometry.rotations import skew
+from visnav.geometry.rotations import cross, euler_rate_matrix, euler_to_dcm, euler_to_dcm_and_rate_matrix, skew
 
 N_STATE = 12
 POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -104,52 +103,9 @@ def camera_rotation(depression: float, yaw: float) -> np.ndarray:
 
 
 def euler_dcm_batch(e: np.ndarray, rate: bool = False):
-    """``C_b^n = Rz(psi) Ry(theta) Rx(phi)`` for a batch of Euler angles (N, 3) -> (N, 3, 3); with ``rate`` also
-    E(e) of eq. 2.13 (body rates -> Euler angle rates, (N, 3, 3)) from the same cos / sin values: ``(C, E)``."""
-    c, s = np.cos(e), np.sin(e)  # one call each for the three angles (the batches are small)
-    cf, ct, cp = c[:, 0], c[:, 1], c[:, 2]
-    sf, st, sp = s[:, 0], s[:, 1], s[:, 2]
-    C = np.empty((e.shape[0], 3, 3))
-    stcp, stsp = st * cp, st * sp
-    C[:, 0, 0] = ct * cp
-    C[:, 0, 1] = sf * stcp - cf * sp
-    C[:, 0, 2] = sf * sp + cf * stcp
-    C[:, 1, 0] = ct * sp
-    C[:, 1, 1] = cf * cp + sf * stsp
-    C[:, 1, 2] = cf * stsp - sf * cp
-    C[:, 2, 0] = -st
-    C[:, 2, 1] = sf * ct
-    C[:, 2, 2] = cf * ct
-    if not rate:
-        return C
-    # (numpy's cos / sin of a column equal those of the whole batch, element by element: the same values the
-    # separate euler_rate_matrix form took; tests/estimation/test_deck_model.py compares them)
-    tt = np.tan(e[:, 1])
-    E = np.zeros((e.shape[0], 3, 3))
-    E[:, 0, 0] = 1.0
-    E[:, 0, 1] = sf * tt
-    E[:, 0, 2] = cf * tt
-    E[:, 1, 1] = cf
-    E[:, 1, 2] = -sf
-    E[:, 2, 1] = sf / ct
-    E[:, 2, 2] = cf / ct
-    return C, E
-
-
-def euler_rate_matrix(e: np.ndarray) -> np.ndarray:
-    """E(e) of eq. 2.13 (body rates -> Euler angle rates) for a batch (N, 3) -> (N, 3, 3)."""
-    return euler_dcm_batch(e, rate=True)[1]
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b along the last axis with broadcasting (numpy's cross is slow for small batches)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = a1 * b2 - a2 * b1
-    out[..., 1] = a2 * b0 - a0 * b2
-    out[..., 2] = a0 * b1 - a1 * b0
-    return out
+    """C_h^d = euler_to_dcm(e) (eq. 2.8-2.12) for a batch (N, 3) -> (N, 3, 3); with ``rate`` also E(e) of
+    eq. 2.13: ``(C, E)`` (geometry.rotations, the one rotation module)."""
+    return euler_to_dcm_and_rate_matrix(e) if rate else euler_to_dcm(e)
 
 
 @dataclass(frozen=True)
@@ -164,22 +120,16 @@ class ImuInput:
 
 
 def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
-    """Discrete eq. 3.1-3.5 for a batch of states (N, 12): one explicit step of length ``dt``."""
+    """Discrete eq. 3.1-3.5 for a batch of states (N, 12): one explicit step of length ``dt``, every sigma point
+    in one array expression (row vectors: ``x @ M.T`` is ``M x`` for each row)."""
     r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
-    w, wdot = u.gyro, u.gyro_dot
-    a_h = u.accel + u.gravity_body  # vehicle's inertial acceleration, h components (eq. 3.4)
-    # eq. 3.5: -a_h - wdot x r - 2 w x v - w x (w x r), the rate terms as two 3x3 products for the batch
-    Sw = skew(w)
-    vdot = -a_h - r @ (skew(wdot) + Sw @ Sw).T - v @ (2.0 * Sw).T
+    W, Wdot = skew(u.gyro), skew(u.gyro_dot)
+    a_h = u.accel + u.gravity_body  # the vehicle's inertial acceleration, h components (eq. 3.4)
+    vdot = -a_h - r @ (Wdot + W @ W).T - 2.0 * v @ W.T  # eq. 3.5: -a_h - wdot x r - w x (w x r) - 2 w x v
     C, E = euler_dcm_batch(e, rate=True)  # C_h^d, E(e)
-    w_rel = w - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
-    edot = np.einsum("nij,nj->ni", E, w_rel)
-    out = np.empty_like(sig)
-    out[:, POS] = r + v * dt + 0.5 * vdot * dt * dt
-    out[:, ATT] = e + edot * dt
-    out[:, VEL] = v + vdot * dt
-    out[:, RATE] = wd
-    return out
+    w_rel = u.gyro - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
+    edot = np.einsum("nij,nj->ni", E, w_rel)  # eq. 3.2
+    return np.hstack([r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd])
 
 
 def ship_acceleration_bound(amplitude, omega, sigma_amplitude=0.0, sigma_omega=0.0) -> np.ndarray:
@@ -190,25 +140,6 @@ def ship_acceleration_bound(amplitude, omega, sigma_amplitude=0.0, sigma_omega=0
 
 
 _I3 = np.eye(3)
-_I3.flags.writeable = False
-_NOISE_TEMPLATES: dict[float, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def _noise_templates(dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Fresh F_z, F_ship of ``process_noise`` with the blocks that depend on ``dt`` alone filled in (copies
-    of templates kept for the last few step lengths)."""
-    t = _NOISE_TEMPLATES.get(dt)
-    if t is None:
-        if len(_NOISE_TEMPLATES) >= 16:
-            _NOISE_TEMPLATES.clear()
-        dt2 = 0.5 * dt * dt
-        Fz = np.zeros((N_STATE, 6))
-        Fz[POS, 0:3] = -dt2 * _I3
-        Fz[VEL, 0:3] = -dt * _I3
-        Fs = np.zeros((N_STATE, 6))
-        Fs[RATE, 3:6] = dt * _I3
-        t = _NOISE_TEMPLATES[dt] = (Fz, Fs)
-    return t[0].copy(), t[1].copy()
 
 
 def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, ship_cov: np.ndarray) -> np.ndarray:
@@ -220,38 +151,20 @@ def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, sh
     per-sample covariance of (accel, gyro); ``ship_cov`` (6, 6) that of the deck accelerations.
     The numerical derivative of the rates is not differentiated: its noise telescopes over steps.
     """
-    # Written out in Python floats for speed (one state, not a batch): every entry is the same IEEE operation on
-    # the same numbers as the array form it replaces (kept in tests/estimation/test_deck_model.py, compared bit
-    # for bit). numpy's cos / sin equal math's (libm), its tan is kept; the dot product and the matmuls (BLAS)
-    # are kept as they were.
-    r0, r1, r2, ef, et, ep, v0, v1, v2 = x[0:9].tolist()
-    w = u.gyro
-    w0, w1, w2 = w.tolist()
-    cf, ct, cp, sf, st, sp = math.cos(ef), math.cos(et), math.cos(ep), math.sin(ef), math.sin(et), math.sin(ep)
-    stcp, stsp = st * cp, st * sp
-    C = np.array([[ct * cp, sf * stcp - cf * sp, sf * sp + cf * stcp],  # C_h^d (euler_dcm_batch's entries)
-                  [ct * sp, cf * cp + sf * stsp, cf * stsp - sf * cp],
-                  [-st, sf * ct, cf * ct]])
-    tt = np.tan(x[4:5]).item()
-    E = np.array([[1.0, sf * tt, cf * tt], [0.0, cf, -sf], [0.0, sf / ct, cf / ct]])  # E(e), eq. 2.13
+    r, e, v, w = x[POS], x[ATT], x[VEL], u.gyro
+    C, E = euler_to_dcm(e), euler_rate_matrix(e)  # C_h^d, E(e) (eq. 2.13)
+    # d vdot / d w of eq. 3.5: -2 w x v gives 2 [v]x, -w x (w x r) = -(w (w.r) - r (w.w)) gives 2 r w^T - (w.r) I - w r^T
+    dvdw = 2.0 * skew(v) + 2.0 * r[:, None] * w - np.dot(w, r) * _I3 - w[:, None] * r
     dt2 = 0.5 * dt * dt
-    Fz, Fs = _noise_templates(dt)
-    # dv/dw = 2 [v]x + 2 r w^T - (w.r) I - w r^T, entry by entry in the array form's order ((2 S + 2 R) - d I) - W
-    wr = float(np.dot(w, x[POS]))
-    z = wr * 0.0  # (the identity's zeros times w.r)
-    dvdw = np.array([
-        [((0.0 + 2.0 * (r0 * w0)) - wr) - w0 * r0, ((2.0 * -v2 + 2.0 * (r0 * w1)) - z) - w0 * r1,
-         ((2.0 * v1 + 2.0 * (r0 * w2)) - z) - w0 * r2],
-        [((2.0 * v2 + 2.0 * (r1 * w0)) - z) - w1 * r0, ((0.0 + 2.0 * (r1 * w1)) - wr) - w1 * r1,
-         ((2.0 * -v0 + 2.0 * (r1 * w2)) - z) - w1 * r2],
-        [((2.0 * -v1 + 2.0 * (r2 * w0)) - z) - w2 * r0, ((2.0 * v0 + 2.0 * (r2 * w1)) - z) - w2 * r1,
-         ((0.0 + 2.0 * (r2 * w2)) - wr) - w2 * r2]])
-    Fz[VEL, 3:6] = dt * dvdw
-    Fz[POS, 3:6] = dt2 * dvdw
-    Fz[ATT, 3:6] = dt * E
-    Fs[POS, 0:3] = dt2 * C.T
-    Fs[VEL, 0:3] = dt * C.T
-    Fs[ATT, 3:6] = -dt2 * E @ C.T
+    Fz = np.zeros((N_STATE, 6))  # columns: accelerometer (3), gyro (3)
+    Fz[POS, :3], Fz[POS, 3:] = -dt2 * _I3, dt2 * dvdw
+    Fz[ATT, 3:] = dt * E
+    Fz[VEL, :3], Fz[VEL, 3:] = -dt * _I3, dt * dvdw
+    Fs = np.zeros((N_STATE, 6))  # columns: deck linear acceleration (deck frame, 3), deck angular acceleration (3)
+    Fs[POS, :3] = dt2 * C.T
+    Fs[ATT, 3:] = -dt2 * E @ C.T
+    Fs[VEL, :3] = dt * C.T
+    Fs[RATE, 3:] = dt * _I3
     return Fz @ imu_cov @ Fz.T + Fs @ ship_cov @ Fs.T
 
 
@@ -278,16 +191,11 @@ def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry,
     """Predicted bearings (eq. 2.25) and bearing rates (eq. 2.27) of every light: (N, L, 2) each.
     ``vectors``: ``light_vectors(sig, lights, cam)`` when the caller has it already."""
     s, b_h, C = light_vectors(sig, lights, cam) if vectors is None else vectors
-    wd = sig[:, RATE]
-    w_rel = gyro - np.einsum("nji,nj->ni", C, wd)  # eq. 2.29
-    pdot = sig[:, None, VEL] - _cross(w_rel[:, None, :], b_h)
-    sdot = pdot @ cam.T_cam.T
-    sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
-    dx, dy, dz = sdot[..., 0], sdot[..., 1], sdot[..., 2]
-    bear = np.arctan(s[..., :2] / sz[..., None])
-    rate = np.empty_like(bear)
-    rate[..., 0] = (dx * sz - sx * dz) / (sx * sx + sz * sz)
-    rate[..., 1] = (dy * sz - sy * dz) / (sy * sy + sz * sz)
+    w_rel = gyro - np.einsum("nji,nj->ni", C, sig[:, RATE])  # eq. 2.29: w_h - C_d^h w_d
+    sdot = (sig[:, None, VEL] - cross(w_rel[:, None, :], b_h)) @ cam.T_cam.T  # eq. 2.28
+    s_xy, s_z = s[..., :2], s[..., 2:3]  # (our camera axes: the thesis' s_x is our s_z, see the module notes)
+    bear = np.arctan(s_xy / s_z)  # eq. 2.25
+    rate = (sdot[..., :2] * s_z - s_xy * sdot[..., 2:3]) / (s_xy * s_xy + s_z * s_z)  # eq. 2.27: d/dt atan(s_xy / s_z)
     return bear, rate
 
 
@@ -302,7 +210,7 @@ def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, 
 def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vectors=None) -> np.ndarray:
     """Bearings of every light (N, 2L), for data association (``vectors`` as ``measurement_model``)."""
     s, _, _ = light_vectors(sig, lights, cam) if vectors is None else vectors
-    return np.stack([np.arctan(s[..., 0] / s[..., 2]), np.arctan(s[..., 1] / s[..., 2])], axis=-1).reshape(len(sig), -1)
+    return np.arctan(s[..., :2] / s[..., 2:3]).reshape(len(sig), -1)  # eq. 2.25
 
 
 def wrap_state(sig: np.ndarray) -> np.ndarray:

@@ -10,17 +10,20 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 __all__ = [
     "euler_to_dcm",
     "euler_to_dcm3",
+    "euler_rate_matrix",
+    "euler_to_dcm_and_rate_matrix",
+    "cross",
     "dcm_to_euler",
     "body_rates_to_euler_rates",
     "euler_rates_to_body_rates",
     "skew",
     "cross3",
     "wrap_angle",
+    "kabsch",
 ]
 
 _GIMBAL_EPS = 1e-12
@@ -87,10 +90,58 @@ def euler_to_dcm(euler) -> np.ndarray:
         return euler_to_dcm3(float(e[0]), float(e[1]), float(e[2]))
     if not np.all(np.isfinite(e)):
         raise ValueError(f"euler must be finite, got {e}")
-    flat = e.reshape(-1, 3)
-    # Intrinsic Z-Y-X (yaw, then pitch, then roll) == Rz(yaw) @ Ry(pitch) @ Rx(roll).
-    C = Rotation.from_euler("ZYX", flat[:, ::-1]).as_matrix()
-    return C.reshape(e.shape[:-1] + (3, 3))
+    return _euler_matrix(np.cos(e), np.sin(e))
+
+
+def _entries_to_matrices(entries: list, batch_shape: tuple) -> np.ndarray:
+    """The nine entries (row by row, each of shape ``batch_shape``) as a C-contiguous (..., 3, 3) array."""
+    return np.array(entries).reshape(9, -1).T.reshape(batch_shape + (3, 3))
+
+
+def _euler_matrix(c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Seed 002 eq. 3.2, C_b^n = Rz(psi) Ry(theta) Rx(phi), from the cosines and sines (..., 3) of (phi, theta, psi)."""
+    cf, ct, cp = c[..., 0], c[..., 1], c[..., 2]
+    sf, st, sp = s[..., 0], s[..., 1], s[..., 2]
+    return _entries_to_matrices([ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp,
+                                 ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp,
+                                 -st, sf * ct, cf * ct], c.shape[:-1])
+
+
+def _euler_rate_matrix(c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Seed 002 eq. 3.7, E(e) (body rates -> Euler angle rates), from the cosines and sines (..., 3) of the angles."""
+    cf, sf, ct, st = c[..., 0], s[..., 0], c[..., 1], s[..., 1]
+    one, zero = np.ones_like(cf), np.zeros_like(cf)
+    return _entries_to_matrices([one, sf * st / ct, cf * st / ct,
+                                 zero, cf, -sf,
+                                 zero, sf / ct, cf / ct], c.shape[:-1])
+
+
+def euler_rate_matrix(euler) -> np.ndarray:
+    """E(e) with (phi_dot, theta_dot, psi_dot) = E(e) (p, q, r), seed 002 eq. 3.7 (seed 003 eq. 2.13); (..., 3, 3).
+
+        E = [[1, sin(phi) tan(theta), cos(phi) tan(theta)],
+             [0, cos(phi),            -sin(phi)          ],
+             [0, sin(phi)/cos(theta), cos(phi)/cos(theta)]]
+    """
+    e = _vec3(euler, "euler")
+    if e.shape == (3,):  # one vector (the filters' per-step Jacobians): the same matrix from math's functions
+        sf, cf, ct, tt = math.sin(e[0]), math.cos(e[0]), math.cos(e[1]), math.tan(e[1])
+        return np.array([[1.0, sf * tt, cf * tt], [0.0, cf, -sf], [0.0, sf / ct, cf / ct]])
+    return _euler_rate_matrix(np.cos(e), np.sin(e))
+
+
+def euler_to_dcm_and_rate_matrix(euler) -> tuple[np.ndarray, np.ndarray]:
+    """``(euler_to_dcm(e), euler_rate_matrix(e))`` of a batch (..., 3) from one cos / sin of the angles."""
+    e = _vec3(euler, "euler")
+    c, s = np.cos(e), np.sin(e)
+    return _euler_matrix(c, s), _euler_rate_matrix(c, s)
+
+
+def cross(a, b) -> np.ndarray:
+    """``a x b`` along the last axis, with broadcasting (``np.cross`` without its per-call overhead on small batches)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack(np.broadcast_arrays(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
 
 
 def dcm_to_euler(C) -> np.ndarray:
@@ -159,3 +210,13 @@ def euler_rates_to_body_rates(euler, euler_dot) -> np.ndarray:
     q = theta_dot * cphi + psi_dot * sphi * cth
     r = -theta_dot * sphi + psi_dot * cphi * cth
     return np.stack(np.broadcast_arrays(p, q, r), axis=-1)
+
+
+def kabsch(a: np.ndarray, b: np.ndarray, w: np.ndarray | None = None) -> np.ndarray:
+    """R minimising sum w |b - R a|^2 (Kabsch 1976; Arun, Huang & Blostein 1987): H = sum w a b^T = U S V^T,
+    R = V diag(1, 1, det(V U^T)) U^T."""
+    w = np.ones(len(a)) if w is None else np.asarray(w, float)
+    H = (np.asarray(a, float) * w[:, None]).T @ np.asarray(b, float)
+    U, _, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, 1.0 if np.linalg.det(Vt.T @ U.T) >= 0 else -1.0])
+    return Vt.T @ D @ U.T

@@ -28,8 +28,6 @@ HERMITE_BASIS = np.array([[2.0, -2.0, 1.0, 1.0], [-3.0, 3.0, -2.0, -1.0], [0.0, 
                           [1.0, 0.0, 0.0, 0.0]])
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 _GL_X, _GL_W = 0.5 * (_GL_X + 1.0), 0.5 * _GL_W  # nodes and weights on [0, 1]
-_GL_XW = tuple(zip(_GL_X.tolist(), _GL_W.tolist()))
-assert len(_GL_XW) == 16  # HermiteSegment._arc_length_1 sums in numpy's pairwise order for 16 terms
 
 
 def _vec(x: ArrayLike, name: str) -> np.ndarray:
@@ -102,65 +100,26 @@ class HermiteSegment:
         return np.cross(np.cross(t, q), t) / (n2 * n2)
 
     def frame_at(self, s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """p(s), t(s) and k(s) (eq. 4.1-4.5) at one scalar s, without the vector overhead: per component in
-        Python floats, the array expressions' element operations in their order (3.0 * A * s is (3A) s)."""
+        """p(s), t(s) and k(s) (eq. 4.2-4.5) at one scalar s: the guidance's per-step call."""
         s = float(s)
-        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2), (d0, d1, d2), (u0, u1, u2), (v0, v1, v2), (w0, w1, w2) = \
-            self._frame_rows  # A, B, C, D, 3A, 2B, 6A
-        p = np.array([((a0 * s + b0) * s + c0) * s + d0, ((a1 * s + b1) * s + c1) * s + d1,
-                      ((a2 * s + b2) * s + c2) * s + d2])
-        tx, ty, tz = (u0 * s + v0) * s + c0, (u1 * s + v1) * s + c1, (u2 * s + v2) * s + c2
-        qx, qy, qz = w0 * s + v0, w1 * s + v1, w2 * s + v2
-        cx, cy, cz = ty * qz - tz * qy, tz * qx - tx * qz, tx * qy - ty * qx  # t × q
-        n2 = tx * tx + ty * ty + tz * tz
-        n4 = n2 * n2
-        k = np.array([(cy * tz - cz * ty) / n4, (cz * tx - cx * tz) / n4, (cx * ty - cy * tx) / n4])  # (t × q) × t
-        return p, np.array([tx, ty, tz]), k
-
-    @property
-    def _frame_rows(self) -> tuple:
-        """(A, B, C, D, 3A, 2B, 6A) as tuples of floats, built once (``frame_at``)."""
-        rows = self.__dict__.get("_frows")
-        if rows is None:
-            A, B, C, D = self.coeffs
-            rows = tuple(tuple(r.tolist()) for r in (A, B, C, D, 3.0 * A, 2.0 * B, 6.0 * A))
-            object.__setattr__(self, "_frows", rows)
-        return rows
+        A, B, C, D = self.coeffs
+        p = ((A * s + B) * s + C) * s + D  # eq. 4.2
+        t = (3.0 * A * s + 2.0 * B) * s + C  # eq. 4.3
+        q = 6.0 * A * s + 2.0 * B  # eq. 4.4
+        n2 = t @ t
+        k = (q * n2 - t * (t @ q)) / (n2 * n2)  # eq. 4.5: (t × q) × t = q (t·t) − t (t·q)
+        return p, t, k
 
     def arc_length(self, s: ArrayLike = 1.0, s0: ArrayLike = 0.0) -> np.ndarray | float:
-        """Arc length from s0 to s [m] (16-point Gauss-Legendre per call, vectorized over s)."""
-        if isinstance(s, float) and isinstance(s0, (float, int)):  # one pair (the guidance's per-step call)
-            return self._arc_length_1(float(s), float(s0))
+        """Arc length from s0 to s [m]: the integral of |t(u)| (eq. 4.3) by 16-point Gauss-Legendre,
+        vectorized over s."""
         s, s0 = np.asarray(s, float), np.asarray(s0, float)
         h = s - s0
         u = s0[..., None] + h[..., None] * _GL_X  # (..., 16)
-        speed = np.linalg.norm(self.tangent(u), axis=-1)
-        out = h * np.sum(speed * _GL_W, axis=-1)
+        t = self.tangent(u)
+        speed = np.sqrt(np.sum(t * t, axis=-1))
+        out = h * (speed @ _GL_W)
         return float(out) if out.ndim == 0 else out
-
-    def _arc_length_1(self, s: float, s0: float) -> float:
-        """:meth:`arc_length` of one (s, s0) in scalar arithmetic: the same products, the norm summed
-        x, y, z left to right and the 16 weighted speeds in numpy's pairwise order (8 partial sums,
-        then a tree), so the same bits (tests/guidance/test_hermite.py)."""
-        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2), _ = self._coeff_rows
-        h = s - s0
-        r = []
-        for x, wt in _GL_XW:
-            u = s0 + h * x
-            t0, t1, t2 = (a0 * u + b0) * u + c0, (a1 * u + b1) * u + c1, (a2 * u + b2) * u + c2
-            r.append(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2) * wt)
-        p = [r[j] + r[j + 8] for j in range(8)]
-        return h * (((p[0] + p[1]) + (p[2] + p[3])) + ((p[4] + p[5]) + (p[6] + p[7])))
-
-    @property
-    def _coeff_rows(self) -> tuple:
-        """(3A, 2B, C, D) as tuples of floats (tangent = (3A u + 2B) u + C), built once."""
-        rows = self.__dict__.get("_rows")
-        if rows is None:
-            A, B, C, D = self.coeffs
-            rows = (tuple((3.0 * A).tolist()), tuple((2.0 * B).tolist()), tuple(C.tolist()), tuple(D.tolist()))
-            object.__setattr__(self, "_rows", rows)
-        return rows
 
     @property
     def length(self) -> float:

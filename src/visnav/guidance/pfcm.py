@@ -33,7 +33,6 @@ z down): the YACS attitude commands act there, and with |φ|, |θ| <= 15° the d
 from __future__ import annotations
 
 import math
-from bisect import bisect_left
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,7 +50,7 @@ from visnav.guidance.speed_limits import (  # noqa: F401  (re-exported: the PFCM
     max_path_speed,
     nz_max_for_mass,
 )
-from visnav.measurements import NavEstimate
+from visnav.measurements import NavEstimate, read_only
 from visnav.scalar import clip as _clip
 
 G = 9.81
@@ -191,20 +190,14 @@ class PfcmGuidance(_LiveReference):
         self.profile_table = {"l": l, "v_targ2": v2, "v_targ3": v3, "envelope2": envelope(v2),
                               "envelope3": envelope(v3), "lateral_curvature": k_lat}
         self._rows = np.column_stack([envelope(v2), envelope(v3), k_lat])
-        self._l_list, self._rows_list = l.tolist(), self._rows.tolist()  # for ``_row``'s scalar arithmetic
 
     def _row(self, l: float) -> list[float]:
-        """The table row (envelope2, envelope3, lateral curvature) at arc length l, interpolated: per element
-        in Python floats (the row expression's own element operations); ``bisect_left`` is ``searchsorted``."""
-        L = self._l_list
-        if l != l:  # NaN: where searchsorted puts it (past the end)
-            j = len(L) - 2
-        else:
-            j = min(max(bisect_left(L, l) - 1, 0), len(L) - 2)
+        """The table row (envelope2, envelope3, lateral curvature) at arc length l, linearly interpolated
+        (clamped to the table's ends)."""
+        L = self.profile_table["l"]
+        j = min(max(int(np.searchsorted(L, l)) - 1, 0), len(L) - 2)
         f = min(max((l - L[j]) / (L[j + 1] - L[j]), 0.0), 1.0)
-        g = 1.0 - f
-        (a0, a1, a2), (b0, b1, b2) = self._rows_list[j], self._rows_list[j + 1]
-        return [a0 * g + b0 * f, a1 * g + b1 * f, a2 * g + b2 * f]
+        return ((1.0 - f) * self._rows[j] + f * self._rows[j + 1]).tolist()
 
     def _u_max(self, ky: float, phi: float) -> float:
         """Scalar eq. 4.15-4.16 for |k_y^b| and a roll limit φ (inf on a straight)."""
@@ -224,27 +217,20 @@ class PfcmGuidance(_LiveReference):
     # -- eq. 4.6-4.10 ----------------------------------------------------------------------------
     def update_control_point(self, p_heli: ArrayLike) -> tuple[int, float]:
         """Advance (segment, s) by the local feedback of eq. 4.7-4.10."""
-        p0, p1, p2 = np.asarray(p_heli, float).tolist()
+        p_heli = np.asarray(p_heli, float)
         segs = self.path.segments
         for _ in range(self.iterations):
             while True:
-                # the array expressions per component in Python floats (3.0 * A * u is (3A) u); the two dot
-                # products stay numpy's (BLAS may fuse them: not the same bits as a Python sum)
-                (a0, a1, a2), (b0, b1, b2), (c0, c1, c2), (d0, d1, d2), (u0, u1, u2), (v0, v1, v2), _ = \
-                    segs[self.segment]._frame_rows  # A, B, C, D, 3A, 2B, 6A
-                u = self.s
-                t = np.array([(u0 * u + v0) * u + c0, (u1 * u + v1) * u + c1, (u2 * u + v2) * u + c2])
+                p, t, _ = segs[self.segment].frame_at(self.s)
                 nt = math.sqrt(t @ t)
-                e = np.array([((a0 * u + b0) * u + c0) * u + d0 - p0, ((a1 * u + b1) * u + c1) * u + d1 - p1,
-                              ((a2 * u + b2) * u + c2) * u + d2 - p2])
-                e_f = float(e @ t) / nt  # eq. 4.7-4.8
-                s = u - e_f / nt  # eq. 4.10
+                e_f = float((p - p_heli) @ t) / nt  # eq. 4.7-4.8
+                s = self.s - e_f / nt  # eq. 4.10
                 if s > 1.0 and self.segment < len(segs) - 1:
                     self.segment += 1  # next segment: the parameter restarts at 0 (§4.3.3 item 1)
                     self.s = 0.0
                     continue
                 break
-            self.s = min(max(float(s), 0.0), 1.0)
+            self.s = min(max(s, 0.0), 1.0)
         return self.segment, self.s
 
     # -- v_targ1 (Fig. 4.5, eq. 4.19-4.20) -------------------------------------------------------
@@ -352,7 +338,7 @@ class PfcmGuidance(_LiveReference):
             v_target=v, accel_target=accel, v_targ1=v1, v_targ2=v2, v_targ3=v3, phase=self.phase, heading_error=d_psi,
             r_ff=r_ff, phi_ff=phi_ff, distance_to_end=l_left, arc_position=l_now, finished=finished,
             source=getattr(nav, "source", "gps"))
-        return self.last
+        return read_only(self.last)  # handed out again at the same t: nobody may write into it
 
 
 class PointHold(_LiveReference):

@@ -70,44 +70,32 @@ def higher_order_tau(t, x0: float, T: float, k: float):
 
     Eq. 2.45 is written here in the equivalent form
     x_ddot = (x0 / T^(3/k)) (3 t / k) [3 t^3 (1-k)/k (T^3 - t^3)^((1-2k)/k) - 2 (T^3 - t^3)^((1-k)/k)],
-    which stays finite at t = T for k = 1/2.
+    which stays finite at t = T for k = 1/2. A float ``t`` (the mission's 50 Hz step) is evaluated in Python
+    floats, an array in numpy; the same law (``_higher_order_tau_law``) either way.
     """
     if T <= 0 or k == 0:
         raise ValueError(f"higher-order tau needs T > 0 and k != 0, got T={T}, k={k}")
-    if isinstance(t, float):  # one instant (the mission's 50 Hz step): Python floats, see _higher_order_tau_one;
+    if isinstance(t, float):
         # where Python's ** raises (numpy's gives inf) the array form below answers
         with contextlib.suppress(OverflowError, ZeroDivisionError):
-            return _higher_order_tau_one(t, x0, T, k)
-    t = np.clip(np.asarray(t, float), 0.0, T)
-    a = x0 / T ** (3.0 / k)
-    g = T**3 - t**3
-    x = a * _pow(g, 1.0 / k)
-    xd = -a * 3.0 * t * t / k * _pow(g, (1.0 - k) / k)
+            return tuple(np.float64(v) for v in _higher_order_tau_law(min(max(t, 0.0), T), x0, T, k, _pow_one))
     with np.errstate(invalid="ignore"):
-        xdd = a * 3.0 * t / k * (3.0 * t**3 * (1.0 - k) / k * _pow(g, (1.0 - 2.0 * k) / k)
-                                 - 2.0 * _pow(g, (1.0 - k) / k))
+        return _higher_order_tau_law(np.clip(np.asarray(t, float), 0.0, T), x0, T, k, _pow)
+
+
+def _higher_order_tau_law(t, x0: float, T: float, k: float, pw):
+    """x, x_dot, x_ddot of eq. 2.43-2.45 at ``t`` in [0, T], ``pw`` the clipped power (``_pow`` or ``_pow_one``)."""
+    a = x0 / T ** (3.0 / k)
+    g = (T - t) * (T * T + T * t + t * t)  # T^3 - t^3, exactly 0 at t = T
+    x = a * pw(g, 1.0 / k)
+    xd = -a * 3.0 * t * t / k * pw(g, (1.0 - k) / k)
+    xdd = a * 3.0 * t / k * (3.0 * t**3 * (1.0 - k) / k * pw(g, (1.0 - 2.0 * k) / k) - 2.0 * pw(g, (1.0 - k) / k))
     return x, xd, xdd
 
 
 def _pow_one(b: float, p: float) -> float:
     """``_pow`` of one number (NaN and b <= 0 give the constant, as np.where(b > 0, ...) does)."""
     return b**p if b > 0 else (0.0 if p > 0 else (1.0 if p == 0 else math.inf))
-
-
-def _higher_order_tau_one(t: float, x0: float, T: float, k: float):
-    """``higher_order_tau`` at one instant, for speed: the array form on a 0-d ``t`` computed in numpy float64
-    scalars, whose ``**`` is libm's ``pow`` as Python's (numpy's power *ufunc* is another implementation: it is
-    not used here, nor was it there), so the same operations in the same order on Python floats give the same
-    bits (tests/guidance/test_tau.py compares them)."""
-    t = 0.0 if t < 0.0 else t  # np.clip: a bound replaces t only beyond it (-0 and NaN stay)
-    t = T if t > T else t
-    a = x0 / T ** (3.0 / k)
-    g = T**3 - t**3
-    p1, p2 = _pow_one(g, (1.0 - k) / k), _pow_one(g, (1.0 - 2.0 * k) / k)
-    x = a * _pow_one(g, 1.0 / k)
-    xd = -a * 3.0 * t * t / k * p1
-    xdd = a * 3.0 * t / k * (3.0 * t**3 * (1.0 - k) / k * p2 - 2.0 * p1)
-    return np.float64(x), np.float64(xd), np.float64(xdd)
 
 
 def higher_order_tau_touchdown_acceleration(x0: float, T: float) -> float:

@@ -24,7 +24,13 @@ Faults, each reported once through ``notify`` (one line) and counted:
 * camera stall (no frame for ``stall_s``): the estimate keeps going out at ``stall_output_hz`` from the
   navigator's inertial propagation with ``quality`` capped at ``stall_quality``; "camera back" when
   frames return;
-* frames out of order (a stamp not after the previous one): dropped, counted;
+* frames out of order (a stamp not after the previous one): dropped, counted; the same for MAVLink samples
+  of one kind (an IMU message stamped before the previous one), so a navigator never integrates backwards;
+* stale inputs (``io/bridge_freshness.py``): every estimate's covariance, ODOMETRY quality and GPS_INPUT fix
+  type / accuracies grow with the age of each input stream (IMU/attitude, GPS, range/baro, camera) and with
+  the filter's own covariance; past a stream's timeout (IMU/attitude 1 s, camera 10 s) no estimate is sent
+  (said once: console/log and a STATUSTEXT to the autopilot) until the stream is back, then
+  ``reset_counter`` + 1 unless the link-back already counted it;
 * malformed MAVLink packets: counted and skipped (``MavlinkLink``);
 * an estimate jump (position moved more than ``jump_sigma`` standard deviations, and ``jump_min_m``,
   against the previous estimate propagated with its velocity), a navigator reinitialisation, a source change (gps -> vision)
@@ -46,6 +52,7 @@ import numpy as np
 
 from visnav.geometry.frames import LocalTangentPlane
 from visnav.io import mavlink_messages as mm
+from visnav.io.bridge_freshness import LABELS, Assessment, Freshness, FreshnessConfig, stream_of
 from visnav.io.camera_source import FrameSource
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_messages import mavlink
@@ -58,7 +65,8 @@ register_stream(
     euler=("rad", "3-2-1 Euler angles of body FRD relative to NED", "attitude of the estimate sent"),
     valid=("bool", "", "the estimate was valid"), time_usec=("us", "the autopilot's time since boot",
                                                              "time_usec the messages carried (t in its clock)"),
-    quality=("1", "", "ODOMETRY quality 0..100"), reset_counter=("1", "", "reset_counter sent"),
+    quality=("1", "", "ODOMETRY quality 0..100"),
+    sigma_h=("m", "", "horizontal 1-sigma sent (the navigator's covariance grown with its inputs' age)"), reset_counter=("1", "", "reset_counter sent"),
     frame_index=("1", "", "the frame whose estimate it is (-1: the inertial estimate of a camera stall)"))
 
 
@@ -96,6 +104,7 @@ class BridgeConfig:
     frame_log: Path | None = None  # a folder: every frame as lossless PNG + frames.csv (index, t, capture_t)
     send_health: bool = False  # the navigator's Health as DEBUG_FLOAT_ARRAY "VN_HEALTH" with every estimate
     gps_sigma_m: float = mm.GPS_SIGMA_M  # 1-sigma of a position fix whose message carries no accuracy
+    freshness: FreshnessConfig = field(default_factory=FreshnessConfig)  # input budgets (io/bridge_freshness.py)
 
 
 class Bridge:
@@ -135,15 +144,26 @@ class Bridge:
         self._origin_req_next = 0.0
         self._t0 = time.monotonic()
         self._rate_mark = (self._t0, Counter(), 0)
+        self.fresh = Freshness(self.cfg.freshness)
+        self._last_sample_t: dict[type, float] = {}  # newest stamp per measurement type (out-of-order check)
+        self._withheld: Assessment | None = None  # the assessment that stopped the output, while stopped
+        self._withheld_at = 0.0
+        self._withheld_reset = 0
         self.requests_applied = 0  # sequence number of the newest mission request applied
+        self._reset_at_loss = 0  # reset_counter when the link was lost
+        self._out_at_rx = 0  # estimates out while up, as of the last message received (link-up time ends there)
         link.on_link_up.append(self._on_link_up)
+        link.on_link_lost.append(self._on_link_lost)
         link.request_intervals(self.cfg.rates_hz)
 
     # ------------------------------------------------------------------ threads
     def _reader(self) -> None:
         while not self.stop.is_set():
             self.link.tick()
-            for t_recv, msg in self.link.poll(0.005):
+            got = self.link.poll(0.005)
+            if got:
+                self._out_at_rx = self.counts["estimates_out_link_up"]
+            for t_recv, msg in got:
                 try:
                     m = self._decode(msg, t_recv)
                 except Exception as e:  # noqa: BLE001 - a message we cannot decode is skipped, counted
@@ -244,13 +264,18 @@ class Bridge:
 
     def _on_link_up(self) -> None:
         self.link.request_message(mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
-        if self.link.link_lost_count > 0:
+        if self.link.link_lost_count > 0 and self.reset_counter == self._reset_at_loss:  # not told yet (a resumption)
             self._bump("autopilot link back")
         self._origin_sent = False
+
+    def _on_link_lost(self) -> None:
+        self._reset_at_loss = self.reset_counter
+        self.counts["estimates_out_link_up"] = self._out_at_rx  # sent after the last message: not link-up time
 
     # ------------------------------------------------------------------ main loop
     def run(self, duration_s: float | None = None, max_frames: int | None = None) -> dict:
         """Run until ``duration_s`` / ``max_frames`` / ``self.stop``; returns the metrics."""
+        self.counts["stale_discarded"] += self.link.discard_pending()  # queued before we listened
         threads = [threading.Thread(target=self._reader, daemon=True, name="mavlink-reader")]
         if self.camera is not None:
             threads.append(threading.Thread(target=self._camera_reader, daemon=True, name="camera-reader"))
@@ -316,6 +341,18 @@ class Bridge:
         if isinstance(item, NavRequest):
             return self._apply_request(item)
         if not hasattr(item, "capture_t"):  # a MAVLink measurement
+            # one key per sensor (a laser and a sonar stream the same message type, stamps may be equal)
+            kind, t = (type(item), getattr(item, "sensor", None)), float(getattr(item, "t", np.nan))
+            if t < self._last_sample_t.get(kind, -np.inf):  # late and overtaken: never integrate backwards
+                self.counts["samples_out_of_order"] += 1
+                if self.counts["samples_out_of_order"] in (1, 10, 100, 1000):
+                    self.notify(f"{kind[0].__name__} out of order (t {t:.3f} s before {self._last_sample_t[kind]:.3f}"
+                                f" s): dropped ({self.counts['samples_out_of_order']} so far)")
+                return
+            self._last_sample_t[kind] = t
+            s = stream_of(item)
+            if s is not None:
+                self.fresh.seen(s, t)
             with self.nav_lock:
                 self.nav.update(item)
             return
@@ -331,6 +368,7 @@ class Bridge:
                             f" dropped ({self.counts['frames_out_of_order']} so far)")
             return
         self._last_frame_t = item.t
+        self.fresh.seen("camera", item.t)
         self.counts["frames"] += 1
         t0 = time.perf_counter()
         with self.nav_lock:
@@ -409,9 +447,13 @@ class Bridge:
         if usec is None or usec <= 0:
             self.counts["unsynced_outputs"] += 1
             return False
+        a = self.fresh.assess(est)
+        if not self._fresh_enough(a):
+            return False
         with self.nav_lock:
             health = self.nav.health(est.t)
         self._check_reset(est, health)
+        est = a.estimate  # the covariance grown with the inputs' age (io/bridge_freshness.py, eq. 3)
         q = mm.quality_from(est, health)
         if stalled:
             q = min(q, self.cfg.stall_quality)
@@ -425,7 +467,7 @@ class Bridge:
                 self.counts["no_origin_outputs"] += 1
                 return False
             unix = time.time() - (time.monotonic() - est.t)
-            msgs = [mm.encode_gps_input(L.mav, est, self.origin, usec, unix)]
+            msgs = [mm.encode_gps_input(L.mav, est, self.origin, usec, unix, fix_type=self.fresh.fix_type(a))]
         if self.cfg.send_health:
             msgs.append(mm.encode_health(L.mav, health, usec, self.requests_applied, frame_index))
         for m in msgs:
@@ -437,8 +479,40 @@ class Bridge:
             self.record("bridge_estimate", est.t, position=np.asarray(est.position, float),
                         velocity=np.asarray(est.velocity, float), euler=np.asarray(est.attitude, float),
                         valid=bool(est.valid), time_usec=int(usec), quality=int(q), reset_counter=self.reset_counter,
+                        sigma_h=_sigma_h(est), 
                         frame_index=int(frame_index))
         self.counts["estimates_out"] += 1
+        if L.link_ok:
+            self.counts["estimates_out_link_up"] += 1
+        return True
+
+    def _statustext(self, text: str, severity: int) -> None:
+        L = self.link
+        if L.target_system is not None:
+            L.send(L.mav.statustext_encode(severity, text.encode()[:50]))
+
+    def _fresh_enough(self, a: Assessment) -> bool:
+        """False while a stream is past its timeout (told once when the output stops, once when it resumes)."""
+        now = time.monotonic()
+        if not a.send:
+            self.counts["estimates_withheld"] += 1
+            if self._withheld is None:
+                self._withheld, self._withheld_at, self._withheld_reset = a, now, self.reset_counter
+                self.counts["output_stops"] += 1
+                b = self.cfg.freshness.budgets
+                self.notify(f"estimates stopped: {a.reason()} (timeout "
+                            f"{', '.join(f'{LABELS[k]} {b[k].timeout_s:g} s' for k in a.expired)}); "
+                            "resuming when it is back")
+                self._statustext(f"visnav: no estimate, {a.reason()}", mavlink.MAV_SEVERITY_WARNING)
+            return False
+        if self._withheld is not None:
+            gone = ", ".join(LABELS[k] for k in self._withheld.expired)
+            self.notify(f"estimates resumed: {gone} back after {now - self._withheld_at:.1f} s without an estimate")
+            self._statustext(f"visnav: estimates resumed ({gone} back)", mavlink.MAV_SEVERITY_INFO)
+            if self.reset_counter == self._withheld_reset:  # not already told by a link back
+                self._bump("estimates resumed after a gap")
+            self._prev = None  # no jump test across the gap: the reset says it
+            self._withheld = None
         return True
 
     # ------------------------------------------------------------------ reporting
@@ -457,24 +531,28 @@ class Bridge:
                 "latency_ms_median": float(np.median(lat)), "latency_ms_p95": float(np.percentile(lat, 95)),
                 "timesync_offset_ms": self.link.sync.offset_ms(), "timesync_rtt_ms": self.link.sync.rtt_ms(),
                 "reset_counter": self.reset_counter, "source": getattr(h, "source", "?"),
-                "frames": self.counts["frames"], "malformed": self.link.malformed, "stalled": self._stalled}
+                "frames": self.counts["frames"], "malformed": self.link.malformed, "stalled": self._stalled,
+                "withheld": "" if self._withheld is None else self._withheld.reason()}
 
     def metrics(self) -> dict:
-        dt = max(time.monotonic() - self._t0, 1e-6)
+        """``rate_in_hz`` / ``rate_out_hz``: counts over the time the link was up (``MavlinkLink.up_s``),
+        not over the session: a link down, or an autopilot not there yet, does not dilute them."""
+        dt = max(self.link.up_s(), 1e-6)
         lat = np.array(self.latency_ms) if self.latency_ms else np.array([np.nan])
         proc = np.array(self.proc_ms) if self.proc_ms else np.array([np.nan])
         arr = np.array(self.arrival_ms) if self.arrival_ms else np.array([np.nan])
         return {
             "link_ok": self.link.link_ok,
-            "rate_in_hz": {k: round(v / dt, 2) for k, v in sorted(self.link.counts_in.items())},
-            "rate_out_hz": round(self.counts["estimates_out"] / dt, 2),
+            "rate_in_hz": {k: round(v / dt, 2) for k, v in sorted(self.link.counts_up.items())},
+            "rate_out_hz": round(self.counts["estimates_out_link_up"] / dt, 2),
             "latency_capture_to_send_ms": {"median": float(np.median(lat)), "p95": float(np.percentile(lat, 95)),
                                            "n": len(self.latency_ms)},
             "processing_ms": {"median": float(np.median(proc)), "p95": float(np.percentile(proc, 95))},
             "latency_arrival_to_send_ms": {"median": float(np.median(arr)), "p95": float(np.percentile(arr, 95))},
             "timesync_offset_ms": self.link.sync.offset_ms(), "timesync_rtt_ms": self.link.sync.rtt_ms(),
             "reset_counter": self.reset_counter, "malformed_packets": self.link.malformed,
-            "link_losses": self.link.link_lost_count, **{k: int(v) for k, v in sorted(self.counts.items())},
+            "link_losses": self.link.link_lost_count, "link_up_s": round(self.link.up_s(), 3),
+            "session_s": round(time.monotonic() - self._t0, 3), **{k: int(v) for k, v in sorted(self.counts.items())},
         }
 
     def write_metrics(self, path: str | Path) -> None:
@@ -536,10 +614,16 @@ class BridgeRecording:
         return self.writer.close(self.camera, self.mount, 0.0, None, to_toml(self.sc))
 
 
+def _sigma_h(est: NavEstimate) -> float:
+    P = np.asarray(est.covariance, float)
+    return mm.horizontal_sigma(P) if np.all(np.isfinite(P[:2, :2])) else float("nan")
+
+
 def status_line(s: dict) -> str:
     rin = " ".join(f"{k.split('_')[0][:4].lower()}:{v:g}" for k, v in sorted(s["rate_in_hz"].items()) if v)
     return (f"link {'OK ' if s['link_ok'] else 'LOST'} | in {rin or '-'} Hz | out {s['rate_out_hz']:g} Hz | "
             f"lat {s['latency_ms_median']:.1f}/{s['latency_ms_p95']:.1f} ms (med/p95) | "
             f"offset {s['timesync_offset_ms']:.3f} ms rtt {s['timesync_rtt_ms']:.2f} ms | {s['source']} | "
             f"reset {s['reset_counter']} | frames {s['frames']}{' STALLED' if s['stalled'] else ''}"
+            f"{' | NO OUTPUT: ' + s['withheld'] if s.get('withheld') else ''}"
             f"{' | malformed ' + str(s['malformed']) if s['malformed'] else ''}")

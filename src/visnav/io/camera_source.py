@@ -81,14 +81,29 @@ class FrameSource:
 
 
 class VideoSource(FrameSource):
-    """``cv2.VideoCapture(source)``: a device index ("0"), a file, an RTSP or GStreamer URL."""
+    """``cv2.VideoCapture(source)``: a device index ("0"), a file, an RTSP or GStreamer URL. OpenCV's own log
+    is silenced while it tries (its WARN lines for a missing device reach stderr from C++); a source that does
+    not open raises CameraSourceError with one line."""
 
     def __init__(self, source: str, **kw):
         super().__init__(**kw)
         import cv2
 
-        self.cap = cv2.VideoCapture(int(source) if source.isdigit() else source)
-        if not self.cap.isOpened():
+        log = getattr(getattr(cv2, "utils", None), "logging", None)
+        level = log.getLogLevel() if log is not None else None
+        if log is not None:
+            log.setLogLevel(log.LOG_LEVEL_SILENT)
+        try:
+            self.cap = cv2.VideoCapture(int(source) if source.isdigit() else source)
+            ok = self.cap.isOpened()
+        finally:
+            if log is not None:
+                log.setLogLevel(level)
+        if not ok:
+            self.cap.release()
+            if source.isdigit():
+                raise CameraSourceError(f"camera {source}: no video device answers at index {source} (is a camera "
+                                        "connected?); on a desk give a folder of images: --camera FOLDER")
             raise CameraSourceError(f"camera {source!r}: cv2.VideoCapture cannot open it")
 
     def read(self) -> Captured | None:

@@ -8,6 +8,8 @@
   autopilot's once its HEARTBEAT is seen (a companion computer shares the vehicle's system id).
 * The autopilot's HEARTBEAT is watched: no HEARTBEAT for ``link_timeout_s`` is a link loss, the next one
   a link back (with how long it was gone); both are reported once through ``notify`` and counted.
+  ``up_s()`` is the time the link was up: from a HEARTBEAT that brought it up to the last message received
+  before it was lost (rates are measured over it, not over link-down time).
 * TIMESYNC: requests at ``timesync_hz`` (tc1 = 0, ts1 = our monotonic ns); replies to our own requests go to
   ``estimation.clock_sync.ClockSync``; the autopilot's requests are answered.
 * MAV_CMD_SET_MESSAGE_INTERVAL for the messages the navigator needs, (re)sent when the link comes up.
@@ -105,15 +107,20 @@ class MavlinkLink:
         self.link_lost_count = 0
         self.malformed = 0
         self.counts_in: Counter[str] = Counter()
+        self.counts_up: Counter[str] = Counter()  # received while the link was up (what rates are measured on)
         self.counts_out: Counter[str] = Counter()
         self.intervals: dict[int, float] = {}
         self._last_hb_rx: int | None = None
         self._lost_at: int | None = None
+        self._up_since: int | None = None  # when the link came up (ns), while it is up
+        self._up_ns = 0  # time up in earlier up periods
+        self._last_rx: int | None = None
         self._next_hb = 0
         self._next_ts = 0
         self._pending_ts: deque[int] = deque(maxlen=64)
         self._send_lock = threading.Lock()
         self.on_link_up: list[Callable[[], None]] = []
+        self.on_link_lost: list[Callable[[], None]] = []
 
     # ------------------------------------------------------------------ sending
     def send(self, msg) -> None:
@@ -173,11 +180,24 @@ class MavlinkLink:
         if self.link_ok and self._last_hb_rx is not None and now - self._last_hb_rx > self.link_timeout_ns:
             self.link_ok = False
             self._lost_at = self._last_hb_rx
+            if self._up_since is not None:  # up until the last message that came (messages follow the heartbeat)
+                self._up_ns += max(0, (self._last_rx or self._last_hb_rx) - self._up_since)
+                self._up_since = None
             self.link_lost_count += 1
             self.notify(f"autopilot link lost: no HEARTBEAT from {self.target_system}/{self.target_component} "
                         f"for {(now - self._last_hb_rx) / 1e9:.1f} s")
+            for cb in self.on_link_lost:
+                cb()
 
     # ------------------------------------------------------------------ receiving
+    def discard_pending(self, max_n: int = 100000) -> int:
+        """Drop what queued up in the socket before anyone read it (e.g. while a navigator was being built):
+        stale samples, and a burst that would make the link-up rates wrong. Returns how many."""
+        n = 0
+        while n < max_n and self.conn.recv_match(blocking=False) is not None:
+            n += 1
+        return n
+
     def poll(self, timeout_s: float = 0.01) -> list:
         """Messages received within ``timeout_s`` as (t_recv_s, msg), HEARTBEAT/TIMESYNC/BAD_DATA handled here."""
         out = []
@@ -198,6 +218,9 @@ class MavlinkLink:
                 self.notify(f"malformed MAVLink packet skipped ({reason}); {self.malformed} so far")
             return False
         self.counts_in[typ] += 1
+        if self.link_ok:
+            self.counts_up[typ] += 1
+        self._last_rx = now
         if self.tlog:
             self.tlog.write(msg)
         if typ == "HEARTBEAT":
@@ -222,6 +245,7 @@ class MavlinkLink:
         self._last_hb_rx = now
         if not self.link_ok:
             self.link_ok = True
+            self._up_since = now
             if first:
                 self.notify(f"autopilot {self.target_system}/{self.target_component} seen on {self.url}")
             else:
@@ -229,6 +253,11 @@ class MavlinkLink:
             self.request_intervals({})
             for cb in self.on_link_up:
                 cb()
+
+    def up_s(self, now_ns: int | None = None) -> float:
+        """Seconds the link has been up (see the module docstring)."""
+        now = self.clock_ns() if now_ns is None else now_ns
+        return (self._up_ns + (max(0, now - self._up_since) if self._up_since is not None else 0)) / 1e9
 
     def close(self) -> None:
         try:

@@ -230,10 +230,12 @@ def gps_time(unix_s: float) -> tuple[int, int]:
 
 
 def encode_gps_input(mav, est: NavEstimate, origin: LocalTangentPlane, time_usec: int, unix_s: float,
-                     gps_id: int = 0):
+                     gps_id: int = 0, fix_type: int | None = None):
     """GPS_INPUT: lat/lon/alt (AMSL = origin height - down) from the NED estimate and the origin; accuracies
     are 1-sigma [m, m/s]: horizontal = worst horizontal axis, vertical = sqrt(Pzz), speed = worst axis of
-    the velocity block. HDOP/VDOP are not meaningful for a vision fix: ignored (flags), sent as 0."""
+    the velocity block. HDOP/VDOP are not meaningful for a vision fix: ignored (flags), sent as 0.
+    ``fix_type``: the caller's (the bridge degrades it with its inputs' age, io/bridge_freshness.py); default
+    3D when valid, no fix when not."""
     P = np.asarray(est.covariance, float)
     lat, lon, alt = origin.ned_to_geodetic(np.asarray(est.position, float))
     ign = mavlink.GPS_INPUT_IGNORE_FLAG_HDOP | mavlink.GPS_INPUT_IGNORE_FLAG_VDOP
@@ -249,7 +251,8 @@ def encode_gps_input(mav, est: NavEstimate, origin: LocalTangentPlane, time_usec
         ign |= mavlink.GPS_INPUT_IGNORE_FLAG_VEL_HORIZ | mavlink.GPS_INPUT_IGNORE_FLAG_VEL_VERT
         v = np.zeros(3)
     week, week_ms = gps_time(unix_s)
-    fix = mavlink.GPS_FIX_TYPE_3D_FIX if est.valid else mavlink.GPS_FIX_TYPE_NO_FIX
+    fix = (mavlink.GPS_FIX_TYPE_3D_FIX if est.valid else mavlink.GPS_FIX_TYPE_NO_FIX) if fix_type is None \
+        else int(fix_type)
     return mav.gps_input_encode(int(time_usec), gps_id, ign, week_ms, week, fix,
                                 int(round(float(lat) * 1e7)), int(round(float(lon) * 1e7)), float(alt), 0.0, 0.0,
                                 float(v[0]), float(v[1]), float(v[2]), s_acc, h_acc, v_acc, SATELLITES_VISIBLE, 0)

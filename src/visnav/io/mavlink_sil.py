@@ -15,8 +15,9 @@ of our instants it meant, see ``tests``).
 
 The vehicle: a horizontal circle of radius ``radius_m`` at ``speed_mps`` and height ``height_m`` (truth in
 closed form: position, velocity, attitude with yaw along the track and the coordinated-turn bank, specific
-force). Faults: ``drop(seconds)`` stops all its output (a link drop), ``send_malformed()`` sends a
-MAVLink 2 frame with a broken CRC.
+force). Faults: ``drop(seconds)`` stops all its output (a link drop), ``stop_data(seconds)`` stops its
+sensor and position messages while HEARTBEAT and TIMESYNC go on (the autopilot's data stops, the link stays
+up), ``send_malformed()`` sends a MAVLink 2 frame with a broken CRC. The truth goes on meanwhile.
 """
 
 from __future__ import annotations
@@ -61,6 +62,8 @@ class CircleTruth:
 @dataclass
 class SilStats:
     received: dict = field(default_factory=dict)
+    sent: dict = field(default_factory=dict)  # messages sent by type (muted ones not counted)
+    send_span: list = field(default_factory=lambda: [None, None])  # monotonic instants of the first and last send
     ext_errors_m: list = field(default_factory=list)  # |external position - truth(time_usec)|
     ext_stamps_usec: list = field(default_factory=list)
     fused_errors_m: list = field(default_factory=list)  # |own solution - truth| after each correction
@@ -85,6 +88,7 @@ class SilAutopilot:
         self.stats = SilStats()
         self._stop = threading.Event()
         self._mute_until = 0.0
+        self._data_mute_until = 0.0
         self._correction = np.zeros(3)
         self._lock = threading.Lock()
         self.p0_hpa = 1013.25
@@ -122,14 +126,22 @@ class SilAutopilot:
     def drop(self, seconds: float) -> None:
         self._mute_until = time.monotonic() + seconds
 
+    def stop_data(self, seconds: float) -> None:
+        self._data_mute_until = time.monotonic() + seconds
+
     def send_malformed(self) -> None:
         buf = bytearray(self.mav.heartbeat_encode(2, 12, 0, 0, 4).pack(self.mav))
         buf[-1] ^= 0xFF  # break the CRC
         self.conn.write(bytes(buf))
 
     def _send(self, msg) -> None:
-        if time.monotonic() >= self._mute_until:
+        now = time.monotonic()
+        if now >= self._mute_until and (now >= self._data_mute_until or msg.get_type() == "HEARTBEAT"):
             self.mav.send(msg)
+            typ = msg.get_type()
+            self.stats.sent[typ] = self.stats.sent.get(typ, 0) + 1
+            self.stats.send_span[0] = now if self.stats.send_span[0] is None else self.stats.send_span[0]
+            self.stats.send_span[1] = now
 
     def _run(self, duration_s: float) -> None:
         period = {"hb": 1.0, "imu": 0.02, "att": 0.02, "baro": 0.1, "rng": 0.1, "gps": 0.1}
@@ -141,8 +153,8 @@ class SilAutopilot:
             bn = self.boot_ns(mono)
             p, v, e, f = self.truth.at(t)
             due = [k for k in period if t >= nxt[k]]
-            for k in due:
-                nxt[k] += period[k]
+            for k in due:  # a starved loop skips what it missed (an autopilot sends no burst of old samples)
+                nxt[k] = max(nxt[k] + period[k], t)
             if "hb" in due:
                 self._send(self.mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4,
                                                      mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0,

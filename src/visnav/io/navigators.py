@@ -179,6 +179,13 @@ def _target_truth(log) -> dict | None:
     return {"t_s": np.asarray(tr["t"], float), "n_m": np.full(n, p[0]), "e_m": np.full(n, p[1]), "d_m": np.zeros(n)}
 
 
+def _vo(sc, recorder, camera, mount, **_):
+    """Frame-only visual odometry of a photo survey (navigation/vo.py); the scenario is not used."""
+    from visnav.navigation.vo import VONavigator
+
+    return VONavigator(camera, recorder=recorder, mount=mount)
+
+
 NAVIGATORS: dict[str, NavigatorSpec] = {
     "palace": NavigatorSpec("palace-landing", ("palace", "hover", "pfcm"), ("imu", "attitude", "gps"), rmax_camera,
                             _rmax_camera_hz, _palace),
@@ -199,6 +206,7 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
                                  frame="target position: NED world, on the ground (down 0)", estimate_row=_target_row,
                                  finish=_geolocation_finish, truth=_target_truth,
                                  streams="visnav.sim.streams:GEOLOC_STREAMS"),
+    "vo": NavigatorSpec("witas-homing", (), ("frames", "gps"), rmax_camera, lambda sc: 0.2, _vo),
 }
 
 

@@ -17,6 +17,7 @@ A recording is a folder a user can fill from their own vehicle without our code:
     link.csv         t_s [, t_recv_s, seq]                      (CONDOR: uplink deliveries of the navigator's fixes)
     telemetry.csv    t_s, n_m, e_m, d_m, heading_rad, height_m, ground_speed_mps   (geo-location: the downlink)
     truth.csv        t_s, n_m, e_m, d_m [, roll_rad, pitch_rad, yaw_rad]   (where a reference exists)
+    mag_field.csv, optical_flow.csv, camera_trigger.csv   (from flight logs; kept, not delivered to navigators)
     commands.csv     t_s, seq, method, args  (simulated recordings: what the mission asked the navigator)
     scenario.toml    (simulated recordings: the resolved scenario)
 
@@ -54,6 +55,7 @@ class Stream:
     text: tuple[str, ...] = ()  # columns that stay strings
     alternatives: tuple[tuple[str, ...], ...] = ()  # other column sets accepted instead of ``required``
     written: tuple[str, ...] = ()  # what ``RecordingWriter`` writes (before t_recv_s, seq); default all
+    consumed: bool = True  # False: read and kept (a log's other sensors), never delivered to a navigator
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -81,6 +83,11 @@ STREAMS: dict[str, Stream] = {
     "link": Stream("link.csv", ("t_s",)),
     # MAV geo-location (seed 002 ch. 7): the autopilot's telemetry as the ground station receives it
     "telemetry": Stream("telemetry.csv", ("t_s", "n_m", "e_m", "d_m", "heading_rad", "height_m", "ground_speed_mps")),
+    # read from flight logs (io/logs.py) and kept for analysis; no navigator consumes them (never delivered)
+    "mag_field": Stream("mag_field.csv", ("t_s", "mx_ga", "my_ga", "mz_ga"), consumed=False),  # body FRD [gauss]
+    "optical_flow": Stream("optical_flow.csv", ("t_s", "flow_x_radps", "flow_y_radps", "body_x_radps", "body_y_radps",
+                                                "quality"), ("distance_m",), consumed=False),
+    "camera_trigger": Stream("camera_trigger.csv", ("t_s", "seq"), ("lat_deg", "lon_deg", "alt_m"), consumed=False),
 }
 TRUTH = Stream("truth.csv", ("t_s", "n_m", "e_m", "d_m"), ("vn_mps", "ve_mps", "vd_mps", "roll_rad", "pitch_rad",
                                                           "yaw_rad"))
@@ -235,7 +242,8 @@ def write_camera_yaml(path: Path, camera: PinholeCamera, mount: FixedMount | Non
     path.write_text(head + yaml.safe_dump(doc, sort_keys=False))
 
 
-def read_camera_yaml(path: Path) -> CameraInfo:
+def read_camera_yaml(path: Path, default_mount: FixedMount | None = None) -> CameraInfo:
+    """``default_mount``: the mount of a camera.yaml that names none (a photo survey's: nadir), else one is needed."""
     import yaml
 
     if not path.is_file():
@@ -265,6 +273,8 @@ def read_camera_yaml(path: Path) -> CameraInfo:
             mount = FixedMount.depressed(float(doc["depression_deg"]), tuple(doc.get("lever_arm_m", (0, 0, 0))))
         elif doc.get("gimbal") is True:
             mount = None
+        elif default_mount is not None:
+            mount = default_mount
         else:
             raise ValueError("no mount: give R_cam_to_body (3x3, camera -> body FRD), depression_deg, or "
                              "gimbal: true (attitude from camera_attitude.csv and pan.csv)")
@@ -292,6 +302,7 @@ class Recording:
     time_offset_s: float = 0.0  # added to frame stamps (camera clock -> IMU clock); camera.yaml's by default
     images: list | None = None  # decoded frames held in memory (logs: rosbag images), else files
     color: bool = False  # frames decoded to RGB (a navigator that uses colour: CONDOR), else 8-bit gray
+    summary: str = ""  # a log's one line: what was read, to the end or to the damage (io/logs.py)
     _video: dict = field(default_factory=dict, repr=False)  # file -> [cv2.VideoCapture, next frame number]
 
     @classmethod
@@ -334,7 +345,7 @@ class Recording:
 
     def delivery(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(t_recv, seq, stream index, row) of every sample, sorted in delivery order."""
-        names = list(self.streams)
+        names = [n for n in self.streams if n not in STREAMS or STREAMS[n].consumed]
         tr, sq, si, ri = [], [], [], []
         for j, n in enumerate(names):
             s = self.streams[n]

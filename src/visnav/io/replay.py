@@ -94,25 +94,15 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
 
 
 def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
-    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``): gyro of ``imu.csv`` against
-    the frames' rotation; the ground is assumed below the body (the camera's view of body down)."""
-    from visnav.estimation.timesync import estimate_offset, frame_rotation_angles
+    """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``: frame rotations from feature
+    tracks against the gyro, the camera-to-IMU rotation fitted with it); a ``CameraImuCalibration``."""
+    from visnav.analysis.check import camera_imu
 
     rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
-    if rec.camera.mount is None:
-        raise RecordingError(f"{rec.path / 'camera.yaml'}: a gimbal camera (gimbal: true); --time-offset auto needs a "
-                             "camera fixed to the body (R_cam_to_body): give the offset in seconds")
-    s = rec.streams["imu"]
-    gyro = np.column_stack([s["gx_radps"], s["gy_radps"], s["gz_radps"]])
-    decoded = [(float(t), rec.image(i)[0]) for i, t in enumerate(rec.streams["frames"]["t_s"])]
-    decoded = [(t, im) for t, im in decoded if im is not None]
-    cam = rec.camera
-    down = cam.mount.R_cam_to_body.T @ np.array([0.0, 0.0, 1.0])
-    pairs, ang = frame_rotation_angles([t for t, _ in decoded], (im for _, im in decoded), cam.camera.K, down)
-    try:
-        return estimate_offset(s["t_s"], gyro, pairs, ang, max_offset_s=max_offset_s)
-    except ValueError as exc:
-        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {exc}") from None
+    cal, why = camera_imu(rec, max_offset_s=max_offset_s)
+    if cal is None:
+        raise RecordingError(f"{rec.path}: cannot estimate the time offset: {why}")
+    return cal
 
 
 # ------------------------------------------------------------------------------------ the replay
@@ -158,9 +148,9 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     if opts.time_offset == "auto":
         est = offset_from_recording(rec)
         rec.time_offset_s = est.offset_s
-        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.sigma_s}
-        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.sigma_s * 1e3:.1f} ms (gyro/camera "
-                     f"cross-correlation, peak {est.peak:.2f})")
+        metrics |= {"time_offset_s": est.offset_s, "time_offset_sigma_s": est.offset_sigma_s}
+        notes.append(f"time offset {est.offset_s * 1e3:.1f} +- {est.offset_sigma_s * 1e3:.1f} ms (frame rotations vs "
+                     f"gyro, rate correlation {est.coarse.peak:.2f})")
     elif opts.time_offset is not None:
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
@@ -188,9 +178,13 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
                     "link_fixes_missing": counts["fixes_missing"]}
         if counts["fixes_missing"]:
             notes.append(f"link.csv: {counts['fixes_missing']} delivered fix(es) the replayed navigator did not make")
+    if hasattr(nav, "replay_metrics"):  # a navigator's own figures (vo: pairs_registered_share)
+        metrics |= nav.replay_metrics()
     if reference:
         metrics["reference"] = reference
         metrics |= _accuracy(log, True)
+        if opts.gps_until_s is not None:
+            metrics |= denied_metrics(log, opts.gps_until_s)
     metrics |= {"replay_wall_s": wall, "replay_cpu_s": cpu,
                 "replay_real_time_factor": dur / wall if wall > 0 else float("nan"),
                 "replay_real_time_factor_cpu": dur / cpu if cpu > 0 else float("nan"), "flight_duration_s": dur}
@@ -382,6 +376,27 @@ def _accuracy(log: FlightLog, has_truth: bool) -> dict:
     except TrajectoryError as exc:
         return {"ate_note": str(exc)}
     return {"ate_rmse_m": s["ate_rmse_m"], "ate_max_m": s["ate_max_m"], "rpe_rmse_m": s["rpe_rmse_m"]}
+
+
+def denied_metrics(log: FlightLog, t_cut: float) -> dict:
+    """The GPS-denied part of a replay (after ``t_cut``) against the reference, horizontally (a GPS altitude is
+    too noisy to score a height): ``final_error_m`` at the last reference sample, ``final_error_pct_of_distance``
+    = that over the reference's path length since ``t_cut`` in %, ``ate_rmse_denied_m`` over the denied part."""
+    est, ref = trajectories(log)
+    if est is None or ref is None or len(est) < 2:
+        return {}
+    keep = (ref.t > t_cut) & (ref.t >= est.t[0]) & (ref.t <= est.t[-1])
+    if not keep.any():
+        return {"denied_note": f"no reference sample after {t_cut:g} s within the estimate"}
+    t = ref.t[keep]
+    p_ref = ref.p[keep, :2]
+    p_est = np.column_stack([np.interp(t, est.t, est.p[:, j]) for j in range(2)])
+    start = np.array([np.interp(t_cut, ref.t, ref.p[:, j]) for j in range(2)])
+    dist = float(np.linalg.norm(np.diff(np.vstack([start, p_ref]), axis=0), axis=1).sum())
+    err = np.linalg.norm(p_est - p_ref, axis=1)
+    return {"final_error_m": float(err[-1]), "distance_denied_m": dist,
+            "final_error_pct_of_distance": float(100 * err[-1] / dist) if dist > 0 else float("nan"),
+            "ate_rmse_denied_m": float(np.sqrt(np.mean(err ** 2))), "denied_s": float(t[-1] - t_cut)}
 
 
 def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title: str = "visnav replay") -> Path:

@@ -39,3 +39,43 @@ def gps_stream(t, lat, lon, alt, vel=None, origin=None) -> dict:
     vel = np.asarray(vel, float)
     return {"t_s": t, "n_m": ned[:, 0], "e_m": ned[:, 1], "d_m": ned[:, 2], "vn_mps": vel[:, 0], "ve_mps": vel[:, 1],
             "vd_mps": vel[:, 2]}
+
+
+def sorted_stream(stream: dict, notes: list, what: str) -> dict:
+    """Sort by t_s (and drop non-finite stamps): logs are repaired with a note, not refused."""
+    t = stream["t_s"]
+    keep = np.isfinite(t)
+    if not keep.all():
+        notes.append(f"{what}: {int((~keep).sum())} samples without a valid time dropped")
+    o = np.argsort(np.where(keep, t, np.inf), kind="stable")[: int(keep.sum())]
+    if np.any(np.diff(o) < 0):
+        notes.append(f"{what}: samples re-sorted by time")
+    return {k: v[o] for k, v in stream.items()}
+
+
+def read_summary(name: str, dur: float, size: int, at: int | None, cut: bool, parts: list[str]) -> str:
+    """The one line a log reader gives: what was read, to the end or to the damage."""
+    where = (f"to the end ({size} bytes)" if at is None else
+             f"cut at byte {at} of {size} (the file ends inside a message)" if cut else
+             f"damaged at byte {at} of {size}, read on where messages resume")
+    return f"{name}: read {dur:.1f} s; {where}; " + ", ".join(parts)
+
+
+def mag_field_stream(t, mag_gauss) -> dict:
+    m = np.asarray(mag_gauss, float)
+    return {"t_s": np.asarray(t, float), "mx_ga": m[:, 0], "my_ga": m[:, 1], "mz_ga": m[:, 2]}
+
+
+def flow_stream(t, flow, dist=None) -> dict:
+    """``optical_flow`` columns: flow x, y and body rates x, y [rad/s], quality (0..255), distance [m]."""
+    f = np.asarray(flow, float)
+    out = {"t_s": np.asarray(t, float), "flow_x_radps": f[:, 0], "flow_y_radps": f[:, 1], "body_x_radps": f[:, 2],
+           "body_y_radps": f[:, 3], "quality": f[:, 4]}
+    return out | ({"distance_m": np.asarray(dist, float)} if dist is not None else {})
+
+
+def camera_stream(t, seq, lla=None) -> dict:
+    out = {"t_s": np.asarray(t, float), "seq": np.asarray(seq, float)}
+    if lla is not None:
+        out |= {"lat_deg": lla[:, 0], "lon_deg": lla[:, 1], "alt_m": lla[:, 2]}
+    return out

@@ -35,7 +35,7 @@ from collections import deque
 import numpy as np
 
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
-from visnav.measurements import (AttitudeSample, FixedWingEstimate, Frame, GpsSample, HeadingSample,
+from visnav.measurements import (read_only, AttitudeSample, FixedWingEstimate, Frame, GpsSample, HeadingSample,
                                  Health, NavInit, OperatorClick, PanSample, TargetRangeSample)
 from visnav.navigation.base import FrozenFrameCheck
 from visnav.navigation.fixedwing import AutopilotNavigator
@@ -282,7 +282,7 @@ class CondorNavigator(AutopilotNavigator):
         m = self._memo
         if m is not None and m[0] == t and m[1] == self._version:
             return m[2]
-        e = self._estimate(t)
+        e = read_only(self._estimate(t))  # handed out again at the same step: nobody may write into it
         self._memo = (t, self._version, e)
         return e
 

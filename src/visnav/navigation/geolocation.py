@@ -26,7 +26,8 @@ from collections import deque
 import numpy as np
 
 from visnav.estimation.rls import RecursiveLeastSquares
-from visnav.measurements import Frame, Health, OperatorClick, TargetEstimate, TelemetrySample
+from visnav.measurements import Frame, Health, NavInit, OperatorClick, TargetEstimate, TelemetrySample
+from visnav.navigation.base import CommandDispatch
 from visnav.vision.geolocation_registration import GeoRegistration, map_based_target
 from visnav.vision.template_tracker import RotatingTemplateTracker
 
@@ -38,7 +39,10 @@ def _interp_angle(a0: float, a1: float, w: float) -> float:
     return (a0 + w * d + math.pi) % (2 * math.pi) - math.pi
 
 
-class GeolocationNavigator:
+class GeolocationNavigator(CommandDispatch):
+    """Target geo-location (seed 002 ch. 7) behind the common navigator protocol (``navigation/base``): the target's
+    (north, east) from frames registered to a geo-referenced image, fused by RLS, against the map-based ray."""
+
     def __init__(self, reference, camera, *, hough: bool = True, median_px: int = 5, search_radius_m: float = 25.0,
                  min_quality: float = 0.05, registration_sigma_m: float = 1.5, map_sigma_m: float = 10.0,
                  gate_prob: float | None = 0.999, tracker_min_score: float = 0.75,
@@ -83,6 +87,21 @@ class GeolocationNavigator:
             self.pending.append(m)
         else:
             raise TypeError(f"GeolocationNavigator cannot use {type(m).__name__}")
+
+    def initialize(self, init: NavInit) -> None:
+        """An operator reset: both estimates restart from no sample (the target's position is what this
+        navigator estimates, so an initial pose of the vehicle has nothing to set)."""
+        self._cmd_restart(init.t)
+
+    def _cmd_restart(self, t: float) -> None:
+        """Forget the fused samples (both RLS estimates); the tracker keeps its target."""
+        for r in self.rls.values():
+            r.reset()
+        self.notes.append(f"restarted at t={t:.2f} s")
+
+    def _cmd_track(self, t: float, pixel) -> None:
+        """Designate the target at ``pixel`` in the frame at ``t`` (what an ``OperatorClick`` does)."""
+        self.update(OperatorClick(t, np.asarray(pixel, float)))
 
     def _telemetry_at(self, t: float) -> TelemetrySample | None:
         tel = list(self.telemetry)

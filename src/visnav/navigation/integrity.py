@@ -321,3 +321,109 @@ def gyro_check_from(block) -> GyroAttitudeCheck | None:
         return None
     return GyroAttitudeCheck(block.gyro_check_alpha, block.gyro_check_window_s,
                              math.radians(block.gyro_check_attitude_sigma_deg))
+
+
+class StuckRangeCheck:
+    """Is a range sensor (laser, sonar) stuck on one value while the vehicle moves vertically? (issue #30)
+
+    A working range sensor's readings carry noise and follow the height: ``samples`` readings in a row that
+    are identical (within ``tolerance_m``: a float repeat; a sensor that quantises would use its quantum)
+    while the vertical speed estimate says the range must have changed by at least ``min_change_m`` over
+    them (``|v_z| (t_last - t_first)``, ``v_z`` at the first of them: the stuck readings the filter fuses pull
+    its vertical speed towards zero) are a stuck sensor. A vehicle that hovers cannot tell (nor does a
+    stuck range then mislead it). ``stuck`` holds until a reading differs from the stuck value again;
+    ``onset`` is the first of the repeated readings (the fault began then or before), ``error_bound(t)`` the
+    range error the readings used between the onset and the detection can carry (``|v_z|`` times that
+    time; the navigator uses none after the detection).
+    """
+
+    def __init__(self, samples: int = 3, min_change_m: float = 0.05, tolerance_m: float = 1e-6):
+        self.samples = int(samples)
+        self.min_change_m = float(min_change_m)
+        self.tolerance_m = float(tolerance_m)
+        self._q: deque = deque(maxlen=self.samples)
+        self.stuck = False
+        self.onset: float | None = None
+        self.detected_t: float | None = None
+        self.rate_mps = 0.0
+        self.value = math.nan
+
+    def add(self, t: float, r: float, vz: float) -> bool:
+        """One reading and the vertical speed estimate [m/s] at it; True while the sensor is stuck."""
+        if not math.isfinite(r):
+            self._q.clear()
+            return self.stuck
+        if self.stuck:
+            if abs(r - self.value) > self.tolerance_m:  # the sensor moves again
+                self.stuck = False
+                self._q.clear()
+            else:
+                return True
+        self._q.append((float(t), float(r), abs(float(vz))))
+        if len(self._q) < self.samples:
+            return False
+        rs = [x for _, x, _ in self._q]
+        t0, _, vz0 = self._q[0]
+        if max(rs) - min(rs) <= self.tolerance_m and vz0 * (t - t0) >= self.min_change_m:
+            self.stuck, self.value = True, rs[0]
+            self.onset, self.detected_t, self.rate_mps = t0, float(t), vz0
+        return self.stuck
+
+    def error_bound(self, t: float) -> float:
+        """Range error [m] the readings used from the onset to the detection can carry (0 before one)."""
+        if self.onset is None or self.detected_t is None:
+            return 0.0
+        return self.rate_mps * max(min(t, self.detected_t) - self.onset, 0.0)
+
+
+class TiltCheck:
+    """Does a navigation filter's tilt agree with the autopilot's attitude solution? (issue #30)
+
+    A horizontal accelerometer bias ``b`` that an INS filter cannot tell from a tilt (position aids alone)
+    is taken into its roll / pitch: the filter leaves the autopilot's (independent) attitude by
+    ``~ b / g``. ``update(t, d)`` takes the roll / pitch difference [rad] (filter minus autopilot, at the same
+    instant); above ``limit_rad`` for ``persist_s`` it flags (once): ``detected_t``, ``angle`` (the
+    difference then) and ``onset``, when the difference last rose above half the limit (the bias began
+    about then). ``position_bound()``: the horizontal error the unmodelled acceleration ``g sin(angle)`` can
+    have built from the onset to the detection, ``g sin(angle) T^2 / 2``.
+    """
+
+    def __init__(self, limit_deg: float = 1.5, persist_s: float = 1.0):
+        self.limit = math.radians(limit_deg)
+        self.persist_s = float(persist_s)
+        self.onset: float | None = None
+        self._above: float | None = None
+        self.detected_t: float | None = None
+        self.angle = 0.0
+        self.last = 0.0
+
+    def update(self, t: float, d) -> bool:
+        """One comparison; True at the flag (once)."""
+        a = float(np.hypot(*np.asarray(d, float)[:2]))
+        self.last = a
+        if self.detected_t is not None:
+            return False
+        if a <= 0.5 * self.limit:
+            self.onset, self._above = None, None
+            return False
+        if self.onset is None:
+            self.onset = float(t)
+        if a <= self.limit:
+            self._above = None
+            return False
+        if self._above is None:
+            self._above = float(t)
+        if t - self._above >= self.persist_s:
+            self.detected_t, self.angle = float(t), a
+            return True
+        return False
+
+    def position_bound(self) -> float:
+        if self.detected_t is None or self.onset is None:
+            return 0.0
+        T = self.detected_t - self.onset
+        return 9.81 * math.sin(self.angle) * T * T / 2
+
+
+register_stream("tilt_check", angle=("deg", "", "filter roll / pitch minus the autopilot's (navigation/integrity."
+                                                  "TiltCheck)"))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -35,9 +36,9 @@ from visnav.measurements import (
     RangeSample,
 )
 from visnav.navigation.base import CommandDispatch, propagate
-from visnav.navigation.integrity import NavIntegrity, gps_check_from, watch_gps
-from visnav.vision.correlation import PnccTracker
-from visnav.vision.interest import forstner
+from visnav.navigation.integrity import NavIntegrity, StuckRangeCheck, gps_check_from, watch_gps
+from visnav.vision.correlation import PnccTracker, distinct_points
+from visnav.vision.interest import forstner, forstner_top_k
 from visnav.log_schema import register_stream
 
 _NED = "NED world (origin at the scenario's home)"
@@ -81,7 +82,12 @@ class PalaceNavigator(CommandDispatch):
             min_coherence=tc.min_coherence, mode="anchored" if anchored_sub else tc.mode,
         )
         self.tracker: PnccTracker | None = None
-        self.filter = PositionFilter(accel_noise=cfg.accel_noise)
+        # with an accelerometer-bias state per axis (issue #30; navigation.accel_bias_noise = 0: without)
+        self.filter = PositionFilter(accel_noise=cfg.accel_noise, accel_bias_noise=getattr(cfg, "accel_bias_noise", 0.0),
+                                     sigma_b=getattr(cfg, "accel_bias_sigma", 0.0))
+        # stuck laser / sonar (issue #30): identical ranges while the height changes
+        n, dz = getattr(cfg, "range_stuck_samples", 3), getattr(cfg, "range_stuck_min_change_m", 0.05)
+        self.stuck = {"laser": StuckRangeCheck(n, dz), "sonar": StuckRangeCheck(n, dz)}
         self.att = History(3, 256, angles=(2,), tolerance=0.02)  # attitude samples (roll, pitch, yaw)
         self.lasers: deque[RangeSample] = deque(maxlen=64)
         self.frames: deque[Frame] = deque(maxlen=8)
@@ -188,12 +194,13 @@ class PalaceNavigator(CommandDispatch):
         if np.isfinite(r) and r < 0:
             self.h.rejected_ranges += 1
             return
+        stuck = self._stuck(m) if m.sensor in self.stuck else False
         if m.sensor == "laser":
-            self.lasers.append(m)
             self.recorder("laser", m.t, range=r, beam_offset=m.beam_offset)  # laser delay identification
-            self.h.laser_ok = bool(np.isfinite(r))
+            self.lasers.append(replace(m, range=math.nan) if stuck else m)  # a stuck laser gives no MPE fix
+            self.h.laser_ok = bool(np.isfinite(r)) and not stuck
             return
-        if not np.isfinite(r):
+        if not np.isfinite(r) or stuck:
             return
         self.last_sonar = m
         if self.source == "inertial" and self.att.k:
@@ -204,6 +211,19 @@ class PalaceNavigator(CommandDispatch):
             z = -r * C[2, 2]
             self.filter.update_position(np.array([0.0, 0.0, z]), 0.03, axes=(2,))
             self.integrity.record(m.t, "sonar", float(self.filter.last_nis[0]), 1, True)
+
+    def _stuck(self, m: RangeSample) -> bool:
+        """The stuck-range test of the sensor (``navigation/integrity.StuckRangeCheck``); its detection latches a
+        suspicion: the MPE fixes (laser) or heights (sonar) used since the onset carry the range error it
+        bounds, the HPL grows by it."""
+        c = self.stuck[m.sensor]
+        was = c.stuck
+        now = c.add(m.t, m.range, float(self.filter.v[2]) if self.filter.initialized else 0.0)
+        if now and not was:
+            why = f"{m.sensor} range stuck at {c.value:.2f} m since {c.onset:.1f} s while the height changes"
+            self._note(f"{m.t:.1f}s {why}")
+            self.integrity.suspect(f"{m.sensor}_stuck", why, c.error_bound)
+        return now
 
     def _on_gps(self, m: GpsSample) -> None:
         if not (np.all(np.isfinite(m.position)) and np.all(np.isfinite(m.velocity))):
@@ -337,6 +357,13 @@ class PalaceNavigator(CommandDispatch):
         y1 = int(np.clip(uv[1] + half, margin + 1, H - margin))
         tc = self.cfg.tracker
         pt = forstner(f.image, feature_size=tc.feature_size, region=(x0, y0, x1, y1), min_isotropy=tc.min_isotropy)
+        if pt is not None and tc.max_self_coherence < 1.0:  # distinctness guard: strongest point with no copy near
+            cands = forstner_top_k(f.image, 8, feature_size=tc.feature_size, region=(x0, y0, x1, y1),
+                                   min_isotropy=tc.min_isotropy, min_distance=5.0)
+            ok = distinct_points(f.image, cands, tc.template_px, tc.search_radius_px, tc.max_self_coherence)
+            if not ok:
+                self._note(f"{f.t:.1f}s no distinct Förstner point near {uv.round(0)} (self-coherence guard)")
+            pt = ok[0] if ok else pt
         if pt is None:
             self._note(f"{f.t:.1f}s Förstner found no point near {uv.round(0)}")
             return
@@ -385,12 +412,27 @@ class PalaceNavigator(CommandDispatch):
         self._reference_var = ic.reference_sigma_m**2 + carried
         self._reference_t = t
 
+    def _watch_bias(self) -> None:
+        """An estimated horizontal accelerometer bias above ``accel_bias_alarm_mps2`` is reported (integrity
+        degraded, no HPL term: the filter compensates it and its covariance holds its uncertainty); below
+        half of it the report ends."""
+        f, limit = self.filter, getattr(self.cfg, "accel_bias_alarm_mps2", math.inf)
+        if not f.has_bias:
+            return
+        b = float(np.hypot(f.b[0], f.b[1]))
+        if b > limit and "accel_bias" not in self.integrity.suspicions:
+            self.integrity.suspect("accel_bias", f"accelerometer bias {b:.2f} m/s^2 estimated (compensated)",
+                                   lambda t: 0.0)
+        elif b < 0.5 * limit:
+            self.integrity.clear("accel_bias")
+
     def health(self, t: float | None = None) -> Health:
         if t is not None:
             self.h.mpe_rate_hz = self.mpe_rate(t)
         self.h.source = self.source
         if t is not None:
             f = self.filter
+            self._watch_bias()
             self.integrity.fill(self.h, t, f.covariance()[:2, :2] if f.initialized else None,
                                 self._mpe_unobserved_var(t))
         return self.h

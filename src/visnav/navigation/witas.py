@@ -37,7 +37,7 @@ from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample, Health, ImuSample,
                                  NavEstimate, NavInit)
 from visnav.navigation.base import CommandDispatch, FrozenFrameCheck, propagate
-from visnav.navigation.integrity import (HandoverCheck, NavIntegrity, gps_check_from, gyro_check_from,
+from visnav.navigation.integrity import (HandoverCheck, NavIntegrity, TiltCheck, gps_check_from, gyro_check_from,
                                         watch_gps)
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
@@ -143,6 +143,19 @@ class _EskfBackend:
     def update_heading(self, yaw, sigma) -> None:
         self._keep(self.kf.update_heading(yaw, sigma))
 
+    def open_accel_bias(self, sigma: float, noise: float) -> None:
+        """An accelerometer fault flagged (issue #30): the bias states are opened by ``sigma`` [m/s^2] and follow
+        a random walk of ``noise`` from now on (they learn the faulty bias, and its end)."""
+        from visnav.estimation.eskf import BA_
+
+        self.kf.P[BA_, BA_] += np.eye(3) * sigma * sigma
+        self.kf.retune(accel_bias_noise=max(self.kf.cfg.accel_bias_noise, noise))
+
+    def aid_attitude(self, euler, sigma) -> None:
+        """The autopilot's attitude fused (``sigma``: [rad] per NED axis), not gated and not in the integrity
+        windows (an aid of the filter's attitude, not of its position)."""
+        self.kf.update_attitude(euler, sigma, gate=False)
+
     def state(self):
         x = self.kf.x
         return x.t, x.position.copy(), x.velocity.copy(), x.euler.copy(), self.kf.P[:6, :6].copy()
@@ -201,6 +214,12 @@ class WitasNavigator(CommandDispatch):
         # the ESKF's gyros against the autopilot's attitude solution (a gyro bias step): None when off
         self.gyro_check = gyro_check_from(ic)
         self._gyro_steps = 0
+        # the ESKF's tilt against the autopilot's (an accelerometer bias taken for a tilt, issue #30): None when off;
+        # after a flag the autopilot's attitude is fused at 10 Hz (ahrs_aid)
+        self.tilt_check = (TiltCheck(ic.tilt_check_deg, ic.tilt_check_persist_s)
+                           if ic is not None and getattr(ic, "tilt_check", False) else None)
+        self.ahrs_aid = False
+        self._tilt_t = -math.inf
 
     def initialize(self, init: NavInit) -> None:
         """Start the GPS-phase filter at an explicit pose (otherwise it starts at the first GPS fix)."""
@@ -284,6 +303,10 @@ class WitasNavigator(CommandDispatch):
             self.hist.push(t, np.concatenate((p, eul)))
             if self.gyro_check is not None and isinstance(self.backend, _EskfBackend):
                 self._check_gyro(m.t, gyr, dt)
+            if isinstance(self.backend, _EskfBackend) and (self.tilt_check is not None or self.ahrs_aid) \
+                    and m.t - self._tilt_t >= 0.1 - 1e-6:
+                self._tilt_t = m.t
+                self._check_tilt(m.t)
             self._ins_only_step(m.t, acc, gyr, dt, e)
         elif self.gps_filter.initialized and e is not None:
             self.gps_filter.predict(m.t, a_ned := accel_ned(euler_to_dcm(e), m.accel))
@@ -368,6 +391,38 @@ class WitasNavigator(CommandDispatch):
                f"over {T:.1f} s (chi2(3) {g.last_stat:.0f} > {g.bound:.0f} at {g.detected_t:.1f} s): gyros excluded, "
                "navigating on the autopilot's attitude")
         self.integrity.suspect("gyro", why, lambda _t, dp=dp: dp)
+        self._note(f"{t:.1f}s {why}")
+
+    def _check_tilt(self, t: float) -> None:
+        """10 Hz: the ESKF's roll / pitch against the autopilot's at the autopilot's newest instant
+        (``TiltCheck``); on a flag the bias states are opened and the autopilot's attitude is fused from then
+        on (the tilt is pinned: a horizontal accelerometer bias becomes observable from the position fixes);
+        the state is degraded and the HPL grows by what the bias can have built before the flag."""
+        if not self.att.k:
+            return
+        ta = self.att.newest_t
+        if self.ahrs_aid:
+            ic = self.cfg.integrity
+            s = math.radians(ic.tilt_aid_sigma_deg)
+            e = self.att.at(t) if t <= ta + 1e-9 else self.att.newest()
+            self.backend.aid_attitude(e, np.array([s, s, math.radians(10.0)]))
+            return
+        look = self.hist.at(ta)
+        if look is None:
+            return
+        d = look[3:5] - self.att.newest()[:2]
+        c = self.tilt_check
+        flagged = c.update(t, d)
+        self.recorder("tilt_check", t, angle=math.degrees(c.last))
+        if not flagged:
+            return
+        ic = self.cfg.integrity
+        self.backend.open_accel_bias(ic.tilt_fault_accel_bias_sigma_mps2, ic.tilt_fault_accel_bias_noise)
+        self.ahrs_aid = True
+        dp = c.position_bound()
+        why = (f"filter tilt {math.degrees(c.angle):.1f} deg from the autopilot's for {ic.tilt_check_persist_s:g} s "
+               f"(an accelerometer bias taken for a tilt?): the autopilot's attitude fused, bias states opened")
+        self.integrity.suspect("accel_tilt", why, lambda _t, dp=dp: dp)
         self._note(f"{t:.1f}s {why}")
 
     # ------------------------------------------------------------------ INS-only comparison track

@@ -25,6 +25,8 @@ class DeckWorldConfig(_M):
     lights_m: list[list[float]] = Field(
         default_factory=lambda: [[-0.128, 0.0, 0.0], [0.0, -0.102, 0.0], [0.0, 0.102, 0.0], [0.058, 0.0, 0.0]],
         description="deck lights, deck frame (eq. 5.10)")
+    light_survey_error_m: float = Field(0.01, ge=0, le=0.2, description="1-sigma per axis of each light's true "
+                                        "position about lights_m, the surveyed one the filter uses (issue 30)")
 
     @field_validator("lights_m")
     @classmethod
@@ -67,6 +69,15 @@ class DeckCameraConfig(_M):
                                                   description="bright points that are not deck lights (deck frame)")
     hide_light: int = Field(-1, ge=-1, le=63, description="index of a light that drops out of view")
     hide_after_s: float = Field(0.0, ge=0, le=3600)
+    misalignment_deg: float = Field(1.0, ge=0, le=10, description="1-sigma per axis of the small rotation between "
+                                    "the true camera mounting and the calibrated one (depression_deg, yaw_deg) the "
+                                    "filter uses (issue 30)")
+    focal_error_frac: float = Field(0.01, ge=0, le=0.2, description="1-sigma of the true focal length's relative "
+                                    "error against focal_px (one factor for fx and fy; issue 30)")
+    principal_point_error_px: float = Field(4.0, ge=0, le=50, description="1-sigma per axis of the true principal "
+                                            "point about the image centre (about 1 % of the focal length)")
+    time_offset_s: float = Field(0.01, ge=0, le=0.2, description="each frame shows the scene this long before "
+                                 "its stamp on the IMU's clock (an uncompensated camera/IMU offset; issue 30)")
 
     def pinhole(self):
         """The camera's intrinsics (``geometry.camera.PinholeCamera``), with eq. 5.6-5.7 distortion if enabled."""
@@ -90,6 +101,19 @@ class DeckImuConfig(_M):
     attitude_noise_deg: float = Field(0.1, ge=0, le=5, description="autopilot roll/pitch used for T_g g (eq. 3.4)")
     rate_hz: float = Field(100.0, gt=1, le=1000, description="IMU and autopilot attitude rate (realised as a whole "
                            "number of run.dt_s steps)")
+    accel_bias_mps2: float = Field(0.05, ge=0, le=2, description="1-sigma per axis of the accelerometer bias at the "
+                                   "start (left after the autopilot's calibration; issue 30)")
+    gyro_bias_deg_s: float = Field(0.1, ge=0, le=10, description="1-sigma per axis of the gyro bias at the start")
+    accel_bias_walk_mps2_sqrt_s: float = Field(0.002, ge=0, le=1, description="accelerometer bias random walk "
+                                               "(the bias drifts by this times sqrt(t))")
+    gyro_bias_walk_deg_s_sqrt_s: float = Field(0.005, ge=0, le=1, description="gyro bias random walk")
+
+
+#: ``--set`` overrides that turn every simulated calibration and sensor error of issue 30 off (the ideal case)
+IDEAL_DECK_SENSORS = ("mission.deck.light_survey_error_m=0", "sensors.camera.misalignment_deg=0",
+                      "sensors.camera.focal_error_frac=0", "sensors.camera.principal_point_error_px=0",
+                      "sensors.camera.time_offset_s=0", "sensors.imu.accel_bias_mps2=0", "sensors.imu.gyro_bias_deg_s=0",
+                      "sensors.imu.accel_bias_walk_mps2_sqrt_s=0", "sensors.imu.gyro_bias_walk_deg_s_sqrt_s=0")
 
 
 class DeckFilterConfig(_M):
@@ -102,6 +126,16 @@ class DeckFilterConfig(_M):
     bearing_rate_noise_deg_s: float | None = Field(None, gt=0, le=100, description="sigma of each bearing rate "
                                                    "(§3.1.2; the thesis used 2); None: sqrt(2) x the bearing sigma x "
                                                    "the frame rate (a difference of two frames)")
+    calibration_bearing_deg: float | None = Field(None, ge=0, le=20, description="the camera calibration's share "
+                                                  "of each bearing's sigma, added to R (issue 30); None: from the "
+                                                  "camera's specified misalignment, principal point and focal errors")
+    light_survey_sigma_m: float | None = Field(None, ge=0, le=0.5, description="the light survey's sigma the "
+                                               "filter adds to R as sigma / range; None: mission.deck's "
+                                               "light_survey_error_m")
+    calibration_floor: bool = Field(True, description="keep the position and attitude variances at least at the "
+                                    "calibration's constant share (misalignment x range, survey error over the "
+                                    "layout) after each update, so that the covariance does not claim what the "
+                                    "frames cannot average out")
     acquisition_bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="bearing sigma while the filter "
                                                  "converges before hand-over (the thesis' R; from a far-off start "
                                                  "a sensor-sized R collapses P before the nonlinear errors are gone)")

@@ -92,6 +92,20 @@ class WitasIntegrityConfig(GpsCheckBlock, GyroCheckBlock):
                                  "the Kalman filter kept in the hand-over frame (navigation/integrity.HandoverCheck)")
     handover_alpha: float = Field(1e-4, gt=0, lt=0.5, description="level of the hand-over test (chi-square(2))")
     handover_updates: int = Field(3, ge=1, le=100, description="registrations in a row above the bound to latch")
+    # issue #30: an accelerometer bias the ESKF takes for a tilt (navigation/integrity.TiltCheck)
+    tilt_check: bool = Field(True, description="compare the ESKF's roll / pitch with the autopilot's attitude "
+                             "solution; a lasting difference (an accelerometer bias taken for a tilt) -> degraded, "
+                             "HPL + what it can have built, the autopilot's attitude fused from then on and the "
+                             "bias states opened (they learn the bias)")
+    tilt_check_deg: float = Field(1.5, gt=0, le=90, description="the tilt difference that flags (fault-free "
+                                  "campaign: below 0.8 deg; a 0.3 m/s^2 bias: 1.7 deg per axis)")
+    tilt_check_persist_s: float = Field(1.0, ge=0, le=30, description="for at least this long")
+    tilt_fault_accel_bias_sigma_mps2: float = Field(0.5, gt=0, le=10, description="1-sigma accelerometer bias "
+                                                    "the bias states are opened to on a flag")
+    tilt_fault_accel_bias_noise: float = Field(0.02, ge=0, le=10, description="accelerometer bias random walk "
+                                               "of the ESKF after a flag, m/s^2/sqrt(s) (the bias may end or change)")
+    tilt_aid_sigma_deg: float = Field(0.2, gt=0, le=10, description="1 sigma of the autopilot's roll / pitch "
+                                      "fused after a flag (its heading: 10 deg, the compass holds it)")
 
 
 class PadIntegrityConfig(GyroCheckBlock):

@@ -126,6 +126,9 @@ class TrackerConfig(_M):
     min_coherence: float = Field(0.5, ge=-1, le=1)
     feature_size: int = Field(7, ge=1, le=31)
     min_isotropy: float = Field(0.2, ge=0, le=1)
+    max_self_coherence: float = Field(0.9, ge=0, le=1, description="distinctness guard: skip a Förstner point "
+                                      "whose template matches a copy within the search window at least this well "
+                                      "(vision.correlation.self_coherence; 1 = off, the thesis)")
 
 
 class MpeConfig(_M):
@@ -147,6 +150,20 @@ class NavigationConfig(_M):
     tracker: TrackerConfig = TrackerConfig()
     mpe: MpeConfig = MpeConfig()
     accel_noise: float = Field(0.3, ge=0, le=10, description="process noise of the position filter, m/s^2")
+    # issue #30: the position filter estimates the accelerometer bias (NED, per axis) from the GPS / MPE /
+    # sonar updates, so the final metre's dead reckoning runs on a corrected acceleration
+    accel_bias_noise: float = Field(0.05, ge=0, le=5, description="random walk of the position filter's "
+                                    "accelerometer-bias state, m/s^2/sqrt(s) (0: no bias state); 0.05 lets a "
+                                    "0.3 m/s^2 step be followed within a few seconds of MPE fixes")
+    accel_bias_sigma: float = Field(0.05, ge=0, le=5, description="1 sigma of that bias at the filter's start, "
+                                    "m/s^2 (the simulated IMU's constant bias: 0.01)")
+    accel_bias_alarm_mps2: float = Field(0.1, gt=0, le=10, description="estimated horizontal accelerometer "
+                                         "bias above this -> integrity degraded (reported, compensated)")
+    range_stuck_samples: int = Field(3, ge=2, le=100, description="this many laser / sonar ranges in a row "
+                                     "identical while the vehicle moves vertically -> that sensor is stuck")
+    range_stuck_min_change_m: float = Field(0.05, gt=0, le=10, description="the vertical motion over those "
+                                            "samples (|v_z| x time) that must have changed the range for the test "
+                                            "to apply")
     integrity: PalaceIntegrityConfig = PalaceIntegrityConfig()
 
 

@@ -51,17 +51,28 @@ class Imu:
 
 
 class AccelGyro:
-    """Accelerometers and gyros with white noise only (the deck Y6's Pixhawk IMU, seed 003 §5.1)."""
+    """Accelerometers and gyros (the deck Y6's Pixhawk IMU, seed 003 §5.1): white noise plus a bias that starts at
+    ``accel_bias`` / ``gyro_bias`` (3,) and random-walks by ``*_bias_walk`` per sqrt(s), its steps drawn from
+    ``bias_rng`` (a generator of its own, so that the noise draws do not depend on the bias settings)."""
 
     def __init__(self, rng: np.random.Generator, accel_noise: float, gyro_noise: float, rate_hz: float = 100.0,
-                 latency_s: float = 0.0):
+                 latency_s: float = 0.0, accel_bias=(0.0, 0.0, 0.0), gyro_bias=(0.0, 0.0, 0.0),
+                 accel_bias_walk: float = 0.0, gyro_bias_walk: float = 0.0,
+                 bias_rng: np.random.Generator | None = None):
         self.rng, self.rate_hz, self.latency_s = rng, rate_hz, latency_s
         self.accel_noise, self.gyro_noise = accel_noise, gyro_noise
+        self.accel_bias, self.gyro_bias = np.array(accel_bias, float), np.array(gyro_bias, float)
+        self.walk = np.repeat([accel_bias_walk, gyro_bias_walk], 3) * np.sqrt(1.0 / rate_hz)  # per sample
+        self.bias_rng = bias_rng if bias_rng is not None else np.random.default_rng(0)
+        self._walking = bool(np.any(self.walk > 0))
 
     def sample(self, t: float, truth_at: TruthAt, world=None) -> ImuSample:
         s = truth_at(t)
-        acc = s.specific_force + self.accel_noise * self.rng.standard_normal(3)
-        gyro = s.body_rates + self.gyro_noise * self.rng.standard_normal(3)
+        acc = s.specific_force + self.accel_bias + self.accel_noise * self.rng.standard_normal(3)
+        gyro = s.body_rates + self.gyro_bias + self.gyro_noise * self.rng.standard_normal(3)
+        if self._walking:  # b_{k+1} = b_k + sigma_walk sqrt(dt) n_k
+            step = self.walk * self.bias_rng.standard_normal(6)
+            self.accel_bias, self.gyro_bias = self.accel_bias + step[:3], self.gyro_bias + step[3:]
         return ImuSample(t=t, accel=acc, gyro=gyro)
 
 

@@ -24,7 +24,9 @@ from visnav.measurements import Frame
 class LedCamera:
     def __init__(self, camera, T_cam: np.ndarray, rho: np.ndarray, rng: np.random.Generator, noise_gray: float = 2.0,
                  spot_sigma_px: float = 1.3, sea_gray: int = 25, deck_gray: int = 60, centroid_noise_px: float = 0.0,
-                 jitter_rng: np.random.Generator | None = None, rate_hz: float = 30.0, latency_s: float = 0.0):
+                 jitter_rng: np.random.Generator | None = None, rate_hz: float = 30.0, latency_s: float = 0.0,
+                 time_offset_s: float = 0.0):
+        self.time_offset_s = time_offset_s  # the frame shows the scene this long before its stamp
         self.camera, self.T_cam, self.rho = camera, np.asarray(T_cam, float), np.asarray(rho, float)
         self.rng = rng
         self.rate_hz, self.latency_s = rate_hz, latency_s
@@ -135,9 +137,11 @@ class LedCamera:
         return img
 
     def sample(self, t: float, truth_at, world) -> Frame:
-        """The frame taken at ``t`` of the deck scene ``world`` (``world/deck.DeckWorld``)."""
-        s = truth_at(t)
-        ds = world.motion.state(t)
+        """The frame stamped ``t`` of the deck scene ``world`` (``world/deck.DeckWorld``), taken ``time_offset_s``
+        earlier."""
+        t_scene = t - self.time_offset_s
+        s = truth_at(t_scene)
+        ds = world.motion.state(t_scene)
         img = self.render(s.position, euler_to_dcm(s.euler), world.to_ned(ds, world.lights_at(t)),
                           world.to_ned(ds, world.corners), world.to_ned(ds, world.extra) if len(world.extra) else None)
         self._index += 1

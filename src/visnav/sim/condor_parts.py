@@ -110,7 +110,9 @@ class CondorLogger:
         record("control", t, mode=self.mission.mode, **self.mission.info, phi_ref=info["phi_ref"],
                psidot=info["psidot"], bank_hold=info["bank_hold"], aileron=u.aileron, elevator=u.elevator,
                rudder=u.rudder, throttle=u.throttle)
-        e = self.nav.estimate(t)
+        # the estimate the step's health was assessed with and the controller flew on (issue #30): asked again after
+        # the mission's step it is the one after a source switch, beside the health (and HPL) from before it
+        e = step.estimate if step.estimate is not None and step.estimate.t == t else self.nav.estimate(t)
         record("estimate", t, position=e.position, euler=e.attitude, valid=e.valid, source=e.source,
                radius=e.radius, radius_valid=e.radius_valid, airspeed=e.airspeed, height=e.height)
         self.status(t, step.health, self.mission.mode)  # the navigator's integrity (issue #18)

@@ -16,10 +16,14 @@ through the same sensor (restarts from the Vicon, and the safety pilot's view wi
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
+
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from visnav.control.deck import DeckController
 from visnav.estimation import deck as dm
+from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.measurements import AttitudeThrustCommand, NavInit, RelativeStateSample, VehicleState
 from visnav.mission.deck import DeckMission
@@ -39,6 +43,35 @@ from visnav.world.deck import DeckMotion, DeckWorld
 CONTROL_HZ = 50.0
 #: 1-sigma of the thesis' Vicon start (position, attitude, velocity, deck rates), per axis
 VICON_SIGMA = np.repeat([0.03, np.radians(3), 0.05, np.radians(2)], 3)
+
+
+@dataclass(frozen=True)
+class TrueCalibration:
+    """What the real system is, against the calibration the filter assumes (issue 30): the true lights (deck frame),
+    camera intrinsics and rotation body -> camera, and the IMU's starting biases. Drawn once per run from a
+    generator of its own (``seed``, so that turning one error off leaves the others' draws unchanged)."""
+
+    lights: np.ndarray
+    camera: PinholeCamera
+    T_cam: np.ndarray
+    accel_bias: np.ndarray
+    gyro_bias: np.ndarray
+    rng: np.random.Generator  # the bias random walk's steps
+
+    @classmethod
+    def draw(cls, sc) -> "TrueCalibration":
+        rng = np.random.default_rng([int(sc.run.seed), 3003])
+        n = rng.standard_normal((4 + len(sc.mission.deck.lights_m), 3))  # every draw made, whatever the sigmas
+        c, imu = sc.sensors.camera, sc.sensors.imu
+        lights = np.asarray(sc.mission.deck.lights_m, float) + sc.mission.deck.light_survey_error_m * n[4:]
+        nominal = c.pinhole()
+        f = nominal.fx * (1.0 + c.focal_error_frac * n[0, 0])
+        pp = c.principal_point_error_px * n[0, 1:]
+        camera = replace(nominal, fx=f, fy=f * nominal.fy / nominal.fx, cx=nominal.cx + pp[0], cy=nominal.cy + pp[1])
+        # the camera turned by a small rotation of its own axes: T_cam,true = R(delta) T_cam
+        T_cam = Rotation.from_rotvec(np.radians(c.misalignment_deg) * n[1]).as_matrix() @ c.rotation()
+        return cls(lights, camera, T_cam, imu.accel_bias_mps2 * n[2], np.radians(imu.gyro_bias_deg_s) * n[3],
+                   np.random.default_rng([int(sc.run.seed), 3004]))
 
 
 class MultirotorTruth(VehicleTruth):
@@ -138,7 +171,8 @@ def build(ctx) -> MissionParts:
     d, c = cfg.deck, sc.sensors.camera
     motion = (DeckMotion.static() if d.motion == "static"
               else DeckMotion.from_sea_state(d.sea_state, rng[0], d.sinusoids, d.motion_scale))
-    world = DeckWorld(motion, d.lights_m, d.size_m, c.extra_blobs_deck_m, c.hide_light, c.hide_after_s)
+    true = TrueCalibration.draw(sc)  # the filter keeps the nominal calibration (DeckNavConfig.from_mission)
+    world = DeckWorld(motion, true.lights, d.size_m, c.extra_blobs_deck_m, c.hide_light, c.hide_after_s)
     world.wind = Wind(SteadyWind(0.0, 0.0))  # still air (a wind_gust fault adds its gust)
 
     v = sc.vehicle
@@ -161,10 +195,13 @@ def build(ctx) -> MissionParts:
     # sensors, in the order they are sampled at one instant (attitude before the IMU sample it rotates)
     imu = sc.sensors.imu
     sensors = {"ahrs": RollPitchAhrs(rng[5], imu.attitude_noise_deg, rate_hz=imu.rate_hz),
-               "imu": AccelGyro(rng[4], imu.accel_noise_mps2, imu.gyro_noise_rad_s, rate_hz=imu.rate_hz),
-               "camera": LedCamera(c.pinhole(), c.rotation(), np.asarray(c.position_m, float), rng[2],
+               "imu": AccelGyro(rng[4], imu.accel_noise_mps2, imu.gyro_noise_rad_s, rate_hz=imu.rate_hz,
+                                accel_bias=true.accel_bias, gyro_bias=true.gyro_bias,
+                                accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s,
+                                gyro_bias_walk=np.radians(imu.gyro_bias_walk_deg_s_sqrt_s), bias_rng=true.rng),
+               "camera": LedCamera(true.camera, true.T_cam, np.asarray(c.position_m, float), rng[2],
                                    noise_gray=c.noise_gray, centroid_noise_px=c.centroid_noise_px, jitter_rng=rng[6],
-                                   rate_hz=c.rate_hz)}
+                                   rate_hz=c.rate_hz, time_offset_s=c.time_offset_s)}
     frame_steps = rate_divisor(c.rate_hz, dt)
     mocap = None
     if sc.navigation.init == "truth":  # the thesis' Vicon (start and restarts)
@@ -195,4 +232,4 @@ def build(ctx) -> MissionParts:
         initial_command=AttitudeThrustCommand(0.0, 0.0, 0.0, 0.0, hov), environment=deck.environment,
         logger=deck.log, contact=deck.contact, observers={RelativeStateSample: mission.observe}, streams=DECK_STREAMS,
         extra_metrics=(integrity_metrics,),
-        info={"landing_point": deck.landing_point, "frame_steps": frame_steps, "params": params})
+        info={"landing_point": deck.landing_point, "frame_steps": frame_steps, "params": params, "calibration": true})

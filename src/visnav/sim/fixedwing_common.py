@@ -26,7 +26,7 @@ def trimmed_aircraft(params: FixedWingParams, airspeed_mps: float, position_ned,
     model = FixedWingModel.from_trim(params, tr, position_ned, heading)
     model.x[3:6] += euler_to_dcm(model.x[6:9]).T @ wind.steady.ned
     # air data (airspeed, specific force) of the start state, before the first step, for the sensors
-    model._air_at = (model.x.tolist(), model._clipped(tr.controls), tuple(np.asarray(wind.steady.ned, float).tolist()))
+    model.hold_air_data(tr.controls, wind.steady.ned)
     return model
 
 

@@ -110,16 +110,11 @@ def _lift_drag(p: FixedWingParams, alpha: float) -> tuple[float, float]:
 
 def derivatives(p: FixedWingParams, x: np.ndarray, u: Controls, wind_ned: np.ndarray,
                 gam: tuple | None = None) -> tuple[np.ndarray, dict]:
-    """dx/dt of the 12-state model (eq. 3.14-3.17) and the air data (Va, alpha, beta)."""
-    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
-    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
-    # body -> NED
-    C = np.array([[ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp],
-                  [ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp],
-                  [-st, sf * ct, cf * ct]])
-    wb = C.T @ wind_ned
-    ur, vr, wr = uu - wb[0], vv - wb[1], ww - wb[2]
-    Va = math.sqrt(ur * ur + vr * vr + wr * wr)
+    """dx/dt of the 12-state model (eq. 3.14-3.17) and the air data (Va, alpha, beta, specific force)."""
+    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = np.asarray(x, float).tolist()
+    C = euler_to_dcm3(phi, th, psi)  # body -> NED (eq. 3.14's rotation)
+    ur, vr, wr = (np.array([uu, vv, ww]) - C.T @ wind_ned).tolist()  # air-relative body velocity (eq. 2.7)
+    Va = math.sqrt(ur * ur + vr * vr + wr * wr)  # eq. 2.8
     Va_s = max(Va, 1.0)
     alpha = math.atan2(wr, ur)
     beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
@@ -128,21 +123,17 @@ def derivatives(p: FixedWingParams, x: np.ndarray, u: Controls, wind_ned: np.nda
     ca, sa = math.cos(alpha), math.sin(alpha)
     da, de, dr, dt = u.aileron, u.elevator, u.rudder, u.throttle
     # eq. 4.19 longitudinal force coefficients in body axes
-    cx = -cd * ca + cl * sa
-    cxq = -p.C_D_q * ca + p.C_L_q * sa
-    cxde = -p.C_D_de * ca + p.C_L_de * sa
-    cz = -cd * sa - cl * ca
-    czq = -p.C_D_q * sa - p.C_L_q * ca
-    czde = -p.C_D_de * sa - p.C_L_de * ca
+    cx, cxq, cxde = -cd * ca + cl * sa, -p.C_D_q * ca + p.C_L_q * sa, -p.C_D_de * ca + p.C_L_de * sa
+    cz, czq, czde = -cd * sa - cl * ca, -p.C_D_q * sa - p.C_L_q * ca, -p.C_D_de * sa - p.C_L_de * ca
     c2v, b2v = p.c / (2.0 * Va_s), p.b / (2.0 * Va_s)
-    m = p.mass
+    m, ct, st, cf, sf = p.mass, math.cos(th), math.sin(th), math.cos(phi), math.sin(phi)
     thrust = 0.5 * p.rho * p.S_prop * p.C_prop * ((p.k_motor * dt) ** 2 - Va * Va)  # eq. 4.18
-    fx = -m * G * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+    fx = -m * G * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust  # eq. 4.18
     fy = m * G * ct * sf + qbar * (p.C_Y_0 + p.C_Y_beta * beta + p.C_Y_p * b2v * P + p.C_Y_r * b2v * R
                                    + p.C_Y_da * da + p.C_Y_dr * dr)
     fz = m * G * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
     l_m = qbar * p.b * (p.C_l_0 + p.C_l_beta * beta + p.C_l_p * b2v * P + p.C_l_r * b2v * R
-                        + p.C_l_da * da + p.C_l_dr * dr)
+                        + p.C_l_da * da + p.C_l_dr * dr)  # eq. 4.19
     m_m = qbar * p.c * (p.C_m_0 + p.C_m_alpha * alpha + p.C_m_q * c2v * Q + p.C_m_de * de)
     n_m = qbar * p.b * (p.C_n_0 + p.C_n_beta * beta + p.C_n_p * b2v * P + p.C_n_r * b2v * R
                         + p.C_n_da * da + p.C_n_dr * dr)
@@ -154,174 +145,10 @@ def derivatives(p: FixedWingParams, x: np.ndarray, u: Controls, wind_ned: np.nda
     rate_dot = (g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,  # eq. 3.17
                 g5 * P * R - g6 * (P * P - R * R) + m_m / p.Jy,
                 g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m)
-    dx = np.concatenate([pos_dot, vel_dot, eul_dot, rate_dot])
-    air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array([fx, fy, fz]) / m
-           - C.T @ np.array([0.0, 0.0, G])}
+    dx = np.array([*pos_dot.tolist(), *vel_dot, *eul_dot, *rate_dot])
+    air = {"Va": Va, "alpha": alpha, "beta": beta,
+           "specific_force": np.array([fx, fy, fz]) / m - C[2] * G}  # f/m - C^T (0, 0, g)
     return dx, air
-
-
-def _fast_constants(p: FixedWingParams, gam: tuple) -> tuple:
-    """The parameters ``_derivatives_fast`` reads, with the constant left prefixes of its products
-    evaluated once (0.5 rho, -m G, pi e AR, ...: the same roundings as evaluating them in place)."""
-    return (-p.M, p.M, p.alpha0, p.C_L_0, p.C_L_alpha, p.C_D_p, math.pi * p.e * p.AR, 0.5 * p.rho, p.S,
-            -p.C_D_q, p.C_L_q, -p.C_D_de, p.C_L_de, p.c, p.b, p.mass, 0.5 * p.rho * p.S_prop * p.C_prop,
-            p.k_motor, -p.mass * G, p.mass * G,
-            p.C_Y_0, p.C_Y_beta, p.C_Y_p, p.C_Y_r, p.C_Y_da, p.C_Y_dr,
-            p.C_l_0, p.C_l_beta, p.C_l_p, p.C_l_r, p.C_l_da, p.C_l_dr,
-            p.C_m_0, p.C_m_alpha, p.C_m_q, p.C_m_de,
-            p.C_n_0, p.C_n_beta, p.C_n_p, p.C_n_r, p.C_n_da, p.C_n_dr, p.Jy) + tuple(gam)
-
-
-def _derivatives_fast(k: tuple, x, u: tuple, wind: tuple, air: bool = False):
-    """:func:`derivatives` (with :func:`_lift_drag`) in scalar ``math`` on a list, for the 100 Hz
-    RK4; ``k`` from :func:`_fast_constants`. The same operations in the same order; ``air`` also
-    returns (Va, alpha, beta, specific force). Agrees with :func:`derivatives` to rounding
-    (tests/vehicles/test_fixedwing.py)."""
-    (nM, M, a0, CL0, CLa, CDp, den, hrho, S, nCDq, CLq, nCDde, CLde, c, b, m, kt, kmot, nmG, mG,
-     CY0, CYb, CYp, CYr, CYda, CYdr, Cl0, Clb, Clp, Clr, Clda, Cldr, Cm0, Cma, Cmq, Cmde,
-     Cn0, Cnb, Cnp, Cnr, Cnda, Cndr, Jy, g1, g2, g3, g4, g5, g6, g7, g8) = k
-    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
-    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
-    C00, C01, C02 = ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp
-    C10, C11, C12 = ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp
-    C20, C21, C22 = -st, sf * ct, cf * ct
-    wx, wy, wz = wind
-    ur = uu - (C00 * wx + C10 * wy + C20 * wz)
-    vr = vv - (C01 * wx + C11 * wy + C21 * wz)
-    wr = ww - (C02 * wx + C12 * wy + C22 * wz)
-    Va = math.sqrt(ur * ur + vr * vr + wr * wr)
-    Va_s = max(Va, 1.0)
-    alpha = math.atan2(wr, ur)
-    beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
-    qbar = hrho * Va_s * Va_s * S
-    # eq. 4.9-4.11 (_lift_drag)
-    ea, eb = math.exp(nM * (alpha - a0)), math.exp(M * (alpha + a0))
-    sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
-    cl_lin = CL0 + CLa * alpha
-    sa = math.sin(alpha)
-    ca = math.cos(alpha)
-    cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * math.copysign(1.0, alpha) * sa * sa * ca
-    cd = CDp + cl_lin * cl_lin / den
-    da, de, dr, dt = u
-    cx = -cd * ca + cl * sa
-    cxq = nCDq * ca + CLq * sa
-    cxde = nCDde * ca + CLde * sa
-    cz = -cd * sa - cl * ca
-    czq = nCDq * sa - CLq * ca
-    czde = nCDde * sa - CLde * ca
-    c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
-    thrust = kt * ((kmot * dt) ** 2 - Va * Va)
-    fx = nmG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
-    fy = mG * ct * sf + qbar * (CY0 + CYb * beta + CYp * b2v * P + CYr * b2v * R + CYda * da + CYdr * dr)
-    fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
-    l_m = qbar * b * (Cl0 + Clb * beta + Clp * b2v * P + Clr * b2v * R + Clda * da + Cldr * dr)
-    m_m = qbar * c * (Cm0 + Cma * alpha + Cmq * c2v * Q + Cmde * de)
-    n_m = qbar * b * (Cn0 + Cnb * beta + Cnp * b2v * P + Cnr * b2v * R + Cnda * da + Cndr * dr)
-    tt = st / ct
-    dx = (C00 * uu + C01 * vv + C02 * ww, C10 * uu + C11 * vv + C12 * ww, C20 * uu + C21 * vv + C22 * ww,
-          R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m,
-          P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct,
-          g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,
-          g5 * P * R - g6 * (P * P - R * R) + m_m / Jy,
-          g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m)
-    if not air:
-        return dx
-    # C^T (0, 0, G) = G (C20, C21, C22)
-    return dx, (Va, alpha, beta, (fx / m - C20 * G, fy / m - C21 * G, fz / m - C22 * G))
-
-
-def _air_fast(k: tuple, x, u: tuple, wind: tuple) -> tuple:
-    """(Va, alpha, beta, specific force) of a state: what the air-data sensors read (``_derivatives_fast``'s
-    ``air`` part; at the sensors' 50 Hz its moments and state derivative cost little)."""
-    return _derivatives_fast(k, x, u, wind, air=True)[1]
-
-
-def _rk4_fast(k: tuple, x: list, u: tuple, wind: tuple, dt: float) -> list:
-    """One RK4 step of :func:`_derivatives_fast` over ``dt`` (controls and wind held), its four evaluations
-    in one frame: the same operations in the same order as ``step``'s ``f(k, x + h k_i, ...)`` calls and
-    ``x + dt / 6 (k1 + 2 k2 + 2 k3 + k4)`` (bit for bit: tests/vehicles/test_fixedwing.py), without four
-    calls, four unpackings of the constants and the lists between the stages. What the derivative does
-    not read is not formed for the inner stages (the positions); a product of constants and controls
-    (``C_Y_dr * dr`` ...) is rounded once per step instead of once per evaluation, a product or sum that
-    appears twice once per evaluation (the same values); ``max`` / ``min`` as comparisons. Returns
-    the new state (12 floats, the heading not yet wrapped)."""
-    (nM, M, a0, CL0, CLa, CDp, den, hrho, S, nCDq, CLq, nCDde, CLde, c, b, m, kt, kmot, nmG, mG,
-     CY0, CYb, CYp, CYr, CYda, CYdr, Cl0, Clb, Clp, Clr, Clda, Cldr, Cm0, Cma, Cmq, Cmde,
-     Cn0, Cnb, Cnp, Cnr, Cnda, Cndr, Jy, g1, g2, g3, g4, g5, g6, g7, g8) = k
-    x0, x1, x2, x3, x4, x5, x6, x7, x8, x9, x10, x11 = x
-    uu, vv, ww, phi, th, psi, P, Q, R = x3, x4, x5, x6, x7, x8, x9, x10, x11
-    da, de, dr, dthr = u
-    wx, wy, wz = wind
-    thr2 = (kmot * dthr) ** 2
-    yda, ydr, lda, ldr, mde, nda, ndr = CYda * da, CYdr * dr, Clda * da, Cldr * dr, Cmde * de, Cnda * da, Cndr * dr
-    cos, sin, exp, atan2, asin, sqrt, copysign = math.cos, math.sin, math.exp, math.atan2, math.asin, math.sqrt, math.copysign
-    h2 = 0.5 * dt
-    for i in range(4):
-        cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(th), sin(th), cos(psi), sin(psi)
-        sfst, cfst = sf * st, cf * st  # (the left factor of C01 / C11 and of C02 / C12: rounded once)
-        C00, C01, C02 = ct * cp, sfst * cp - cf * sp, cfst * cp + sf * sp
-        C10, C11, C12 = ct * sp, sfst * sp + cf * cp, cfst * sp - sf * cp
-        C20, C21, C22 = -st, sf * ct, cf * ct
-        ur = uu - (C00 * wx + C10 * wy + C20 * wz)
-        vr = vv - (C01 * wx + C11 * wy + C21 * wz)
-        wr = ww - (C02 * wx + C12 * wy + C22 * wz)
-        Va = sqrt(ur * ur + vr * vr + wr * wr)
-        Va_s = 1.0 if 1.0 > Va else Va  # max(Va, 1.0)
-        alpha = atan2(wr, ur)
-        sb = vr / Va_s
-        sb = sb if sb < 1.0 else 1.0  # min(1.0, sb)
-        beta = asin(sb if sb > -1.0 else -1.0)  # max(-1.0, sb)
-        qbar = hrho * Va_s * Va_s * S
-        ea, eb = exp(nM * (alpha - a0)), exp(M * (alpha + a0))
-        ea1 = 1.0 + ea
-        sigma = (ea1 + eb) / (ea1 * (1.0 + eb))
-        cl_lin = CL0 + CLa * alpha
-        sa = sin(alpha)
-        ca = cos(alpha)
-        cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * copysign(1.0, alpha) * sa * sa * ca
-        cd = CDp + cl_lin * cl_lin / den
-        ncd = -cd
-        cx = ncd * ca + cl * sa
-        cxq = nCDq * ca + CLq * sa
-        cxde = nCDde * ca + CLde * sa
-        cz = ncd * sa - cl * ca
-        czq = nCDq * sa - CLq * ca
-        czde = nCDde * sa - CLde * ca
-        V2 = 2.0 * Va_s
-        c2v, b2v = c / V2, b / V2
-        thrust = kt * (thr2 - Va * Va)
-        fx = nmG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
-        fy = mG * ct * sf + qbar * (CY0 + CYb * beta + CYp * b2v * P + CYr * b2v * R + yda + ydr)
-        fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
-        qb = qbar * b
-        l_m = qb * (Cl0 + Clb * beta + Clp * b2v * P + Clr * b2v * R + lda + ldr)
-        m_m = qbar * c * (Cm0 + Cma * alpha + Cmq * c2v * Q + mde)
-        n_m = qb * (Cn0 + Cnb * beta + Cnp * b2v * P + Cnr * b2v * R + nda + ndr)
-        tt = st / ct
-        d0, d1, d2 = C00 * uu + C01 * vv + C02 * ww, C10 * uu + C11 * vv + C12 * ww, C20 * uu + C21 * vv + C22 * ww
-        d3, d4, d5 = R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m
-        d6, d7, d8 = P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct
-        d9 = g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m
-        d10 = g5 * P * R - g6 * (P * P - R * R) + m_m / Jy
-        d11 = g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m
-        if i == 0:  # k1
-            s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11 = d0, d1, d2, d3, d4, d5, d6, d7, d8, d9, d10, d11
-            h = h2
-        elif i == 3:  # (k1 + 2 k2 + 2 k3) + k4
-            s0, s1, s2, s3, s4, s5 = s0 + d0, s1 + d1, s2 + d2, s3 + d3, s4 + d4, s5 + d5
-            s6, s7, s8, s9, s10, s11 = s6 + d6, s7 + d7, s8 + d8, s9 + d9, s10 + d10, s11 + d11
-            break
-        else:  # + 2 k2, + 2 k3
-            s0, s1, s2 = s0 + 2.0 * d0, s1 + 2.0 * d1, s2 + 2.0 * d2  # (2 * k: 2.0 is the same factor)
-            s3, s4, s5 = s3 + 2.0 * d3, s4 + 2.0 * d4, s5 + 2.0 * d5
-            s6, s7, s8 = s6 + 2.0 * d6, s7 + 2.0 * d7, s8 + 2.0 * d8
-            s9, s10, s11 = s9 + 2.0 * d9, s10 + 2.0 * d10, s11 + 2.0 * d11
-            h = h2 if i == 1 else dt
-        uu, vv, ww, phi, th, psi = x3 + h * d3, x4 + h * d4, x5 + h * d5, x6 + h * d6, x7 + h * d7, x8 + h * d8
-        P, Q, R = x9 + h * d9, x10 + h * d10, x11 + h * d11
-    h6 = dt / 6.0
-    return [x0 + h6 * s0, x1 + h6 * s1, x2 + h6 * s2, x3 + h6 * s3, x4 + h6 * s4, x5 + h6 * s5,
-            x6 + h6 * s6, x7 + h6 * s7, x8 + h6 * s8, x9 + h6 * s9, x10 + h6 * s10, x11 + h6 * s11]
 
 
 @dataclass
@@ -334,7 +161,6 @@ class FixedWingModel:
 
     def __post_init__(self) -> None:
         self._gam = self.params.gammas()
-        self._k = _fast_constants(self.params, self._gam)
         self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
         self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
         self._state_x: np.ndarray | None = None  # the x and t ``state`` was built for
@@ -346,10 +172,13 @@ class FixedWingModel:
         evaluated when first read (a loop that reads it at its control rate skips the rest)."""
         if self._air_at is not None:
             x1, uc, w = self._air_at
-            Va, alpha, beta, sf = _air_fast(self._k, x1, uc, w)
-            self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(sf)}
+            self._air = derivatives(self.params, x1, uc, w, self._gam)[1]
             self._air_at = None
         return self._air
+
+    def hold_air_data(self, u: Controls, wind_ned) -> None:
+        """The air data ``air`` reports before the first step: those of the current state under ``u`` and the wind."""
+        self._air_at = (self.x.copy(), self._clip(u), np.asarray(wind_ned, float))
 
     @classmethod
     def from_trim(cls, params: FixedWingParams, trim: "Trim", position_ned, heading: float) -> "FixedWingModel":
@@ -359,26 +188,33 @@ class FixedWingModel:
         return cls(params, x)
 
     def _clip(self, u: Controls) -> Controls:
-        return Controls(*self._clipped(u))
-
-    def _clipped(self, u: Controls) -> tuple[float, float, float, float]:
+        """The controls within the surfaces' deflection limits and the throttle's [0, 1]."""
         lim = self.params.max_deflection
-        return (min(max(float(u.aileron), -lim), lim), min(max(float(u.elevator), -lim), lim),
-                min(max(float(u.rudder), -lim), lim), min(max(float(u.throttle), 0.0), 1.0))
+        return Controls(min(max(float(u.aileron), -lim), lim), min(max(float(u.elevator), -lim), lim),
+                        min(max(float(u.rudder), -lim), lim), min(max(float(u.throttle), 0.0), 1.0))
 
     def step(self, u: Controls, dt: float, environment: Environment) -> None:
-        """RK4 over ``dt`` with the controls and the environment's wind held (``_derivatives_fast``)."""
-        uc = self._clipped(u)
+        """Classic RK4 of :func:`derivatives` over ``dt`` with the controls and the environment's wind held."""
+        uc = self._clip(u)
         if not isinstance(environment, Environment):
             raise TypeError(f"FixedWingModel.step takes a vehicles.base.Environment, got {type(environment).__name__}")
-        w = tuple(np.asarray(environment.wind_ned, float).tolist())
-        if not math.isfinite(w[0] + w[1] + w[2]):
+        w = np.asarray(environment.wind_ned, float)
+        if not np.all(np.isfinite(w)):
             raise ValueError(f"wind must be finite, got {environment.wind_ned}")
-        x1 = _rk4_fast(self._k, self.x.tolist(), uc, w, dt)
+
+        def f(x):
+            return derivatives(self.params, x, uc, w, self._gam)[0]
+
+        x = self.x
+        k1 = f(x)
+        k2 = f(x + 0.5 * dt * k1)
+        k3 = f(x + 0.5 * dt * k2)
+        k4 = f(x + dt * k3)
+        x1 = x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         x1[8] = (x1[8] + math.pi) % (2 * math.pi) - math.pi
-        if not all(map(math.isfinite, x1)):
+        if not np.all(np.isfinite(x1)):
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
-        self.x = np.array(x1)
+        self.x = x1
         self.t += dt
         self._air_at = (x1, uc, w)
 

@@ -78,27 +78,20 @@ class Multirotor:
         env = environment or Environment()
         rotor_height_m, wind = env.rotor_height_m, np.asarray(env.wind_ned, float)
         p, s = self.p, self.state
-        wn, z = p.attitude_omega, p.attitude_zeta
-        # the attitude and the translation in Python floats for speed (one vehicle, 3-vectors): each component
-        # the same IEEE operations in the same order as the array form (kept in tests/vehicles/test_multirotor.py,
-        # compared bit for bit); the matmuls (BLAS) are kept
-        e0, e1, e2 = s.euler.tolist()
-        d0, d1, d2 = s.euler_rate.tolist()
-        k, c = wn * wn, 2.0 * z * wn
-        r0, r1 = float(cmd.roll), float(cmd.pitch)  # (np.array([cmd.roll, cmd.pitch]) held them as float64)
-        d0, d1 = d0 + (k * (r0 - e0) - c * d0) * dt, d1 + (k * (r1 - e1) - c * d1) * dt  # semi-implicit Euler
-        d2 = d2 + (cmd.yaw_rate - d2) * min(dt / p.yaw_rate_tau, 1.0)
-        e = np.array([e0 + d0 * dt, e1 + d1 * dt, e2 + d2 * dt])
-        ed = np.array([d0, d1, d2])
-        ge = p.ground_effect(rotor_height_m)
-        T_cmd = min(max(float(cmd.throttle), 0.0), 1.0) * p.max_thrust * ge
+        # roll and pitch: second order of natural frequency wn and damping zeta; yaw rate: first-order lag
+        wn, zeta = p.attitude_omega, p.attitude_zeta
+        e, ed = s.euler, s.euler_rate.copy()
+        ed[:2] += (wn * wn * (np.array([cmd.roll, cmd.pitch]) - e[:2]) - 2.0 * zeta * wn * ed[:2]) * dt  # semi-implicit
+        ed[2] += (cmd.yaw_rate - ed[2]) * min(dt / p.yaw_rate_tau, 1.0)
+        e = e + ed * dt
+        # thrust: first-order lag to throttle * max thrust in ground effect
+        T_cmd = min(max(float(cmd.throttle), 0.0), 1.0) * p.max_thrust * p.ground_effect(rotor_height_m)
         thrust = s.thrust + (T_cmd - s.thrust) * min(dt / p.thrust_tau, 1.0)
+        # translation: a = C_b^n [0, 0, -T/m] - c_d (v - v_wind) + g, trapezoidal position
         C = euler_to_dcm(e)
         f_n = C @ np.array([0.0, 0.0, -thrust / p.mass]) - p.drag * (s.velocity - wind)  # specific force, NED
-        (f0, f1, f2), (v0, v1, v2), (q0, q1, q2) = f_n.tolist(), s.velocity.tolist(), s.position.tolist()
-        u0, u1, u2 = v0 + (f0 + 0.0) * dt, v1 + (f1 + 0.0) * dt, v2 + (f2 + G) * dt  # acc = f_n + [0, 0, G]
-        vel = np.array([u0, u1, u2])
-        pos = np.array([q0 + (v0 + u0) * 0.5 * dt, q1 + (v1 + u1) * 0.5 * dt, q2 + (v2 + u2) * 0.5 * dt])
+        vel = s.velocity + (f_n + np.array([0.0, 0.0, G])) * dt
+        pos = s.position + (s.velocity + vel) * 0.5 * dt
         self.state = MultirotorState(position=pos, velocity=vel, euler=e, euler_rate=ed, thrust=thrust,
                                      specific_force=C.T @ f_n, body_rates=np.asarray(euler_rates_to_body_rates(e, ed)))
         return self.state

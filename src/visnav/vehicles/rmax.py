@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import signal
 
+from visnav.geometry.rotations import cross3, euler_to_dcm3
 from visnav.measurements import VehicleState, YacsCommand
 from visnav.vehicles.base import Environment
 
@@ -154,20 +155,6 @@ class RmaxParams:
             raise ValueError(f"trim must be 4 values inside ±input_limit, got {self.trim}")
 
 
-def _dcm_bn(phi: float, theta: float, psi: float) -> tuple[tuple[float, ...], ...]:
-    """C_bn of seed 002 eq. 3.2 (body -> NED), rows as tuples."""
-    cf, sf, ct, st, cp, sp = (math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta),
-                              math.cos(psi), math.sin(psi))
-    return ((ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp),
-            (ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp),
-            (-st, sf * ct, cf * ct))
-
-
-def _trig(att: tuple) -> tuple[float, float, float, float]:
-    """cos φ, sin φ, cos θ, sin θ of an attitude tuple."""
-    return math.cos(att[0]), math.sin(att[0]), math.cos(att[1]), math.sin(att[1])
-
-
 def _psi_rate(att: tuple) -> float:
     """ψ̇ = (q sinφ + r cosφ)/cosθ (eq. 3.7)."""
     phi, theta, _, q, r, _ = att
@@ -207,15 +194,15 @@ class RmaxModel:
             pos, vel_ned = np.asarray(position, float), np.zeros(3)
         if pos.shape != (3,) or not np.all(np.isfinite(pos)) or pos[2] > 0:
             raise ValueError(f"position must be 3 finite NED values with z <= 0 (ground), got {pos}")
-        cb = np.array(_dcm_bn(0.0, 0.0, yaw))
+        cb = euler_to_dcm3(0.0, 0.0, yaw)
         w0 = (cb.T @ vel_ned)[2]
         # u v w N E D psi, and w_yacs: the climb velocity the YACS holds, -g * integral of aZ
-        self._y = np.concatenate([cb.T @ vel_ned, pos, [yaw, w0]]).tolist()
+        self._y = np.concatenate([cb.T @ vel_ned, pos, [yaw, w0]])
         self.last_input = np.zeros(4)
         self.t = float(t0)
         self.on_ground = bool(pos[2] == 0.0)
         if self.on_ground:
-            self._y[0:3] = [0.0, 0.0, 0.0]
+            self._y[0:3] = 0.0
         self.touchdown_speed = float("nan")
         self.state = self._make_state(np.zeros(3))
 
@@ -257,31 +244,18 @@ class RmaxModel:
                 "yaw_rate_deg_s": float(y[2]), "az_g": float(y[3])}
 
     # -- translational part ----------------------------------------------------------------------
-    def _deriv(self, y: np.ndarray, att: tuple, wind_ned: np.ndarray) -> tuple[np.ndarray, tuple]:
-        """Eq. 3.9 with T = −g(1 + ΔaZ) (eq. 3.10); returns d/dt of (u v w N E D ψ w_yacs) and the
-        air-relative drag+thrust part (the specific force). The reference form of ``_deriv_fast``."""
+    def _deriv(self, y: np.ndarray, att: tuple, wind_ned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Eq. 3.9 with the thrust T = −g(1 + ΔaZ) of eq. 3.10: d/dt of (u v w N E D ψ w_yacs) and the
+        specific force (the air-relative drag and the thrust, body axes)."""
         P = self.params
         phi, theta, p, q, r, az = att
-        u, v, w, psi = y[0], y[1], y[2], y[6]
-        R = _dcm_bn(phi, theta, psi)
-        wx, wy, wz = wind_ned
-        ub = R[0][0] * wx + R[1][0] * wy + R[2][0] * wz  # C_nb wind = C_bn^T wind
-        vb = R[0][1] * wx + R[1][1] * wy + R[2][1] * wz
-        wb = R[0][2] * wx + R[1][2] * wy + R[2][2] * wz
-        fx, fy = P.Xu * (u - ub), P.Yv * (v - vb)
-        w_hold = y[7] if P.heave_damping == "yacs" else 0.0
-        fz = P.Zw * (w - w_hold - wb) - P.g * (1.0 + az)
-        g = P.g
-        ct, st, cf, sf = math.cos(theta), math.sin(theta), math.cos(phi), math.sin(phi)
-        du = fx - q * w + r * v - g * st
-        dv = fy - r * u + p * w + g * ct * sf
-        dw = fz - p * v + q * u + g * ct * cf
-        dpsi = _psi_rate(att)
-        d = np.array([du, dv, dw,
-                      R[0][0] * u + R[0][1] * v + R[0][2] * w,
-                      R[1][0] * u + R[1][1] * v + R[1][2] * w,
-                      R[2][0] * u + R[2][1] * v + R[2][2] * w, dpsi, -P.g * az])
-        return d, (fx, fy, fz)
+        C = euler_to_dcm3(phi, theta, y[6])  # C_bn, eq. 3.2
+        v_b = y[0:3]
+        v_air = v_b - C.T @ wind_ned  # body velocity relative to the air
+        w_hold = y[7] if P.heave_damping == "yacs" else 0.0  # the climb rate the YACS holds
+        f = np.array([P.Xu * v_air[0], P.Yv * v_air[1], P.Zw * (v_air[2] - w_hold) - P.g * (1.0 + az)])
+        dv = f - cross3((p, q, r), v_b) + P.g * C[2]  # eq. 3.9: f − ω × v + C_nb (0, 0, g)
+        return np.concatenate([dv, C @ v_b, [_psi_rate(att), -P.g * az]]), f
 
     def _saturate(self, command: YacsCommand) -> np.ndarray:
         raw = (float(command.ail), float(command.ele), float(command.rud), float(command.thr))
@@ -290,36 +264,13 @@ class RmaxModel:
         lim, trim = self.params.input_limit, self.params.trim
         return np.array([min(max(tr + r, -lim), lim) - tr for r, tr in zip(raw, trim)])
 
-    def _deriv_fast(self, y, trig: tuple, att: tuple, wind: tuple) -> tuple:
-        """``_deriv`` in scalar ``math`` on tuples (the 100 Hz path: 4 calls per step); the same
-        operations in the same order, so the two agree to the last bit (tests/vehicles)."""
-        P = self.params
-        cf, sf, ct, st = trig
-        _, _, p, q, r, az = att
-        u, v, w, psi = y[0], y[1], y[2], y[6]
-        cp, sp = math.cos(psi), math.sin(psi)
-        R00, R01, R02 = ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp
-        R10, R11, R12 = ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp
-        R20, R21, R22 = -st, sf * ct, cf * ct
-        wx, wy, wz = wind
-        ub = R00 * wx + R10 * wy + R20 * wz
-        vb = R01 * wx + R11 * wy + R21 * wz
-        wb = R02 * wx + R12 * wy + R22 * wz
-        fx, fy = P.Xu * (u - ub), P.Yv * (v - vb)
-        w_hold = y[7] if P.heave_damping == "yacs" else 0.0
-        g = P.g
-        fz = P.Zw * (w - w_hold - wb) - g * (1.0 + az)
-        return ((fx - q * w + r * v - g * st, fy - r * u + p * w + g * ct * sf, fz - p * v + q * u + g * ct * cf,
-                 R00 * u + R01 * v + R02 * w, R10 * u + R11 * v + R12 * w, R20 * u + R21 * v + R22 * w,
-                 (q * sf + r * cf) / ct, -g * az), (fx, fy, fz))
-
     def step(self, command: YacsCommand, dt: float | None = None,
              environment: Environment | None = None) -> VehicleState:
         """Advance by ``dt`` (default: the model's dt) under a held command, in the wind of ``environment``
         (held over the step; the R-MAX model has no ground effect: ``rotor_height_m`` is not used).
 
         The eq. 3.4 states move by their exact ZOH discretisation; the translational states by
-        RK4 on ``_deriv`` (written out in scalar ``math`` as ``_deriv_fast``)."""
+        RK4 on ``_deriv``."""
         wind_ned = None if environment is None else environment.wind_ned
         dt = self.dt if dt is None else float(dt)
         if not (math.isfinite(dt) and dt > 0):
@@ -327,8 +278,7 @@ class RmaxModel:
         w = np.zeros(3) if wind_ned is None else np.asarray(wind_ned, dtype=float)
         if w.shape != (3,):
             raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
-        wind = tuple(w.tolist())
-        if not math.isfinite(wind[0] + wind[1] + wind[2]):
+        if not np.all(np.isfinite(w)):
             raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
         Ad, Bd, _, _, Ah, Bh = self._matrices(dt)
         u = self._saturate(command)
@@ -336,20 +286,18 @@ class RmaxModel:
         xh, x1 = Ah @ x0 + Bh @ u, Ad @ x0 + Bd @ u  # exact TF states at t, t + dt/2, t + dt
         a0, ah, a1 = self._attitudes(x0, xh, x1)
         y = self._y
-        if self.on_ground and self._down_accel(y, a0, np.array(wind)) < 0.0:  # net upward force: lift off
+        if self.on_ground and self._down_accel(y, a0, w) < 0.0:  # net upward force: lift off
             self.on_ground = False
         if self.on_ground:  # skids hold the position; attitude still follows eq. 3.4
-            y1 = list(y)
+            y1 = y.copy()
             y1[6] += dt * (_psi_rate(a0) + 4 * _psi_rate(ah) + _psi_rate(a1)) / 6.0
-        else:
-            d, h2, th = self._deriv_fast, 0.5 * dt, _trig(ah)
-            k1, _ = d(y, _trig(a0), a0, wind)
-            k2, _ = d([a + h2 * b for a, b in zip(y, k1)], th, ah, wind)
-            k3, _ = d([a + h2 * b for a, b in zip(y, k2)], th, ah, wind)
-            k4, _ = d([a + dt * b for a, b in zip(y, k3)], _trig(a1), a1, wind)
-            y1 = [a + dt * (b1 + 2 * b2 + 2 * b3 + b4) / 6.0 for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]
-            row = _dcm_bn(a1[0], a1[1], y1[6])[2]
-            vd = row[0] * y1[0] + row[1] * y1[1] + row[2] * y1[2]
+        else:  # RK4, the attitude at t, t + dt/2 and t + dt from the exact TF states
+            k1 = self._deriv(y, a0, w)[0]
+            k2 = self._deriv(y + 0.5 * dt * k1, ah, w)[0]
+            k3 = self._deriv(y + 0.5 * dt * k2, ah, w)[0]
+            k4 = self._deriv(y + dt * k3, a1, w)[0]
+            y1 = y + dt * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+            vd = float(euler_to_dcm3(a1[0], a1[1], y1[6])[2] @ y1[0:3])  # NED down speed
             if y1[5] >= 0.0 and vd > 0.0:  # touchdown
                 self.touchdown_speed = float(vd)
                 self.on_ground = True
@@ -357,7 +305,7 @@ class RmaxModel:
             y1[0] = y1[1] = y1[2] = y1[5] = y1[7] = 0.0
         self._x, self._y, self.last_input = x1, y1, u
         self.t = round(self.t + dt, 12)  # no float drift over long runs
-        self.state = self._make_state(wind, a1)
+        self.state = self._make_state(w, a1)
         return self.state
 
     def _down_accel(self, y: np.ndarray, att: tuple, wind: np.ndarray) -> float:
@@ -365,22 +313,19 @@ class RmaxModel:
         y0 = np.array(y, dtype=float)
         y0[0:3] = 0.0
         d, _ = self._deriv(y0, att, wind)
-        row = _dcm_bn(att[0], att[1], y[6])[2]
-        return row[0] * d[0] + row[1] * d[1] + row[2] * d[2]
+        return float(euler_to_dcm3(att[0], att[1], y[6])[2] @ d[0:3])
 
     def _make_state(self, wind, att: tuple | None = None) -> VehicleState:
         if att is None:
             att = self._attitude(self._x)
         phi, theta, p, q, r, _ = att
         y = self._y
-        R = _dcm_bn(phi, theta, y[6])
+        C = euler_to_dcm3(phi, theta, y[6])
         if self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
-            g = self.params.g
-            f = [-(R[2][0] * g), -(R[2][1] * g), -(R[2][2] * g)]
+            f = -self.params.g * C[2]
         else:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
-            f = self._deriv_fast(y, _trig(att), att, tuple(wind))[1]
+            f = self._deriv(y, att, np.asarray(wind, float))[1]
         psi = (y[6] + math.pi) % (2 * math.pi) - math.pi
-        # numpy's product (not a scalar sum) keeps the truth velocity bit-identical to before
-        return VehicleState(t=self.t, position=np.array(y[3:6]), velocity=np.array(R) @ np.array(y[0:3]),
+        return VehicleState(t=self.t, position=y[3:6].copy(), velocity=C @ y[0:3],
                             euler=np.array([phi, theta, psi]), body_rates=np.array([p, q, r]),
-                            specific_force=np.array(f), on_ground=self.on_ground)
+                            specific_force=f, on_ground=self.on_ground)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["pncc", "TrackResult", "PnccTracker"]
+__all__ = ["pncc", "self_coherence", "distinct_points", "TrackResult", "PnccTracker"]
 
 _BACK_RADIUS = 2  # px, search radius of the backward match (subpixel mode)
 _FLAT_RTOL = 1e-8  # (σ_a^2 + σ_b^2)/2 below this * (data range)^2 counts as "both flat"
@@ -77,6 +77,42 @@ def pncc(search: np.ndarray, template: np.ndarray) -> np.ndarray:
     np.divide(num, den, out=out, where=den > (2.0 * _FLAT_RTOL * n) * scale * scale)
     out *= 2.0
     return np.clip(out, -1.0, 1.0, out=out)
+
+
+def self_coherence(image: np.ndarray, x: float, y: float, template_size: int = 21, search_radius: int = 30,
+                   exclude_px: int = 3) -> float:
+    """Distinctness of the point (x, y): the highest coherence (eq. 2.3) of its own template at a
+    *local maximum* of the coherence surface over the tracker's search window (+-``search_radius``,
+    clipped to the image) more than ``exclude_px`` from the point itself. Near 1: a repeated
+    pattern (tiles, a grid, a row of equal edges) within reach of one step, where the tracker can
+    jump to the copy; a plain blurred corner has a broad single peak and scores low (its
+    shoulders are no local maxima). -1 when no other local maximum exists."""
+    img = _gray("image", image)
+    h = int(template_size) // 2
+    xi, yi = int(round(x)), int(round(y))
+    H, W = img.shape
+    if not (h <= xi <= W - 1 - h and h <= yi <= H - 1 - h):
+        raise ValueError(f"point ({x}, {y}) leaves no room for a {template_size} px template in {W}x{H}")
+    x0, x1 = max(xi - search_radius, h), min(xi + search_radius, W - 1 - h)
+    y0, y1 = max(yi - search_radius, h), min(yi + search_radius, H - 1 - h)
+    c = pncc(img[y0 - h : y1 + h + 1, x0 - h : x1 + h + 1], img[yi - h : yi + h + 1, xi - h : xi + h + 1])
+    peak = (c >= cv2.dilate(c, np.ones((3, 3), np.uint8))) & (c > -1.0)
+    vv, uu = np.mgrid[y0 : y1 + 1, x0 : x1 + 1]
+    peak &= np.maximum(np.abs(uu - xi), np.abs(vv - yi)) > int(exclude_px)
+    return float(c[peak].max()) if peak.any() else -1.0
+
+
+def distinct_points(image: np.ndarray, points, template_size: int = 21, search_radius: int = 30,
+                    max_self_coherence: float = 0.9, exclude_px: int = 3) -> list:
+    """The ``points`` (anything with ``.x``, ``.y``: Förstner picks, strongest first) whose
+    ``self_coherence`` is at most ``max_self_coherence``, in their order: the distinctness guard of
+    the PALACE tracker (``navigation.tracker.max_self_coherence``). On the real EuRoC frames the
+    PNCC tracks that jumped 13-30 px to a copy of their own texture all started at points scoring
+    0.93-0.99 (docs/real-data.md); 1.0 turns the guard off."""
+    if max_self_coherence >= 1.0:
+        return list(points)
+    return [p for p in points
+            if self_coherence(image, p.x, p.y, template_size, search_radius, exclude_px) <= max_self_coherence]
 
 
 @dataclass

@@ -8,7 +8,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from visnav.mission.witas import fit_loop
+
+def fit_loop(cfg_path, extent, footprint_m: float) -> tuple[float, float, float, tuple[float, float]]:
+    """Loop sizes and centre that keep the loop ``margin_m`` + half a camera footprint inside a map."""
+    n0, n1, e0, e1 = extent
+    m = cfg_path.margin_m + 0.5 * footprint_m
+    avail_n, avail_e = (n1 - n0) - 2 * m, (e1 - e0) - 2 * m
+    if avail_n < 20 or avail_e < 20:
+        raise ValueError(f"map of {n1 - n0:.0f} m x {e1 - e0:.0f} m is too small for a loop with "
+                         f"{cfg_path.margin_m} m margin and a {footprint_m:.0f} m camera footprint")
+    sn, se = min(cfg_path.size_north_m, avail_n), min(cfg_path.size_east_m, avail_e)
+    r = min(cfg_path.corner_radius_m, 0.45 * min(sn, se))
+    return sn, se, r, (0.5 * (n0 + n1), 0.5 * (e0 + e1))
 
 
 def make_ground(cfg, seed: int, camera):
