@@ -79,6 +79,7 @@ def witas_rec(tmp_path_factory):
 
 
 # ------------------------------------------------------------------ point 2: any navigator on any recording
+@pytest.mark.filterwarnings("error::RuntimeWarning", "error::UserWarning")
 @pytest.mark.parametrize("navigator", ["palace", "deck", "pad", "condor", "geolocation", "witas"])
 def test_any_navigator_on_a_witas_recording_runs_or_says_what_it_lacks(witas_rec, tmp_path, navigator):
     r = _invoke("replay", witas_rec, "--navigator", navigator, "--out", tmp_path / "o")
@@ -133,6 +134,7 @@ def _cut_imu(src: Path, dst: Path) -> tuple[int, int]:
     return keep + 1, 5
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning", "error::UserWarning")  # no library warning on the console
 def test_truncated_imu_csv_is_named_and_allow_truncated_replays_what_came_before(witas_rec, tmp_path):
     line, cols = _cut_imu(witas_rec, tmp_path / "cut")
     expected = len((witas_rec / "imu.csv").read_text().splitlines()[0].split(","))
