@@ -373,3 +373,14 @@ def test_a_campaign_counts_its_outcomes_and_its_runs_over_the_hpl():
     s = summarize(rows, [])
     assert s["outcomes"] == {"safe": 2, "aborted": 1, "hpl_violated_while_ok": 1}
     assert outcome_text(s["outcomes"]) == "outcomes: 2 safe, 1 aborted; 1 run with steps over the HPL while ok"
+
+
+def test_a_replay_off_a_terminal_says_where_it_is(witas_rec, tmp_path, monkeypatch):
+    from visnav.cli import RunProgress
+
+    monkeypatch.setattr(RunProgress, "every_s", 0.0)
+    r = _invoke("replay", witas_rec, "--navigator", "witas", "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    lines = [x for x in r.stderr.splitlines() if x.startswith("replay on witas: ")]
+    n = int(lines[0].split(" of ")[1].split()[0])
+    assert lines and n > 200 and lines[0].startswith("replay on witas: 0 of ")  # the events of 2 s of flight
