@@ -123,6 +123,9 @@ def test_a_wrong_claim_is_caught():
         test_a_documented_command_exists_and_takes_its_options("x.md", "visnav rn palace-landing")
     with pytest.raises(pytest.fail.Exception, match="run.durration_s"):
         test_a_documented_scenario_and_its_keys_exist("x.md", "palace-landing", ("run.durration_s=3",), ())
+    with pytest.raises(pytest.fail.Exception, match="navigation.mpe.atitude_delay_s"):
+        test_a_documented_scenario_key_exists("x.md", "navigation.mpe.atitude_delay_s")
+    test_a_documented_scenario_key_exists("x.md", "navigation.mpe.attitude_delay_s")
 
 
 def test_every_command_has_a_help_page():
@@ -133,3 +136,42 @@ def test_every_command_has_a_help_page():
     for name in _commands():
         r = CliRunner().invoke(app, [name, "--help"])
         assert r.exit_code == 0 and "Usage:" in r.stdout and r.exception is None, (name, r.output)
+
+
+#: dotted names in the docs that are code, not scenario keys: an object's attribute (where it says so)
+NOT_KEYS = {"vehicle.state": "a vehicle model's state (docs/architecture.md, the truth history)",
+            "world.wind": "the world object's wind (docs/integrity.md, the gust fault)"}
+
+
+def _key_claims() -> list[tuple[str, str]]:
+    pat = r"`((?:run|world|vehicle|navigation|sensors|mission)\.[a-z0-9_.]+)(?:\s*=\s*[^`]*)?`"
+    return [(p.relative_to(ROOT).as_posix(), k) for p in DOCS for k in re.findall(pat, p.read_text())]
+
+
+@lru_cache(maxsize=None)
+def _known_keys() -> frozenset:
+    from visnav.scenarios.keys import settable_keys
+    from visnav.scenarios.roles import LEGACY
+    from visnav.scenarios.schema import builtin_names, load_scenario
+
+    keys = {r["key"] for n in builtin_names() for r in settable_keys(load_scenario(n))}
+    keys |= {old for pairs in LEGACY.values() for old, _ in pairs}  # the old layout the docs explain
+    return frozenset(keys)
+
+
+def test_the_docs_have_keys_to_check():
+    assert len(_key_claims()) > 50
+
+
+@pytest.mark.parametrize("where, key", sorted(set(_key_claims())))
+def test_a_documented_scenario_key_exists(where, key):
+    import importlib
+
+    known = _known_keys()
+    if key in known or any(k.startswith(key + ".") or key.startswith(k + ".") for k in known) or key in NOT_KEYS:
+        return
+    module, _, attr = f"visnav.{key}".rpartition(".")  # a code path (navigation.integrity.same_image)
+    try:
+        assert hasattr(importlib.import_module(module), attr)
+    except (ImportError, AssertionError):
+        pytest.fail(f"{where}: `{key}` is neither a scenario key (visnav keys SCENARIO) nor a name in the code")

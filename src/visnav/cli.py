@@ -71,10 +71,10 @@ class RunProgress:
 
     every_s = 10.0
 
-    def __init__(self, name: str, total_s: float, con: Console, clock=None):
+    def __init__(self, name: str, total_s: float, con: Console, clock=None, unit: str = "s"):
         import time
 
-        self.name, self.total, self.con = name, float(total_s), con
+        self.name, self.total, self.con, self.unit = name, float(total_s), con, unit
         self.clock = clock or time.perf_counter
         self._bar = self._task = None
         self._t0 = self._next = 0.0
@@ -90,18 +90,22 @@ class RunProgress:
             self._task = self._bar.add_task(self.name, total=self.total, info="")
         return self
 
-    def update(self, t: float, info: str = "") -> None:
+    def update(self, t: float, info: str = "", total: float | None = None) -> None:
+        """``t`` done of ``total`` (``unit``: simulated seconds, or replayed events; ``total`` may be given late)."""
+        if total is not None:
+            self.total = float(total)
+        at = f"t={t:.1f} s of {self.total:g} s" if self.unit == "s" else f"{t:.0f} of {self.total:.0f} {self.unit}"
         if self._bar is not None:
-            if int(t) != self._shown:  # once a simulated second
+            if int(t) != self._shown:  # once a simulated second (an event: the caller's pace)
                 self._shown = int(t)
-                self._bar.update(self._task, completed=t, info=f"t={t:5.1f}s {info}")
+                self._bar.update(self._task, completed=t, total=self.total, info=f"{at} {info}")
             return
         now = self.clock()
         if now >= self._next:
             self._next = now + self.every_s
             pct = f" ({100.0 * t / self.total:.0f} %)" if self.total > 0 else ""
-            self.con.print(f"{self.name}: t={t:.1f} s of {self.total:g} s{pct}, {info}, {now - self._t0:.0f} s "
-                           "elapsed", soft_wrap=True, highlight=False)
+            self.con.print(f"{self.name}: {at}{pct}{', ' + info if info else ''}, {now - self._t0:.0f} s elapsed",
+                           soft_wrap=True, highlight=False)
 
     def __exit__(self, *exc) -> None:
         if self._bar is not None:
@@ -450,6 +454,9 @@ def metrics(
     if json_:
         _print_json(m)
         return
+    from visnav.analysis.outcome import verdict_line
+
+    console.print(escape(verdict_line(m)), style="bold", soft_wrap=True)
     table = _metrics_table(f"metrics from {run_dir}/log.h5", m, ">value")
     for k, v in m.items():
         table.add_row(k, escape(_fmt(v)))
@@ -849,8 +856,8 @@ def record_(
     err = Console(stderr=True)
     try:
         sc = load_scenario(scenario, set_, seed)
-        with console.status(f"recording {sc.run.name}"):
-            res = record(sc, out, force=force)
+        with RunProgress(f"recording {sc.run.name}", sc.run.duration_s, err) as prog:
+            res = record(sc, out, force=force, progress=lambda t, total: prog.update(t))
     except (ScenarioError, RecordingError, FileNotFoundError, ValueError) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(2)
@@ -930,8 +937,8 @@ def replay_(
                                      "(replay anyway with --no-check):\n  " + "\n  ".join(problems))
         opts = ReplayOptions(map_path=map_, output_rate_hz=rate, gps_until_s=gps_until,
                              time_offset="auto" if time_offset == "auto" else offset)
-        with console.status(f"replaying {escape(recording)} on {navigator}"):
-            res = replay(rec, navigator, opts)
+        with RunProgress(f"replay on {navigator}", 1.0, err_console, unit="events") as prog:
+            res = replay(rec, navigator, opts, progress=lambda k, n: prog.update(k, "", total=n))
         write_replay(res, out_dir, title=f"replay of {recording} on {navigator}")
     except (RecordingError, ScenarioError, ValueError) as exc:
         if not any(out_dir.iterdir()):

@@ -79,6 +79,7 @@ def witas_rec(tmp_path_factory):
 
 
 # ------------------------------------------------------------------ point 2: any navigator on any recording
+@pytest.mark.filterwarnings("error::RuntimeWarning", "error::UserWarning")
 @pytest.mark.parametrize("navigator", ["palace", "deck", "pad", "condor", "geolocation", "witas"])
 def test_any_navigator_on_a_witas_recording_runs_or_says_what_it_lacks(witas_rec, tmp_path, navigator):
     r = _invoke("replay", witas_rec, "--navigator", navigator, "--out", tmp_path / "o")
@@ -133,6 +134,7 @@ def _cut_imu(src: Path, dst: Path) -> tuple[int, int]:
     return keep + 1, 5
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning", "error::UserWarning")  # no library warning on the console
 def test_truncated_imu_csv_is_named_and_allow_truncated_replays_what_came_before(witas_rec, tmp_path):
     line, cols = _cut_imu(witas_rec, tmp_path / "cut")
     expected = len((witas_rec / "imu.csv").read_text().splitlines()[0].split(","))
@@ -185,6 +187,7 @@ def test_no_vortex_ring_approach_in_table_and_json_and_metrics_has_ate(segment_r
     again = json.loads(r.stdout)
     assert again["vrs_margin_min_mps"] == "no vortex-ring approach"
     assert again["ate_rmse_m"] == pytest.approx(m["ate_rmse_m"], rel=1e-9)
+    assert _invoke("metrics", d).stdout.startswith("outcome: safe")  # the table opens with the verdict too
 
 
 def test_the_summary_opens_with_the_verdict(segment_run):
@@ -370,3 +373,14 @@ def test_a_campaign_counts_its_outcomes_and_its_runs_over_the_hpl():
     s = summarize(rows, [])
     assert s["outcomes"] == {"safe": 2, "aborted": 1, "hpl_violated_while_ok": 1}
     assert outcome_text(s["outcomes"]) == "outcomes: 2 safe, 1 aborted; 1 run with steps over the HPL while ok"
+
+
+def test_a_replay_off_a_terminal_says_where_it_is(witas_rec, tmp_path, monkeypatch):
+    from visnav.cli import RunProgress
+
+    monkeypatch.setattr(RunProgress, "every_s", 0.0)
+    r = _invoke("replay", witas_rec, "--navigator", "witas", "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    lines = [x for x in r.stderr.splitlines() if x.startswith("replay on witas: ")]
+    n = int(lines[0].split(" of ")[1].split()[0])
+    assert lines and n > 200 and lines[0].startswith("replay on witas: 0 of ")  # the events of 2 s of flight

@@ -63,6 +63,8 @@ def run_outcome(log, scenario, metrics: dict, interrupted: bool = False) -> tupl
         i = len(modes) - 1 - modes[::-1].index(last)
         r = str(md["reason"][i]) if "reason" in md and md["reason"][i] else ""
         return "aborted", f"{last} at t={float(md['t'][i]):.1f} s" + (f": {r}" if r else "")
+    if base == "safe":  # an abort is its own outcome now: what is left of "held or aborted" is held
+        reason = reason.replace(" (held or aborted)", " (held)").replace(" (held or went around)", " (held)")
     return base, reason
 
 

@@ -151,7 +151,9 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     if ins:
         ax[1, 0].plot(ins["t"], herr(ins), color=INS_COLOR, label="INS only")
     ax[1, 0].set_yscale("log"), ax[1, 0].set_ylim(0.05, None)
-    ax[1, 0].set_ylabel("m (log)"), ax[1, 0].set_title("Horizontal position error"), ax[1, 0].legend(fontsize=8)
+    ax[1, 0].set_ylabel("m (log)"), ax[1, 0].set_title("Horizontal position error")
+    if ax[1, 0].get_legend_handles_labels()[0]:  # a short run has no PMF, odometry or INS track yet: no empty legend
+        ax[1, 0].legend(fontsize=8)
     if est:
         tv = interp_rows(est["t"], tt, tr["velocity"])
         for j, name in ((0, "north"), (1, "east")):
