@@ -30,6 +30,9 @@ class NavigatorSpec:
     finish: Callable | None = None  # finish(nav, log): what the navigator logs at the end of a run (replay)
     truth: Callable | None = None  # truth(log) -> truth.csv columns of what it estimates (default: the vehicle's)
     streams: str = ""  # "module:NAME" of its loop's stream table (units of a replay's log.h5), "": the registered ones
+    # the loop logs the step's own estimate (the first asked at a time: the one its health and HPL were assessed with),
+    # not one asked again after the mission's step (CONDOR's source switch, issue #30); else the last asked
+    log_first_estimate: bool = False
 
 
 def rmax_camera(sc):
@@ -200,7 +203,7 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
     "condor": NavigatorSpec("condor-orbit", ("condor",), ("imu", "attitude", "gps", "baro", "magnetometer", "airspeed",
                                                           "camera_attitude", "pan", "frames", "click"),
                             _condor_camera, lambda sc: float(sc.sensors.camera.frame_hz), _condor, color_frames=True,
-                            streams="visnav.sim.streams:CONDOR_STREAMS"),
+                            streams="visnav.sim.streams:CONDOR_STREAMS", log_first_estimate=True),
     "geolocation": NavigatorSpec("mav-geolocation", ("mav-geolocation",), ("telemetry", "frames", "click"),
                                  _geolocation_camera, lambda sc: float(sc.sensors.camera.frame_hz), _geolocation,
                                  frame="target position: NED world, on the ground (down 0)", estimate_row=_target_row,

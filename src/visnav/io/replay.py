@@ -210,7 +210,8 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
     by_index = {STREAM_NAMES.index(s): s for s in rec.streams}
     cut = opts.gps_until_s if opts.gps_until_s is not None else np.inf
     row = NAVIGATORS[navigator].estimate_row or _estimate_row
-    pending: list = []  # the last estimate query not yet logged: (t, fields); a later one at the same t replaces it
+    pending: list = []  # the estimate query not yet logged: (t, fields); a later one at the same t replaces it
+    # (the first stays where the navigator's loop logs the step's own estimate: NavigatorSpec.log_first_estimate)
     uplink = getattr(nav, "pop_uplink", None)  # a ground-station half's fixes (CONDOR): back through link.csv
     fixes: dict[float, object] = {}
     via_link = "link" in rec.streams
@@ -272,7 +273,8 @@ def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict
                 t = t if kinds[k] == 2 else _query_t(c, b[k], t)
                 if pending and pending[0] != t:
                     flush()
-                pending[:] = [t, row(nav.estimate(t))]
+                if not (pending and NAVIGATORS[navigator].log_first_estimate):  # (the step's own: CONDOR)
+                    pending[:] = [t, row(nav.estimate(t))]
             elif c["method"][b[k]] == "health":
                 t = _query_t(c, b[k], t)
                 h = nav.health(t)
