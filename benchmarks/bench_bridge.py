@@ -17,7 +17,7 @@ from __future__ import annotations
 import json
 import sys
 
-from visnav.io.sil_flight import CASES, fly
+from visnav.app.sil_flight import CASES, fly
 
 
 def main(seconds: float = 15.0) -> dict:

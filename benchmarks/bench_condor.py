@@ -11,7 +11,7 @@ import numpy as np
 from visnav.vehicles.base import Environment
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 def _per_call(fn, n: int) -> float:

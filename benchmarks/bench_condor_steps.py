@@ -30,7 +30,7 @@ def measure(blocks: int, at_s: float) -> dict:
 
     from visnav.measurements import Frame
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
     from visnav.vehicles.base import Environment
 
     sim = make_simulation(load_scenario("condor-orbit", [f"run.duration_s={at_s}"], seed=1))

@@ -65,7 +65,7 @@ def bench_filterpy(n: int = 300) -> float:
 
 def bench_landing(seed: int = 1, scenario: str = "deck-static") -> dict:
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     c0 = time.process_time()
     res = make_simulation(load_scenario(scenario, seed=seed)).run()

@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests' refer
 def collect(seed: int):
     from visnav.scenarios.schema import load_scenario
     from visnav.sensors.led_camera import LedCamera
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     calls, orig = [], LedCamera.render
 

@@ -6,7 +6,7 @@ import sys
 import time
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 
 
 def main(seed: int = 1, profile: bool = False) -> dict:

@@ -74,7 +74,7 @@ def bench_detection(blocks: int = 10, n: int = 5) -> dict:
 
 def bench_landing() -> tuple[float, float, float]:
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     sc = load_scenario("pad-landing", ["mission.start_height_m=5.0", "mission.start_ne_m=[1.0, -0.8]",
                                        "mission.settle_s=1.0", "mission.slow_height_m=3.0", "world.field_size_m=30.0"])

@@ -20,9 +20,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from visnav.io.recording import Recording  # noqa: E402
-from visnav.io.replay import replay  # noqa: E402
+from visnav.app.replay import replay  # noqa: E402
 from visnav.scenarios.schema import load_scenario  # noqa: E402
-from visnav.sim.record import record  # noqa: E402
+from visnav.app.record import record  # noqa: E402
 
 #: (navigator, scenario) pairs
 CASES = [("palace", "palace-landing"), ("witas", "witas-homing"), ("deck", "deck-moving"), ("deck", "deck-static"),

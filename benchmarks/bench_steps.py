@@ -114,7 +114,7 @@ def _deck(blocks: int) -> dict:
     from visnav.estimation import deck as dm
     from visnav.measurements import ImuSample
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
     from visnav.world.deck import relative_state
 
     sim = make_simulation(load_scenario("deck-moving", seed=1))

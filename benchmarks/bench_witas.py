@@ -104,7 +104,7 @@ def main(run: bool = True) -> dict:
     res["ransac_cv2_ms"] = _median_ms(lambda: cv2.findHomography(x1, x2, cv2.RANSAC, thr), 200)
     if run:
         from visnav.scenarios.schema import load_scenario
-        from visnav.sim.missions import make_simulation
+        from visnav.app.missions import make_simulation
 
         sim = make_simulation(load_scenario("witas-homing"))
         c0, m0 = time.process_time(), time.thread_time()

@@ -33,7 +33,7 @@ TARGETS = [
     ("visnav.estimation.deck", "process_noise"),
     ("visnav.estimation.deck", "process_model"),
     ("visnav.estimation.association", "associate"),
-    ("visnav.sim.deck_parts", "DeckContact.log"),
+    ("visnav.app.deck_parts", "DeckContact.log"),
     ("visnav.mission.deck", "DeckMission.step"),
     ("visnav.control.deck", "DeckController.command"),
     ("visnav.sensors.led_camera", "LedCamera.sample"),
@@ -42,12 +42,12 @@ TARGETS = [
     ("visnav.sensors.deck_observer", "RelativeStateSensor.sample"),
     ("visnav.sim.parts", "VehicleTruth.advance"),
     ("visnav.vehicles.multirotor", "Multirotor.step"),
-    ("visnav.sim.deck_parts", "DeckContact.environment"),
-    ("visnav.sim.deck_parts", "DeckContact.contact"),
+    ("visnav.app.deck_parts", "DeckContact.environment"),
+    ("visnav.app.deck_parts", "DeckContact.contact"),
     ("visnav.world.deck", "DeckMotion.state"),
     ("visnav.world.deck", "relative_state"),
     ("visnav.estimation.integrity", "IntegrityMonitor.assess"),
-    ("visnav.sim.loop", "Simulation._deliver"),
+    ("visnav.app.loop", "Simulation._deliver"),
 ]
 
 
@@ -96,11 +96,11 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     a = ap.parse_args()
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     import visnav.navigation.deck  # noqa: F401  (import every target's module before wrapping)
     import visnav.sensors.deck_observer  # noqa: F401
-    import visnav.sim.deck_parts  # noqa: F401
+    import visnav.app.deck_parts  # noqa: F401
 
     accs = install()
     best: dict[str, tuple[float, int]] = {}

@@ -19,7 +19,7 @@ import numpy as np
 
 def run(name: str, seed: int = 1, dump: str | None = None, profile: bool = False) -> dict:
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     from visnav.sensors import camera
 

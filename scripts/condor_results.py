@@ -9,7 +9,7 @@ import sys
 import numpy as np
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 def main(n: int = 5) -> None:

@@ -20,7 +20,7 @@ def main(scenario: str, n: int, prefix: str) -> None:
 
     from visnav.analysis.deck_report import binned_mean, distance_and_errors, relative_path
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     runs = []
     for seed in range(1, n + 1):

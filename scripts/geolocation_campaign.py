@@ -44,7 +44,7 @@ KEYS = ("target_error_m", "map_based_error_m", "samples", "false_match_rate", "s
 def one(job):
     part, name, seed, overrides, scenario = job
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     r = make_simulation(load_scenario(scenario, overrides, seed=seed)).run()
     return {"part": part, "map": name, "seed": seed, "overrides": overrides,

@@ -24,7 +24,7 @@ def budget(run_dir: Path) -> dict:
     from visnav.geometry.rotations import euler_to_dcm
     from visnav.scenarios.schema import load_scenario
     from visnav.sensors.gimbal import PitchRollGimbal
-    from visnav.sim.geoloc_parts import mav_camera
+    from visnav.app.geoloc_parts import mav_camera
     from visnav.sim.log import FlightLog
     from visnav.vision.geolocation_registration import map_based_target, nadir_dcm
 

@@ -23,7 +23,7 @@ def headline(scenario: str, seed: int) -> dict:
     has them)."""
     from visnav.analysis.published import published
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     sc = load_scenario(scenario, [], seed)
     result = make_simulation(sc).run()

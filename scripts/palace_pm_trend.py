@@ -36,7 +36,7 @@ def _done(path: Path) -> set:
 
 
 def fly(out: Path, seeds, sets=(), altitudes=ALTITUDES, sources=SOURCES) -> None:
-    from visnav.analysis.margins_campaign import SweepSettings, sweep_run
+    from visnav.app.margins_campaign import SweepSettings, sweep_run
 
     out.mkdir(parents=True, exist_ok=True)
     (out / "frf").mkdir(exist_ok=True)
@@ -77,7 +77,7 @@ def _slope(x, y):
 
 def table(out: Path) -> str:
     from visnav.analysis.loop_model import model_margins
-    from visnav.analysis.margins_campaign import SweepSettings, merge_sweeps
+    from visnav.app.margins_campaign import SweepSettings, merge_sweeps
 
     with (out / "sweeps.csv").open(newline="") as f:
         rows = list(csv.DictReader(f))

@@ -12,7 +12,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 
 
 def one(args):

@@ -28,7 +28,7 @@ def _leaves(sc):
 
 @pytest.mark.parametrize("name", builtin_names())
 def test_resolved_round_trip_and_build(name):
-    from visnav.sim.missions import BuildContext, build  # noqa: F401
+    from visnav.app.missions import BuildContext, build  # noqa: F401
 
     sc = load_scenario(name)
     text = to_toml(sc)
@@ -38,7 +38,7 @@ def test_resolved_round_trip_and_build(name):
     assert all("kind" in s for s in data["sensors"].values())
     again = validate(data)
     assert again == sc and to_toml(again) == text
-    from visnav.sim.loop import Simulation
+    from visnav.app.loop import Simulation
 
     Simulation(again)  # the builder assembles every part from the role sections
 

@@ -38,7 +38,7 @@ def _fail(message, code: int = 2) -> NoReturn:
 
 
 def _print_json(obj) -> None:
-    from visnav.io.runs import _jsonable
+    from visnav.app.runs import _jsonable
 
     print(json.dumps(_jsonable(obj), indent=2))
 
@@ -143,9 +143,9 @@ def run(
     """Run one closed-loop simulation and write its run directory."""
     from visnav.analysis.published import summary_rows
     from visnav.analysis.report import run_notes
-    from visnav.io.runs import new_run_dir, write_run
+    from visnav.app.runs import new_run_dir, write_run
     from visnav.scenarios.schema import ScenarioError, load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     try:
         sc = load_scenario(scenario, set_, seed)
@@ -153,7 +153,7 @@ def run(
             key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
             sc = load_scenario(scenario, list(set_) + [f"{key}={json.dumps(str(Path(map_).resolve()))}"], seed)
         if sil or sil_external:
-            from visnav.sim.sil import sil_simulation
+            from visnav.app.sil import sil_simulation
 
             sim = sil_simulation(sc)
         else:
@@ -174,8 +174,8 @@ def run(
         def progress(t, total):
             prog.update(t, f"mode {sim.mission.mode}")
 
-        if sil or sil_external:  # the same scenario, its navigator in `visnav bridge` (sim/sil.py)
-            from visnav.sim.sil import SilError, run_sil
+        if sil or sil_external:  # the same scenario, its navigator in `visnav bridge` (app/sil.py)
+            from visnav.app.sil import SilError, run_sil
 
             try:
                 result = run_sil(sc, progress=progress, sim=sim, out_dir=Path(out_dir) / "bridge",
@@ -236,7 +236,7 @@ def montecarlo(
     finished runs; another configuration there is refused (or --new)."""
     import time as _time
 
-    from visnav.analysis.montecarlo import Campaign, CampaignError, parse_grid
+    from visnav.app.montecarlo import Campaign, CampaignError, parse_grid
 
     try:
         if n < 1:
@@ -264,7 +264,7 @@ def montecarlo(
     except CampaignError as exc:
         _fail(exc)
     except KeyboardInterrupt:
-        from visnav.analysis.montecarlo import _read_csv
+        from visnav.app.montecarlo import _read_csv
 
         err_console.print(f"interrupted: {len(_read_csv(camp.runs_csv))} finished runs are in {camp.runs_csv}; to "
                           f"resume, run the same command with --out {camp.out}", soft_wrap=True)
@@ -306,8 +306,8 @@ def faults(
     one Monte Carlo campaign each in DIR/<fault>/ (resumable); writes DIR/faults.csv and DIR/faults.md."""
     import time as _time
 
-    from visnav.analysis.fault_campaign import FAULT_COLUMNS, campaigns, fault_row, faults_for, write_tables
-    from visnav.analysis.montecarlo import CampaignError, _read_csv
+    from visnav.app.fault_campaign import FAULT_COLUMNS, campaigns, fault_row, faults_for, write_tables
+    from visnav.app.montecarlo import CampaignError, _read_csv
 
     names = [x for f in faults_ for x in f.split(",") if x.strip()]
     try:
@@ -365,8 +365,8 @@ def margins(
     import csv
     import time as _time
 
-    from visnav.analysis.margins_campaign import check_margins_scenario, margins_campaign
-    from visnav.io.runs import prepare_out_dir
+    from visnav.app.margins_campaign import check_margins_scenario, margins_campaign
+    from visnav.app.runs import prepare_out_dir
 
     def numbers(text: str, option: str) -> list[float]:
         try:
@@ -440,7 +440,7 @@ def metrics(
 ) -> None:
     """Recompute a run's metrics from its log."""
     from visnav.analysis.run_metrics import RunDirError, from_run_dir
-    from visnav.io.runs import _jsonable
+    from visnav.app.runs import _jsonable
 
     try:
         m = from_run_dir(run_dir)
@@ -513,7 +513,7 @@ def ahrs(
     """Our INS attitude filter (AHRS mode) on a PX4 log's raw IMU vs PX4's vehicle_attitude."""
     from visnav.analysis.ahrs_check import ahrs_check
 
-    from visnav.io.runs import prepare_out_dir
+    from visnav.app.runs import prepare_out_dir
 
     out_dir = Path(out) if out else Path("runs") / f"ahrs-{Path(log).stem}"
     try:
@@ -586,7 +586,7 @@ def eval_(
                       rpe_unit=rpe_unit, drift_lengths_m=drift)
         files = []
         if out:
-            from visnav.io.trajectory_export import write_evaluation
+            from visnav.analysis.trajectory_export import write_evaluation
 
             try:
                 files = write_evaluation(ev, out, lt)
@@ -677,12 +677,12 @@ def bridge(
 
     from rich.live import Live
 
-    from visnav.io.bridge import OUTPUTS, Bridge, BridgeConfig, BridgeRecording, status_line
-    from visnav.io.bridge_navigators import build_navigator
+    from visnav.app.bridge import OUTPUTS, Bridge, BridgeConfig, BridgeRecording, status_line
+    from visnav.app.bridge_navigators import build_navigator
     from visnav.io.camera_source import CameraSourceError, open_source, read_time_offset
     from visnav.io.mavlink_link import MavlinkLink, MavlinkLinkError
     from visnav.io.mavlink_messages import mavlink
-    from visnav.io.navigators import NAVIGATORS
+    from visnav.app.navigators import NAVIGATORS
     from visnav.scenarios.schema import ScenarioError
     from visnav.sim.log import FlightLog
 
@@ -851,7 +851,7 @@ def record_(
     """Fly a scenario's closed loop and write what its navigator saw as a recorded flight."""
     from visnav.io.recording import RecordingError
     from visnav.scenarios.schema import ScenarioError, load_scenario
-    from visnav.sim.record import record
+    from visnav.app.record import record
 
     err = Console(stderr=True)
     try:
@@ -876,7 +876,7 @@ def replay_(
     recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, an "
                                     "EuRoC folder, a folder of geotagged photos, PX4 .ulg, ArduPilot DataFlash .bin, "
                                     "MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
-    navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
+    navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (app/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
     time_offset: Optional[str] = typer.Option(None, help="camera clock offset: 'auto' (gyro/camera "
@@ -898,8 +898,8 @@ def replay_(
     """Run a navigator on a recorded flight and write a run directory (log.h5, estimate.tum, metrics.json)."""
     from visnav.io.logs import open_recording
     from visnav.io.recording import RecordingError
-    from visnav.io.replay import ReplayOptions, replay, write_replay
-    from visnav.io.runs import new_run_dir
+    from visnav.app.replay import ReplayOptions, replay, write_replay
+    from visnav.app.runs import new_run_dir
     from visnav.scenarios.schema import ScenarioError
 
     err = Console(stderr=True)

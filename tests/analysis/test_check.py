@@ -169,7 +169,7 @@ def test_frames_on_their_own_clock_are_aligned(clean, tmp_path, kind):
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.record import record
+    from visnav.app.record import record
 
     d = tmp_path_factory.mktemp("rec") / "witas"
     record(load_scenario("witas-homing", ["run.duration_s=12", "mission.gps_loss_s=3", "mission.settle_s=2"]), d)

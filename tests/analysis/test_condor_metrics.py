@@ -7,7 +7,7 @@ import pytest
 from visnav.analysis.condor_metrics import condor_metrics
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 def _same(a: dict, b: dict) -> None:

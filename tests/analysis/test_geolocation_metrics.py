@@ -7,7 +7,7 @@ import pytest
 from visnav.analysis.geolocation_metrics import geolocation_metrics
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 def test_metrics_from_log_h5(tmp_path):

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from visnav.analysis.fault_campaign import FAULT_SETS, fault_row, faults_for
+from visnav.app.fault_campaign import FAULT_SETS, fault_row, faults_for
 from visnav.analysis.integrity_metrics import integrity_metrics
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
@@ -88,7 +88,7 @@ def test_fault_row_aggregates_runs():
 def test_fault_sets_validate_and_unknown_names_are_one_line():
     for scen in ("palace-landing", "witas-homing", "pad-landing", "deck-static", "deck-moving", "condor-orbit"):
         for d in faults_for(scen, [], ["all"]):  # every definition is a valid fault of that mission
-            from visnav.analysis.fault_campaign import _toml_inline
+            from visnav.app.fault_campaign import _toml_inline
 
             load_scenario(scen, [f"faults=[{_toml_inline(d)}]"])
     assert len(faults_for("witas-homing", [], ["all"])) == len(FAULT_SETS["witas-homing"])
@@ -143,7 +143,7 @@ def test_condor_outcome_orbit_radius_while_ok():
 
 
 def test_a_deck_run_logs_and_scores_its_integrity():
-    from visnav.sim.loop import Simulation
+    from visnav.app.loop import Simulation
 
     r = Simulation(load_scenario("deck-moving", ["run.seed=2"])).run()
     st = r.log.get("status")

@@ -4,9 +4,9 @@ import math
 
 import pytest
 
-from visnav.analysis import margins_campaign as mc
+from visnav.app import margins_campaign as mc
 from visnav.analysis.loop_model import model_margins, model_stable
-from visnav.analysis.margins_campaign import SweepSettings, margins_campaign, sweep_run
+from visnav.app.margins_campaign import SweepSettings, margins_campaign, sweep_run
 
 
 COLUMNS = ["altitude_m", "delay_s", "compensated", "lateral_pm_deg", "lateral_pm_wc_rps", "lateral_gm_db",

@@ -15,7 +15,7 @@ from visnav.analysis.run_metrics import METRICS, RunDirError, compute_metrics, f
 from visnav.cli import app
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
-from visnav.sim.missions import REGISTRY, make_simulation
+from visnav.app.missions import REGISTRY, make_simulation
 
 #: short runs that reach each mission's metrics (the pad landing from 5 m lands; pfcm-segment completes)
 SHORT = {

@@ -6,7 +6,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from visnav.analysis.montecarlo import Campaign, CampaignError, parse_grid
+from visnav.app.montecarlo import Campaign, CampaignError, parse_grid
 from visnav.cli import app
 
 TINY = ["mission.hold_s=3", "run.duration_s=8", "mission.settle_s=1", "mission.coherence_time_s=0.5",
@@ -108,7 +108,7 @@ def test_new_starts_a_fresh_campaign_beside_and_says_where(tmp_path):
 
 
 def test_summary_has_rates_of_boolean_metrics_and_the_thesis_figures():
-    from visnav.analysis.montecarlo import summarize
+    from visnav.app.montecarlo import summarize
 
     rows = [{"seed": str(s), "status": "ok", "error": "", "landed": v, "touchdown_error_m": str(e)}
             for s, v, e in ((1, "True", 0.1), (2, "False", 0.3), (3, "True", 0.2), (4, "True", 0.4))]
@@ -131,7 +131,7 @@ def test_campaign_summary_json_carries_rates_and_source(tmp_path):
 
 
 def test_ctrl_c_in_a_campaign_keeps_finished_rows_and_says_how_to_resume(tmp_path, monkeypatch):
-    import visnav.analysis.montecarlo as mc
+    import visnav.app.montecarlo as mc
 
     orig, n = mc.run_job, []
 

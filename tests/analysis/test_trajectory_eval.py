@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from visnav.analysis.trajectory_eval import (Trajectory, TrajectoryError, associate, evaluate, read_trajectory,
                                              segment_drift, umeyama)
-from visnav.io.trajectory_export import write_tum_file
+from visnav.analysis.trajectory_export import write_tum_file
 
 evo_sync = pytest.importorskip("evo.core.sync", reason="evo is a dev dependency (pip install -e '.[dev]')")
 from evo.core import metrics as evo_metrics  # noqa: E402

@@ -108,7 +108,7 @@ def test_unwritable_out_is_one_line_on_stderr_and_exit_2(tmp_path, cmd):
 
 # ----------------------------------------------------------------- point 5: Ctrl-C
 def test_ctrl_c_during_a_run_writes_what_it_has_and_exits_130(tmp_path, monkeypatch):
-    from visnav.sim.rmax_parts import RmaxLogger
+    from visnav.app.rmax_parts import RmaxLogger
 
     orig, calls = RmaxLogger.__call__, []
 

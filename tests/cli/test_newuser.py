@@ -43,7 +43,7 @@ def test_force_refuses_a_folder_that_is_not_a_run_folder(tmp_path, make, text):
 
 
 def test_force_refuses_home_and_root(monkeypatch, tmp_path):
-    from visnav.io.runs import OutputDirError, folder_kind, prepare_out_dir
+    from visnav.app.runs import OutputDirError, folder_kind, prepare_out_dir
 
     assert folder_kind("/") == "the root directory"
     with pytest.raises(OutputDirError, match="is the root directory"):
@@ -61,7 +61,7 @@ def test_force_refuses_home_and_root(monkeypatch, tmp_path):
 def test_force_still_replaces_an_earlier_run(tmp_path):
     d = tmp_path / "run"
     assert _invoke("run", "pfcm-segment", *SHORT, "--out", d, "--no-report").exit_code == 0
-    from visnav.io.runs import folder_kind
+    from visnav.app.runs import folder_kind
 
     assert folder_kind(d) == "a run folder"
     r = _invoke("run", "pfcm-segment", *SHORT, "--out", d, "--force", "--no-report", "--seed", "7")
@@ -207,9 +207,9 @@ def test_the_verdict_names_hpl_violations_while_ok():
 
 
 def test_an_interrupted_run_reports_interrupted(tmp_path):
-    from visnav.io.runs import write_run
+    from visnav.app.runs import write_run
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     sim = make_simulation(load_scenario("pfcm-segment", ["run.duration_s=3"]))
 
@@ -228,7 +228,7 @@ def test_an_interrupted_run_reports_interrupted(tmp_path):
 def test_an_abort_without_touchdown_is_aborted_and_counts_safe_in_a_fault_campaign():
     import numpy as np
 
-    from visnav.analysis.fault_campaign import fault_row
+    from visnav.app.fault_campaign import fault_row
     from visnav.analysis.outcome import OUTCOMES, run_outcome
     from visnav.scenarios.schema import load_scenario
 
@@ -327,7 +327,7 @@ def test_the_report_opens_with_the_outcome_and_the_headline_figures():
 def test_the_report_page_has_the_verdict_above_the_metrics_table(tmp_path):
     from visnav.analysis.report import write_report
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     res = make_simulation(load_scenario("pfcm-segment", ["run.duration_s=3"])).run()
     write_report(res, tmp_path / "report.html")
@@ -364,7 +364,7 @@ def test_the_witas_pmf_map_panel_has_a_legend(monkeypatch):
 
 
 def test_a_campaign_counts_its_outcomes_and_its_runs_over_the_hpl():
-    from visnav.analysis.montecarlo import summarize
+    from visnav.app.montecarlo import summarize
     from visnav.analysis.outcome import outcome_text
 
     rows = [{"seed": "1", "status": "ok", "outcome": "safe", "hpl_bound_violations": "0"},

@@ -9,7 +9,7 @@ from tests.io.bridge_fixtures import GpsFollowNavigator
 from tests.io.mavlink_helpers import free_udp_port
 from tests.io.test_bridge_requests import _Synced
 from visnav.io import mavlink_messages as mm
-from visnav.io.bridge import Bridge, BridgeConfig
+from visnav.app.bridge import Bridge, BridgeConfig
 from visnav.io.bridge_freshness import (DEFAULT_BUDGETS, Freshness, FreshnessConfig, StreamBudget, inflate,
                                         stream_of)
 from visnav.io.camera_source import Captured

@@ -12,7 +12,7 @@ import pytest
 from tests.io.bridge_fixtures import GpsFollowNavigator
 from tests.io.mavlink_helpers import free_udp_port
 from visnav.io import mavlink_messages as mm
-from visnav.io.bridge import Bridge, BridgeConfig
+from visnav.app.bridge import Bridge, BridgeConfig
 from visnav.io.bridge_freshness import FreshnessConfig
 from visnav.io.camera_source import CallableSource, FrameSource
 from visnav.io.mavlink_link import MavlinkLink

@@ -9,7 +9,7 @@ import numpy as np
 from tests.io.bridge_fixtures import GpsFollowNavigator
 from tests.io.mavlink_helpers import free_udp_port
 from visnav.io import mavlink_messages as mm
-from visnav.io.bridge import Bridge, BridgeConfig, NavRequest
+from visnav.app.bridge import Bridge, BridgeConfig, NavRequest
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import Health, NavCommand

@@ -11,7 +11,7 @@ import pytest
 
 from tests.io.bridge_fixtures import GpsFollowNavigator
 from tests.io.mavlink_helpers import free_udp_port
-from visnav.io.bridge import Bridge, BridgeConfig
+from visnav.app.bridge import Bridge, BridgeConfig
 from visnav.io.camera_source import CallableSource, Captured, FrameSource
 from visnav.io.mavlink_link import MavlinkLink, MavlinkLinkError
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
@@ -167,7 +167,7 @@ def test_other_outputs_land_at_their_instant(tmp_path, output, types):
 
 
 def test_palace_navigator_over_sil_short():
-    from visnav.io.sil_flight import fly
+    from visnav.app.sil_flight import fly
 
     r = fly("palace", 4.0, gps_s=100.0)
     assert r["estimates_out"] > 10 and r["stamp_error_ms_max"] < 2.0
@@ -178,7 +178,7 @@ def test_palace_navigator_over_sil_short():
 def test_witas_navigator_over_sil_vision_after_gps_loss():
     """WITAS behind the bridge: GPS stops after 4 s, the navigator engages vision (reset_counter tells the
     autopilot), and the estimate the stand-in receives stays near its truth."""
-    from visnav.io.sil_flight import fly
+    from visnav.app.sil_flight import fly
 
     r = fly("witas", 14.0, gps_s=4.0)
     assert r["source_at_end"] == "vision" and r["reset_counter"] >= 1

@@ -93,7 +93,7 @@ def test_dataflash_truncated_is_read_up_to_the_damage(tmp_path):
 
 
 def test_dataflash_replays_on_palace(tmp_path):
-    from visnav.io.replay import replay
+    from visnav.app.replay import replay
 
     rec = open_recording(_dataflash(tmp_path / "flight.bin"))
     res = replay(rec, "palace")

@@ -23,7 +23,7 @@ from tests.io.bridge_fixtures import GpsFollowNavigator
 from tests.io.mavlink_helpers import free_udp_port
 from visnav.geometry.frames import LocalTangentPlane
 from visnav.io import mavlink_messages as mm
-from visnav.io.bridge import Bridge, BridgeConfig, NavRequest
+from visnav.app.bridge import Bridge, BridgeConfig, NavRequest
 from visnav.io.mavlink_link import MavlinkLink, mavutil
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import Health, NavCommand, NavEstimate

@@ -55,7 +55,7 @@ def test_no_git_gives_none_not_an_error(monkeypatch):
 
 @pytest.fixture(scope="module")
 def ground_run():
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     return make_simulation(load_scenario("condor-ground-test")).run()
 
@@ -63,7 +63,7 @@ def ground_run():
 def test_run_directory_carries_provenance(ground_run, tmp_path):
     import h5py
 
-    from visnav.io.runs import write_run
+    from visnav.app.runs import write_run
 
     write_run(ground_run, tmp_path)
     m = json.loads((tmp_path / "metrics.json").read_text())

@@ -16,9 +16,9 @@ import pytest
 from typer.testing import CliRunner
 
 from visnav.io.recording import Recording
-from visnav.io.replay import ReplayOptions, replay
+from visnav.app.replay import ReplayOptions, replay
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.record import record
+from visnav.app.record import record
 
 PALACE = ["run.duration_s=10.5", "mission.start_height_m=14"]
 WITAS = ["run.duration_s=12", "mission.gps_loss_s=3", "mission.settle_s=2"]

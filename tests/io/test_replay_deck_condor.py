@@ -18,9 +18,9 @@ import pytest
 from typer.testing import CliRunner
 
 from visnav.io.recording import Recording, RecordingError
-from visnav.io.replay import replay
+from visnav.app.replay import replay
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.record import record
+from visnav.app.record import record
 
 DECK = ["run.duration_s=3"]
 CONDOR = ["run.duration_s=10", "mission.control.orbit.switch_time_s=4"]

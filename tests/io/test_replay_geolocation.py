@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from visnav.io.recording import Recording
-from visnav.io.replay import replay
+from visnav.app.replay import replay
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.record import record
+from visnav.app.record import record
 
 GEO = ["run.duration_s=20"]
 

@@ -10,7 +10,7 @@ import pytest
 from visnav.mission.pad import PadLandingMission
 from visnav.scenarios.config_pad import PadMissionConfig
 from visnav.scenarios.schema import ScenarioError, load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 SHORT = ["mission.start_height_m=5.0", "mission.start_ne_m=[1.0, -0.8]", "mission.settle_s=1.0",
          "mission.slow_height_m=3.0", "world.field_size_m=30.0", "run.duration_s=30.0"]

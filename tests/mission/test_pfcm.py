@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from visnav.io.runs import write_run
+from visnav.app.runs import write_run
 from visnav.mission.pfcm import build_path, spiral_waypoints
 from visnav.scenarios.schema import ScenarioError, load_scenario
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 
 KEYS = ["cross_track_rms_m", "cross_track_max_m", "speed_error_rms_mps", "max_roll_deg", "max_descent_mps",
         "input_saturation_s", "path_completed", "sim_time_s", "wall_time_s", "real_time_factor"]

@@ -5,7 +5,7 @@ import numpy as np
 
 from visnav.measurements import AttitudeSample, GpsSample, ImuSample, NavCommand, NavInit
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.condor_parts import build_navigator
+from visnav.app.condor_parts import build_navigator
 from visnav.sensors.condor_camera import condor_camera
 
 

@@ -10,8 +10,8 @@ from visnav.measurements import NavCommand, NavInit, TargetRangeSample
 from visnav.navigation.base import Navigator
 from visnav.navigation.condor import CondorNavigator, RadiusFilter
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.condor_parts import build_navigator
-from visnav.sim.loop import Simulation
+from visnav.app.condor_parts import build_navigator
+from visnav.app.loop import Simulation
 
 
 class _Recorder:

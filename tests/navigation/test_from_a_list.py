@@ -15,7 +15,7 @@ import pytest
 from visnav.navigation.base import Navigator
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
-from visnav.sim.missions import BuildContext, build
+from visnav.app.missions import BuildContext, build
 
 
 class Capture:
@@ -47,7 +47,7 @@ class Capture:
 
 
 def _fly(name, sets):
-    from visnav.sim.loop import Simulation
+    from visnav.app.loop import Simulation
 
     sc = load_scenario(name, sets)
     caps = []

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.loop import Simulation
-from visnav.sim.missions import make_simulation
+from visnav.app.loop import Simulation
+from visnav.app.missions import make_simulation
 
 
 class _Capture:

@@ -59,7 +59,7 @@ def test_unknown_sync_is_one_clear_error(ref):
 
 
 def test_frame_phase_is_a_step_within_one_frame_period():
-    from visnav.sim.geoloc_parts import frame_phase
+    from visnav.app.geoloc_parts import frame_phase
 
     rng = np.random.default_rng(4)
     ph = [frame_phase(None, 5.0, 0.01, rng) for _ in range(400)]

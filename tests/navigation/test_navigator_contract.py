@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from visnav.io.navigators import NAVIGATORS, make_navigator
+from visnav.app.navigators import NAVIGATORS, make_navigator
 from visnav.measurements import Health, NavCommand, NavInit
 from visnav.navigation.base import Navigator
 from visnav.scenarios.schema import load_scenario

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from visnav.io.navigators import make_navigator
+from visnav.app.navigators import make_navigator
 from visnav.measurements import AttitudeSample, GpsSample, ImuSample, NavCommand, NavInit
 from visnav.navigation.base import Navigator
 from visnav.scenarios.schema import load_scenario
@@ -66,8 +66,8 @@ def test_pad_navigator_needs_its_pan_tilt_unit():
 
 def test_a_builders_nav_init_is_logged_and_sent(monkeypatch):
     """A NavInit in the parts reaches the navigator before the first step and is logged (stream nav_init)."""
-    from visnav.sim import missions
-    from visnav.sim.loop import Simulation
+    from visnav.app import missions
+    from visnav.app.loop import Simulation
 
     orig = missions.REGISTRY["palace"]
 

@@ -12,7 +12,7 @@ from visnav.scenarios.schema import load_scenario
 from visnav.sensors.autopilot import Ahrs, AutopilotImu, Pitot
 from visnav.sensors.baro import Compass
 from visnav.sensors.gps import Gps
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 S = VehicleState(0.0, np.array([10.0, -5.0, -100.0]), np.array([17.0, 1.0, 0.0]), np.array([0.3, 0.05, 1.0]),
                  np.array([0.01, 0.02, 0.15]), np.array([0.1, 0.2, -9.9]))

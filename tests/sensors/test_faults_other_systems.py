@@ -10,12 +10,12 @@ import copy
 import numpy as np
 import pytest
 
-from visnav.analysis.fault_campaign import FAULT_SETS
+from visnav.app.fault_campaign import FAULT_SETS
 from visnav.measurements import Frame, GpsSample, ImuSample
 from visnav.scenarios.config_integrity import FaultConfig
 from visnav.scenarios.schema import load_scenario
 from visnav.sensors.faults import FaultySensor, GustyWind, apply_faults, target_of
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 from visnav.sim.parts import CurrentTruth
 
 START, DUR = 0.1, 0.1

@@ -120,7 +120,7 @@ def test_injected_attitude_error_gives_h_tan_e_in_the_map_based_method(axis, err
     gimbal (no lag, leak, dead band, mount error) counters the estimate and leaves the camera tilted by e; the
     ground station casts the tracked pixel from the exact position, height and yaw as a nadir view (Fig. 7.2):
     a target under the aircraft is placed h tan(e) away, across the track for roll, along it for pitch."""
-    from visnav.sim.geoloc_parts import mav_camera
+    from visnav.app.geoloc_parts import mav_camera
     from visnav.scenarios.config_geolocation import MavCameraConfig
     from visnav.vision.geolocation_registration import map_based_target
 

@@ -4,7 +4,7 @@ restores it (short variant: 14 s of MPE hover, no landing)."""
 import pytest
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 
 HOVER = ["mission.start_height_m=19", "mission.switch_height_m=18", "mission.hold_s=60", "mission.settle_s=1",
          "run.duration_s=24"]

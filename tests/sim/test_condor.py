@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from visnav.scenarios.schema import ScenarioError, load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 KEYS = ("radius_est_error_rms_pct", "radius_est_error_max_pct", "orbit_radius_error_rms_m",
         "orbit_radius_error_max_m", "tracking_lost_s", "controller")

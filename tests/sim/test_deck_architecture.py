@@ -10,7 +10,7 @@ from visnav.measurements import DeckReference, NavCommand
 from visnav.navigation.deck import DeckHealth, DeckNavConfig, DeckNavigator
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 class _Recorder:
@@ -49,7 +49,7 @@ class _Recorder:
                                         ("deck-moving", ["run.duration_s=9"])])
 def test_navigator_from_a_list_of_measurements_gives_the_closed_loop_estimate(name, sets):
     """Static: the eq. 5.12 start and the hand-over command; moving: the Vicon NavInit, hover and approach."""
-    from visnav.sim.loop import Simulation
+    from visnav.app.loop import Simulation
 
     sc = load_scenario(name, sets, seed=2)
     rec: list[_Recorder] = []

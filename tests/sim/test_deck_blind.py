@@ -4,7 +4,7 @@ approach's last second must not end in an unsafe touchdown."""
 import numpy as np
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 def test_blackout_in_the_commit_window_lands_on_the_plate():

@@ -5,7 +5,7 @@ import pytest
 
 from visnav.analysis.deck_metrics import NEES_BAND_12
 from visnav.scenarios.schema import ScenarioError, load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 def _run(name, seed, *sets):

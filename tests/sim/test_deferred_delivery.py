@@ -1,5 +1,5 @@
 """The loop delivers a frame still rendering later (in order, before anything reads the navigator): the run is
-the run of a loop that waits for every frame when it is due, to the last bit (sim/loop.py, issue #19)."""
+the run of a loop that waits for every frame when it is due, to the last bit (app/loop.py, issue #19)."""
 
 import time
 
@@ -9,7 +9,7 @@ import pytest
 from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import load_scenario
 from visnav.sensors.camera import CameraRenderer
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 
 SHORT = ["mission.start_height_m=14", "mission.settle_s=1"]
 
@@ -126,7 +126,7 @@ def test_the_switch_interval_is_short_while_frames_render_and_restored_after(mon
     within ``RENDER_SWITCH_INTERVAL_S``; after the run (or an error) the process has its own setting back."""
     import sys
 
-    from visnav.sim import loop
+    from visnav.app import loop
 
     seen = []
     execute = CameraRenderer.execute  # (the worker's part of a frame)

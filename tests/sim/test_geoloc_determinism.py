@@ -23,7 +23,7 @@ _CHILD = """
 import json, sys
 import numpy as np
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 r = make_simulation(load_scenario("mav-geolocation", json.loads(sys.argv[2]), seed=1)).run()
 assert r.error is None, r.error
 arrays = {f"{s}/{k}": v for s in r.log.streams() for k, v in r.log.get(s).items() if v.dtype != object}

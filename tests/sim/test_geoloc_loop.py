@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 FAST = ["mission.map.rural_size_m=260", "mission.max_samples=10", "run.duration_s=60"]
 

@@ -3,8 +3,8 @@
 import pytest
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim import missions
-from visnav.sim.loop import Simulation
+from visnav.app import missions
+from visnav.app.loop import Simulation
 
 
 def test_every_scenario_flies_the_one_loop_from_its_builder():

@@ -7,9 +7,9 @@ import pytest
 from typer.testing import CliRunner
 
 from visnav.cli import app
-from visnav.io.runs import write_run
+from visnav.app.runs import write_run
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 
 SHORT = ["mission.start_height_m=14", "mission.settle_s=1", "run.duration_s=60"]
 KEYS = ["landed", "aborted", "touchdown_error_m", "mpe_drift_m", "time_under_vision_s", "reinitializations",

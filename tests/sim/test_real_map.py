@@ -6,7 +6,7 @@ import pytest
 
 from tests.shared_data import shared_data_dir
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.loop import Simulation
+from visnav.app.loop import Simulation
 
 DATA = shared_data_dir()
 MAP = DATA / "satellite_column.png"

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 @pytest.mark.parametrize("name, keys, stream", [

@@ -1,5 +1,5 @@
 """`visnav run SCENARIO --sil`: the closed loop flown with its navigator in `visnav bridge`, a separate process,
-over MAVLink on 127.0.0.1 (sim/sil.py). Real time: the short variants fly a few seconds; the full landing
+over MAVLink on 127.0.0.1 (app/sil.py). Real time: the short variants fly a few seconds; the full landing
 is marked slow."""
 
 import shlex
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from visnav.io.logs import open_recording
-from visnav.io.replay import replay
+from visnav.app.replay import replay
 from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
-from visnav.sim.sil import SilError, run_sil
+from visnav.app.sil import SilError, run_sil
 
 pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
 
@@ -111,7 +111,7 @@ def test_palace_landing_over_sil_lands_like_in_process():
 
 
 def test_sil_refuses_missions_without_a_bridge_navigator():
-    from visnav.sim.sil import sil_simulation
+    from visnav.app.sil import sil_simulation
 
     with pytest.raises(ValueError, match="mission.type 'pad-landing' has the pad navigator, which needs a pan-tilt"):
         sil_simulation(load_scenario("pad-landing"))

@@ -1,4 +1,4 @@
-"""The SIL autopilot's own navigation solution (sim/sil.py ``ExternalFusion``, ``SilLink.estimate``): the bridge's
+"""The SIL autopilot's own navigation solution (app/sil.py ``ExternalFusion``, ``SilLink.estimate``): the bridge's
 ODOMETRY fused at the instant it describes and carried to the present with the autopilot's IMU, as PX4's EKF2 /
 ArduPilot's EKF3 fuse an external vision source on their delayed horizon. No bridge, no wall-clock pacing:
 the measurements are handed to the link by hand and the ODOMETRY goes through pymavlink's encoder and parser."""
@@ -13,7 +13,7 @@ from visnav.io import mavlink_messages as mm
 from visnav.io.camera_source import FrameStreamServer
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import AttitudeSample, ImuSample, NavEstimate
-from visnav.sim.sil import ORIGIN, ExternalFusion, SilLink, free_port
+from visnav.app.sil import ORIGIN, ExternalFusion, SilLink, free_port
 
 P0, V0 = np.array([3.0, -2.0, -5.0]), np.array([1.0, 0.5, 0.2])
 A = np.array([0.3, -0.2, 0.5])  # constant kinematic acceleration NED [m/s^2]
@@ -96,8 +96,8 @@ def test_sil_camera_streams_while_the_mission_needs_no_frames():
     """In-process PALACE renders no frames below 1 m (the mission's camera gate); behind the bridge the camera
     is the companion computer's and streams on, else the bridge would see a camera stall in the final descent."""
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
-    from visnav.sim.sil import sil_simulation
+    from visnav.app.missions import make_simulation
+    from visnav.app.sil import sil_simulation
 
     sc = load_scenario("palace-landing")
     gate = make_simulation(sc).parts.gates["camera"]  # the in-process economy this test is about

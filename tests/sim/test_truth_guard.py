@@ -19,7 +19,7 @@ from visnav.scenarios.schema import load_scenario
 #: modules allowed to read truth: the sensors, the loop and the R-MAX's parts (logging, touchdown, wind), the vehicle model
 #: that produces it, the state type's own properties (height_agl) and the dataclass machinery
 ALLOWED = ("visnav.sensors.", "visnav.vehicles.")
-ALLOWED_EXACT = {"visnav.sim.loop", "visnav.sim.rmax_parts", "visnav.measurements", "dataclasses"}
+ALLOWED_EXACT = {"visnav.app.loop", "visnav.app.rmax_parts", "visnav.measurements", "dataclasses"}
 RMAX_SCENARIOS = ["palace-landing", "palace-hover-drift", "palace-sweep", "pfcm-segment", "pfcm-spiral",
                   "witas-homing", "pad-landing"]
 
@@ -43,9 +43,9 @@ class GuardedState(VehicleState):
 
 def _guard(monkeypatch):
     import visnav.sensors.base as sb
-    import visnav.sim.loop as loop
+    import visnav.app.loop as loop
     import visnav.sim.parts as parts
-    import visnav.sim.rmax_parts as rp
+    import visnav.app.rmax_parts as rp
     import visnav.vehicles.rmax as vr
 
     class GuardedHistory(parts.VehicleTruth):
@@ -78,7 +78,7 @@ def test_the_guard_sees_a_read_from_elsewhere(monkeypatch):
 
 @pytest.mark.parametrize("name", RMAX_SCENARIOS)
 def test_no_truth_outside_the_sensors_the_log_and_nav_init(monkeypatch, name):
-    from visnav.sim.loop import Simulation
+    from visnav.app.loop import Simulation
 
     _guard(monkeypatch)
     LEAKS.clear()

@@ -1,7 +1,7 @@
 """Truth guard for the loops of their own (ship deck, CONDOR, geo-location): as ``test_truth_guard.py`` does
 for the R-MAX loop, the true vehicle states (and the deck's true motion) are read only by the sensors, the
-vehicle and world models that produce them, and the loop (``sim/loop.py``) with the system's own logging /
-contact / truth parts (``sim/deck_parts.py``, ...).
+vehicle and world models that produce them, and the loop (``app/loop.py``) with the system's own logging /
+contact / truth parts (``app/deck_parts.py``, ...).
 
 The state types are swapped for subclasses whose attribute reads check the module of the reader; a read
 from anywhere else (a navigator, a mission, a controller, guidance) is recorded and raises.
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 ALLOWED = ("visnav.sensors.", "visnav.vehicles.", "visnav.world.")
 ALLOWED_EXACT = {"visnav.measurements", "dataclasses", "copy"}
@@ -29,7 +29,7 @@ def _guarded(cls, loop_module: str):
         if not name.startswith("__"):
             mod = sys._getframe(1).f_globals.get("__name__", "?")
             if not (mod.startswith(ALLOWED) or mod in ALLOWED_EXACT or mod == loop_module
-                    or mod in ("visnav.sim.fixedwing_common", "visnav.sim.loop", "visnav.sim.parts")):
+                    or mod in ("visnav.sim.fixedwing_common", "visnav.app.loop", "visnav.sim.parts")):
                 LEAKS.append(f"{mod} read truth {cls.__name__}.{name}")
                 raise AssertionError(f"truth read from {mod} ({cls.__name__}.{name})")
         return object.__getattribute__(self, name)
@@ -48,15 +48,15 @@ def _guard(monkeypatch, loop_module: str) -> dict:
     monkeypatch.setattr(fw, "VehicleState", g["vs"])  # the fixed wing's state
     monkeypatch.setattr(mr, "MultirotorState", g["mr"])  # the Y6's state
     monkeypatch.setattr(wd, "DeckState", g["ds"])  # the ship deck's true motion
-    if loop_module == "visnav.sim.deck_parts":
-        import visnav.sim.deck_parts as dp
+    if loop_module == "visnav.app.deck_parts":
+        import visnav.app.deck_parts as dp
 
         monkeypatch.setattr(dp, "VehicleState", g["vs"])  # what the deck's truth history holds
     return g
 
 
 def test_the_guard_catches_a_read_from_elsewhere(monkeypatch):
-    g = _guard(monkeypatch, "visnav.sim.deck_parts")
+    g = _guard(monkeypatch, "visnav.app.deck_parts")
     from visnav.world.deck import DeckMotion
 
     ds = DeckMotion.static().state(0.0)
@@ -69,10 +69,10 @@ def test_the_guard_catches_a_read_from_elsewhere(monkeypatch):
 
 
 @pytest.mark.parametrize("name, loop, keys", [
-    ("deck-static", "visnav.sim.deck_parts", ["run.duration_s=8"]),  # manual start, hand-over, approach
-    ("deck-moving", "visnav.sim.deck_parts", ["run.duration_s=6"]),
-    ("condor-orbit", "visnav.sim.condor_parts", ["run.duration_s=30", "mission.control.orbit.switch_time_s=20"]),  # GPS, then vision
-    ("mav-geolocation", "visnav.sim.geoloc_parts", ["run.duration_s=25"]),
+    ("deck-static", "visnav.app.deck_parts", ["run.duration_s=8"]),  # manual start, hand-over, approach
+    ("deck-moving", "visnav.app.deck_parts", ["run.duration_s=6"]),
+    ("condor-orbit", "visnav.app.condor_parts", ["run.duration_s=30", "mission.control.orbit.switch_time_s=20"]),  # GPS, then vision
+    ("mav-geolocation", "visnav.app.geoloc_parts", ["run.duration_s=25"]),
 ])
 def test_no_truth_outside_the_sensors_models_and_the_loop(monkeypatch, name, loop, keys):
     g = _guard(monkeypatch, loop)

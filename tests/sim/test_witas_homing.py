@@ -8,7 +8,7 @@ import pytest
 
 from tests.shared_data import missing_reason, shared_data_dir
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.missions import make_simulation
+from visnav.app.missions import make_simulation
 
 
 def _data() -> Path | None:

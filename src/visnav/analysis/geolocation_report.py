@@ -24,7 +24,7 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
     target = tgt["position"][0]
     geo = None
     if scenario is not None:
-        from visnav.sim.geoloc_parts import mission_map
+        from visnav.world.rural import mission_map
 
         geo = mission_map(scenario.mission)
     tr = log.get("truth")

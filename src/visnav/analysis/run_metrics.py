@@ -58,7 +58,7 @@ def compute_metrics(log, scenario, *, wall_time_s: float = math.nan, error: str 
 
     out = metrics_function(scenario.mission.type)(log, scenario, wall_time_s=wall_time_s, error=error)
     out.update(integrity_metrics(log, scenario))  # issue #18: every R-MAX navigator logs its integrity
-    if "ate_rmse_m" not in out and tum_frame(scenario) is not None:  # as a run's RunResult adds it (sim/loop.py)
+    if "ate_rmse_m" not in out and tum_frame(scenario) is not None:  # as a run's RunResult adds it (app/loop.py)
         ate = trajectory_rmse(log)
         if ate is not None:
             out["ate_rmse_m"] = ate

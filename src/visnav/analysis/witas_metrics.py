@@ -31,7 +31,7 @@ def witas_metrics(log, scenario, *, wall_time_s: float, error: str | None = None
     sim_time = float(tr["t"][-1]) if tr else 0.0
     eng = log.get("vision_engaged")
     setup = log.get("witas_setup")
-    home = np.asarray(setup["home"][0], float) if setup else np.full(3, np.nan)  # sim/witas_parts.py logs it
+    home = np.asarray(setup["home"][0], float) if setup else np.full(3, np.nan)  # app/witas_parts.py logs it
     if not tr or not eng:
         out["returned_home"] = False
         return finish_metrics(out, sim_time, wall_time_s, error or "vision filter never engaged")

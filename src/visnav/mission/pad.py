@@ -14,7 +14,7 @@ above ``integrity_abort_height_m`` (estimated height) -> ``go-around``: the refe
 for 2 s; after ``max_go_arounds`` the landing is aborted (hold, mission over). Below that height the
 landing goes on on dead reckoning (the pattern leaves the view near the ground by design).
 
-``build(sim)`` is the mission builder registered as ``pad-landing`` in ``sim/missions.py``.
+``build(sim)`` is the mission builder registered as ``pad-landing`` in ``app/missions.py``.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@ is lost at the start, the vision-based navigator is the only navigation source i
 and the helicopter comes back home.
 
 The loop's geometry lives here (``loop_waypoints``; fitted to a map by ``world/witas_map.fit_loop``); the simulation's builder of the
-mission (world, reference map, sensors, navigator, PFCM mission) is ``sim/witas_parts.py``.
+mission (world, reference map, sensors, navigator, PFCM mission) is ``app/witas_parts.py``.
 """
 
 from __future__ import annotations

@@ -268,7 +268,7 @@ class WitasNavigator(CommandDispatch):
                 self._process_frames()
 
     def frame_prework(self):
-        """The KLT tracking of the next frame, run where the frame is rendered as soon as it is (``sim/loop.py``;
+        """The KLT tracking of the next frame, run where the frame is rendered as soon as it is (``app/loop.py``;
         ``vision/klt.KltTracker.prework``): its result is used when the frame reaches the odometry with the
         tracker as it was when the frame was taken, as it is unless a camera gap restarted it; the same
         numbers either way. None before the vision phase (no frame is used)."""

@@ -1,7 +1,7 @@
 """Configuration by role (issue #13): what each system flies, and the translation of the older layout.
 
 ``SUITES``: per ``mission.type``, the vehicle kind, the named sensors (kind and the system's default values)
-and the navigator kind its builder (``sim/missions.py``) assembles. A scenario file names only what it
+and the navigator kind its builder (``app/missions.py``) assembles. A scenario file names only what it
 changes; a section the system does not fly (``sensors.sonar`` on the deck) or a kind its builder does not
 take is an error naming the key and the system.
 

@@ -307,7 +307,7 @@ class PfcmMissionConfig(_M):
 
 # Every mission's config, told apart by its ``type`` (add new ones to this tuple). A mission that
 # flies another vehicle keeps its own config module (scenarios/config_<mission>.py, built on
-# scenarios/base.py) and its builder of the loop's parts (registered in sim/missions.py, @register).
+# scenarios/base.py) and its builder of the loop's parts (registered in app/missions.py, @register).
 MISSION_CONFIGS: tuple[type[BaseModel], ...] = (PalaceMissionConfig, HoverMissionConfig, PfcmMissionConfig,
                                                 WitasMissionConfig, CondorMissionConfig, DeckMissionConfig,
                                                 GeolocationMissionConfig, PadMissionConfig)

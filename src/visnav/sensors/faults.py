@@ -221,7 +221,7 @@ def apply_faults(sensors: dict, faults, rng: np.random.Generator) -> dict:
 
 
 def inject_faults(sensors: dict, world, faults, rng: np.random.Generator) -> dict:
-    """The loop's hook (``sim/loop.py``, every system): its sensors (role -> sensor as the mission's builder
+    """The loop's hook (``app/loop.py``, every system): its sensors (role -> sensor as the mission's builder
     named them: the R-MAX's ``imu gps laser sonar camera baro compass``, the deck's ``ahrs imu camera``,
     CONDOR's ``ahrs imu pitot baro compass gps camera_ahrs pan_pot camera``) with the faulted ones wrapped;
     a ``wind_gust`` fault wraps ``world.wind`` in place (the deck's still air and CONDOR's wind are

@@ -1,4 +1,4 @@
-"""What a mission builder returns (``sim/missions.py`` ``@register``): the parts ``sim/loop.Simulation`` drives.
+"""What a mission builder returns (``app/missions.py`` ``@register``): the parts ``sim/loop.Simulation`` drives.
 A leaf module, so that the builders in ``sim/*_parts.py`` import it without importing the registry."""
 
 from __future__ import annotations

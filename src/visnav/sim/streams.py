@@ -11,7 +11,7 @@ NED = "NED world (origin at the scenario's home)"
 EULER = ("rad", "3-2-1 Euler angles (roll, pitch, yaw) of body FRD relative to NED world", "attitude")
 YACS = "YACS unit (+-500 = full stick)"
 
-#: the R-MAX loop (sim/loop.py): palace, hover, pfcm and witas-homing missions
+#: the R-MAX loop (app/loop.py): palace, hover, pfcm and witas-homing missions
 RMAX_STREAMS = {
     "truth": {"position": ("m", NED, "true position of the body origin"),
               "velocity": ("m/s", NED, "true velocity"),
@@ -65,7 +65,7 @@ _DECK_STATE = {
 }
 _DECK_ORDER = "state order: position (m), euler (rad), velocity (m/s), deck_rates (rad/s)"
 
-#: the deck landing (sim/deck_parts.py)
+#: the deck landing (app/deck_parts.py)
 DECK_STREAMS = {
     "truth": {k: (u, f, "true " + d) for k, (u, f, d) in _DECK_STATE.items()},
     "estimate": {**{k: (u, f, "UKF estimate of the " + d) for k, (u, f, d) in _DECK_STATE.items()},  # at the step
@@ -107,7 +107,7 @@ DECK_STREAMS = {
     "status": _status("vehicle body FRD x, y (of the relative position: the UKF's P[0:2, 0:2])"),
 }
 
-#: the CONDOR orbit (sim/condor_parts.py)
+#: the CONDOR orbit (app/condor_parts.py)
 CONDOR_STREAMS = {
     "truth": {**{k: v for k, v in RMAX_STREAMS["truth"].items()},
               "airspeed": ("m/s", "", "true airspeed"), "beta": ("rad", "", "sideslip angle")},
@@ -170,7 +170,7 @@ CONDOR_GROUND_STREAMS = {
 
 _NE = "north, east of the NED world"
 
-#: the MAV target geo-location (sim/geoloc_parts.py, seed 002 ch. 7)
+#: the MAV target geo-location (app/geoloc_parts.py, seed 002 ch. 7)
 GEOLOC_STREAMS = {
     "truth": {**{k: v for k, v in RMAX_STREAMS["truth"].items() if k != "body_rates"},
               "airspeed": ("m/s", "", "true airspeed")},

@@ -129,3 +129,10 @@ def rural_map(size_m: float = 700.0, resolution_m: float = 0.25, rng: np.random.
         img[mask > 0] = water[mask > 0]
     out = GeoImage(np.clip(np.rint(img), 0, 255).astype(np.uint8), half * r, -half * r, r, name="rural")
     return out
+
+
+def mission_map(cfg) -> GeoImage:
+    """The map of ``mission.map``: a geo-referenced file, or the procedural rural world."""
+    if cfg.map.file:
+        return GeoImage.load(cfg.map.file)
+    return rural_map(cfg.map.rural_size_m, 0.25, np.random.default_rng(cfg.map.rural_seed))

@@ -1,6 +1,6 @@
 """The WITAS homing world: the ground raster (procedural rural map or ``mission.map.file``) with the loop
 fitted on it, and the navigator's degraded reference map. Deterministic in the run seed: the simulation
-(``sim/witas_parts.py``), the replay (``io/replay.py``) and the report (``analysis/witas_metrics.py``)
+(``app/witas_parts.py``), the replay (``app/replay.py``) and the report (``analysis/witas_metrics.py``)
 rebuild the same one.
 """
 

@@ -1,4 +1,4 @@
-"""Ground-target geo-location flight (seed 002 ch. 7), the parts of the one loop (``sim/loop.py``): a 434 g
+"""Ground-target geo-location flight (seed 002 ch. 7), the parts of the one loop (``app/loop.py``): a 434 g
 fixed-wing MAV with a nadir camera on a pitch-roll gimbal flies a figure-eight at 70 m over a truck; frames
 (720x576) and 5 Hz telemetry go to the ground station, where ``GeolocationNavigator`` (the system's
 navigator) tracks the truck, registers each frame to the reference image and combines the samples by
@@ -30,24 +30,16 @@ from visnav.sensors.camera import CameraRenderer
 from visnav.sensors.gimbal import PitchRollGimbal
 from visnav.sensors.telemetry import AutopilotTelemetry
 from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
-from visnav.sim.condor_parts import floor
+from visnav.app.condor_parts import floor
 from visnav.sim.parts import MissionParts, VehicleTruth
-from visnav.sim.rmax_parts import WindEnvironment
+from visnav.app.rmax_parts import WindEnvironment
 from visnav.sim.streams import GEOLOC_STREAMS
 from visnav.vehicles.fixedwing import MICRO_REFERENCE_AIRSPEED_MPS, MICRO_REFERENCE_SPAN_M, micro_params, trim
 from visnav.world.appearance import another_day
 from visnav.world.maps import GeoImage, degrade_reference
+from visnav.world.rural import mission_map
 from visnav.world.scene import World
 from visnav.world.targets import paste_truck
-
-
-def mission_map(cfg) -> GeoImage:
-    """The map of ``mission.map``: a geo-referenced file, or the procedural rural world."""
-    if cfg.map.file:
-        return GeoImage.load(cfg.map.file)
-    from visnav.world.rural import rural_map
-
-    return rural_map(cfg.map.rural_size_m, 0.25, np.random.default_rng(cfg.map.rural_seed))
 
 
 def map_centre(geo: GeoImage) -> np.ndarray:
@@ -83,7 +75,7 @@ def frame_phase(phase_s: float | None, frame_hz: float, dt: float, rng: np.rando
 
 def build_navigator(sc, reference: GeoImage, camera: PinholeCamera) -> GeolocationNavigator:
     """The navigator of the scenario ``sc`` (``navigation``, the camera's processing size): used by the loop and
-    by the navigator registry (``io/navigators.py``: replay)."""
+    by the navigator registry (``app/navigators.py``: replay)."""
     r, c = sc.navigation, sc.sensors.camera
     return GeolocationNavigator(reference, camera, hough=r.hough, median_px=r.median_px,
                                 search_radius_m=r.search_radius_m, min_quality=r.min_quality,

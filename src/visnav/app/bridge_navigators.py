@@ -1,4 +1,4 @@
-"""Navigators for the live bridge, from the one registry (``io/navigators.py``) the simulation and the replay use.
+"""Navigators for the live bridge, from the one registry (``app/navigators.py``) the simulation and the replay use.
 
 ``build_navigator("witas")`` takes the navigator's default scenario (``witas-homing``; ``palace`` ->
 ``palace-landing``), or any scenario name / .toml path, whose mission type names the navigator; no
@@ -25,13 +25,13 @@ class BuiltNavigator:
     camera_hz: float
     scenario: str  # the run name of its scenario
     sc: object  # the resolved Scenario (``sim.missions.make_simulation(sc)`` builds its simulated world)
-    name: str = ""  # its name in the registry io/navigators.py (what `visnav replay --navigator` takes)
+    name: str = ""  # its name in the registry app/navigators.py (what `visnav replay --navigator` takes)
 
 
 def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None,
                     recorder=None) -> BuiltNavigator:
     """Raises ScenarioError / FileNotFoundError / ValueError with a one-line message on bad input."""
-    from visnav.io.navigators import NAVIGATORS
+    from visnav.app.navigators import NAVIGATORS
     from visnav.scenarios.schema import load_scenario
 
     scenario = NAVIGATORS[name].scenario if name in NAVIGATORS else name
@@ -45,7 +45,7 @@ def build_navigator(name: str, map_path: str | None = None, overrides: list[str]
 
 def navigator_from_scenario(sc, recorder=None) -> BuiltNavigator:
     """The registered navigator a validated Scenario's mission flies with (and the camera rate it consumes)."""
-    from visnav.io.navigators import NAVIGATORS, make_navigator, navigator_for
+    from visnav.app.navigators import NAVIGATORS, make_navigator, navigator_for
 
     name = navigator_for(getattr(sc.mission, "type", "palace"))
     return BuiltNavigator(make_navigator(name, sc, recorder), float(NAVIGATORS[name].camera_hz(sc)), sc.run.name, sc,

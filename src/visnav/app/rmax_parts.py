@@ -1,4 +1,4 @@
-"""The R-MAX's parts of the one loop (``sim/loop.py``), which its builders (``sim/missions.py``, ``witas_parts``,
+"""The R-MAX's parts of the one loop (``app/loop.py``), which its builders (``app/missions.py``, ``witas_parts``,
 ``pad_parts``) leave to their defaults: the helicopter model started at the builder's pose, its wind, the
 trim held while no position solution is in, the actuator sweep, the touchdown and the streams it logs."""
 

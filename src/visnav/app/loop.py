@@ -4,10 +4,10 @@ controller -> vehicle.
 The loop owns the clock: one fixed dynamics step (``run.dt_s``, 100 Hz); every other block at its own rate
 as an integer divisor of it (``sim/clock.rate_divisor``). Each measurement is stamped with the instant it
 describes and delivered after its sensor's latency (a heap). Everything else is a part from the mission's
-builder (``sim/missions.py`` -> ``sim/parts.MissionParts``): world, vehicle, truth, sensors, navigator
+builder (``app/missions.py`` -> ``sim/parts.MissionParts``): world, vehicle, truth, sensors, navigator
 (and the flight navigator it flies on, where that is another), mission, controller, environment (wind,
 ground effect), logger, contact, uplink (a latency + drop channel), metrics; the R-MAX's where a builder
-leaves them out (``sim/rmax_parts.py``). The R-MAX: IMU 100 Hz, mission + position loop 10 Hz, GPS and
+leaves them out (``app/rmax_parts.py``). The R-MAX: IMU 100 Hz, mission + position loop 10 Hz, GPS and
 laser 10 Hz, sonar 20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered).
 Truth reaches only the sensors (through ``truth_at``), the log, the system's contact / logging parts and an
 explicit, logged ``NavInit``. ``run_scaffold``: the one run scaffold (wall time, errors, Ctrl-C, metrics
@@ -31,10 +31,10 @@ from visnav.sensors.camera import PendingFrame
 from visnav.sim.clock import rate_divisor as _divisor
 from visnav.sensors.faults import inject_faults
 from visnav.sim.log import FlightLog
-from visnav.sim.missions import BuildContext
-from visnav.sim.missions import build as build_mission
+from visnav.app.missions import BuildContext
+from visnav.app.missions import build as build_mission
 from visnav.sim.parts import Step, VehicleTruth
-from visnav.sim.rmax_parts import fill_rmax_defaults
+from visnav.app.rmax_parts import fill_rmax_defaults
 from visnav.sim.streams import RMAX_STREAMS
 from visnav.vehicles.base import Environment
 
@@ -116,7 +116,7 @@ class Simulation:
 
     @property
     def flight_nav(self):
-        """What the mission and the controller fly on: the navigator (``sim.nav``, which ``sim/sil.py`` may swap
+        """What the mission and the controller fly on: the navigator (``sim.nav``, which ``app/sil.py`` may swap
         for its proxy before the run), or the system's flight navigator where it has one (an autopilot's)."""
         fn = self.parts.flight_navigator
         return self.nav if fn is None else fn

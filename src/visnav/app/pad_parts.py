@@ -1,5 +1,5 @@
 """Builds the pad landing (seed 002 ch. 6) for the R-MAX loop (registered as ``pad-landing`` in
-``sim/missions.py``): the pad board in the world, the pan-tilt camera on its spring platform, the split-rate
+``app/missions.py``): the pad board in the world, the pan-tilt camera on its spring platform, the split-rate
 IMU, the navigator and the mission of ``mission/pad.py``. Here, not in ``mission/``, because it builds
 sensors and world (DESIGN §1).
 """

@@ -76,7 +76,7 @@ def run_job(job: Job) -> dict:
 
     cv2.setNumThreads(1)  # one run per core
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     row: dict = {"seed": job.seed, **{k: v for k, v in job.grid}}
     try:
@@ -289,7 +289,7 @@ class Campaign:
         """Check the campaign and its directory, write campaign.json; returns (runs done, runs to do).
         A directory holding another configuration's campaign (or anything else) is refused, or with
         ``new`` the campaign moves to the first free ``<out>-2``, ``<out>-3``, ... (``self.moved_from``)."""
-        from visnav.io.runs import OutputDirError, prepare_out_dir
+        from visnav.app.runs import OutputDirError, prepare_out_dir
 
         validate_campaign(self.scenario, self.overrides, self.grid)
         ident = self.identity()

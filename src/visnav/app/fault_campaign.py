@@ -135,7 +135,7 @@ def faults_for(scenario: str, overrides: list[str], names: list[str]) -> list[di
 def campaigns(scenario: str, n: int, out: Path, faults: list[dict], overrides: list[str], workers: int,
               first_seed: int = 1):
     """(name, Campaign) for the fault-free case and each fault."""
-    from visnav.analysis.montecarlo import Campaign
+    from visnav.app.montecarlo import Campaign
 
     seeds = list(range(first_seed, first_seed + n))
     out = Path(out)
@@ -205,5 +205,5 @@ def write_tables(out: Path, table: list[dict], extra: dict[str, list[dict]], sce
         for r in rows:
             lines.append(f"- {name} seed {r.get('seed')}: {r.get('outcome', r.get('status'))}"
                          f" ({r.get('outcome_reason', r.get('error', ''))}), delay {r.get('detection_delay_s', '')} s")
-    lines += ["", "Definitions: `analysis/integrity_metrics.py`; faults and timing: `analysis/fault_campaign.py`."]
+    lines += ["", "Definitions: `analysis/integrity_metrics.py`; faults and timing: `app/fault_campaign.py`."]
     (out / "faults.md").write_text("\n".join(lines) + "\n")

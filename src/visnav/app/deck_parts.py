@@ -1,4 +1,4 @@
-"""The ship-deck landing's parts (seed 003) for the one loop (``sim/loop.py``): Y6 multirotor, LED camera, IMU.
+"""The ship-deck landing's parts (seed 003) for the one loop (``app/loop.py``): Y6 multirotor, LED camera, IMU.
 
 Every block on the dynamics grid (``sensor_grid``, ``sim/clock.rate_divisor``): the autopilot attitude and
 the IMU (``sensors/imu.RollPitchAhrs``, ``AccelGyro``) at ``imu.rate_hz``, the LED camera

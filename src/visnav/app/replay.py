@@ -3,7 +3,7 @@
 The measurements of a ``Recording`` go to the navigator in delivery order; the recorded mission
 requests (``commands.csv``) are replayed at their place in that order, and the estimate is asked at the
 recorded times (a simulated recording) or at a fixed output rate (a recording without ``estimate``
-rows). The navigators are those of the one registry (``io/navigators.py``), built from the recording's
+rows). The navigators are those of the one registry (``app/navigators.py``), built from the recording's
 scenario with its camera (``camera.yaml``) and, for WITAS, ``--map`` or the scenario's reference map.
 """
 
@@ -59,8 +59,8 @@ def scenario_of(rec: Recording, default: str, overrides=()):
 
 # ------------------------------------------------------------------------------------ navigators
 def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
-    """The registered navigator ``name`` (``io/navigators.py``) with the recording's camera and scenario."""
-    from visnav.io.navigators import make_navigator, spec
+    """The registered navigator ``name`` (``app/navigators.py``) with the recording's camera and scenario."""
+    from visnav.app.navigators import make_navigator, spec
 
     s = spec(name)
     sc = scenario_of(rec, s.scenario, opts.scenario_overrides)
@@ -135,7 +135,7 @@ def _events(rec: Recording, out_rate: float):
 def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, progress=None) -> ReplayResult:
     """Run ``navigator`` on ``rec``; an error inside the replay stops it and keeps what it has
     (``metrics["error"]``)."""
-    from visnav.io.navigators import NAVIGATORS
+    from visnav.app.navigators import NAVIGATORS
 
     opts = opts or ReplayOptions()
     if navigator not in NAVIGATORS:
@@ -154,7 +154,7 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     elif opts.time_offset is not None:
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
-    from visnav.io.navigators import stream_table
+    from visnav.app.navigators import stream_table
 
     log = FlightLog(schema=stream_table(nspec))  # the loop's units and frames (deck: the relative state)
     nav, sc = _navigator(navigator, rec, opts, log.record)
@@ -202,7 +202,7 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
 
 def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict, str | None]:
     """The replay loop: samples to ``update``, recorded requests to their methods, estimates to the log."""
-    from visnav.io.navigators import NAVIGATORS
+    from visnav.app.navigators import NAVIGATORS
 
     kinds, a, b, times = events
     c = rec.commands
@@ -404,8 +404,8 @@ def denied_metrics(log: FlightLog, t_cut: float) -> dict:
 def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title: str = "visnav replay") -> Path:
     """log.h5, scenario.toml, estimate.tum (valid estimates only; the header names the frame), truth.tum,
     metrics.json, report.html."""
-    from visnav.io.runs import _jsonable
-    from visnav.io.trajectory_export import write_tum_file
+    from visnav.app.runs import _jsonable
+    from visnav.analysis.trajectory_export import write_tum_file
     from visnav.scenarios.schema import to_toml
 
     result.log.to_hdf5(out_dir / "log.h5", attrs={"replay": 1})

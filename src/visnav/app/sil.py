@@ -366,8 +366,8 @@ class SilLink:
 
 def sil_simulation(sc):
     """The scenario's simulation with ``SilLink`` in its navigator slot (``sim.sil_link``)."""
-    from visnav.io.navigators import navigator_for
-    from visnav.sim.missions import make_simulation
+    from visnav.app.navigators import navigator_for
+    from visnav.app.missions import make_simulation
 
     kind = getattr(sc.mission, "type", "palace")
     try:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.geometry.rotations import euler_to_dcm
-from visnav.io.bridge import Bridge, BridgeConfig
-from visnav.io.bridge_navigators import build_navigator
+from visnav.app.bridge import Bridge, BridgeConfig
+from visnav.app.bridge_navigators import build_navigator
 from visnav.io.camera_source import CallableSource
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
@@ -36,7 +36,7 @@ def _free_port() -> int:
 
 def fly(name: str, seconds: float, gps_s: float = 4.0, output: str = "odometry") -> dict:
     """Fly ``name`` (witas / palace / a scenario in CASES) for ``seconds`` of wall time; the figures."""
-    from visnav.sim.missions import make_simulation
+    from visnav.app.missions import make_simulation
 
     built = build_navigator(name)
     sim = make_simulation(built.sc)  # its world and camera renderer serve the SIL camera

@@ -64,7 +64,7 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
     ``laser_delay_s`` are the simulated (unknown) sensor delays; ``attitude_delay_s`` and
     ``laser_compensation_s`` the navigator's compensation (``navigation.mpe.*``)."""
     from visnav.scenarios.schema import load_scenario
-    from visnav.sim.loop import Simulation
+    from visnav.app.loop import Simulation
 
     if axis not in AXIS_INDEX:
         raise ValueError(f"axis must be one of {sorted(AXIS_INDEX)}, got {axis!r}")

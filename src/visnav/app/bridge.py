@@ -570,7 +570,7 @@ class BridgeRecording:
 
     def __init__(self, navigator, out_dir: str | Path, sc, camera, mount):
         from visnav.io.recording_writer import RecordingWriter
-        from visnav.sim.record import RecordingNavigator
+        from visnav.app.record import RecordingNavigator
 
         self.sc, self.camera, self.mount = sc, camera, mount
         self._images: queue.Queue = queue.Queue()

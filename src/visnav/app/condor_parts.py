@@ -1,4 +1,4 @@
-"""CONDOR's parts (seed 004 ch. 6-7) for the one loop (``sim/loop.py``): fixed wing + gimbal camera + vision
+"""CONDOR's parts (seed 004 ch. 6-7) for the one loop (``app/loop.py``): fixed wing + gimbal camera + vision
 radius + orbit controller.
 
 Sensors -> latency queue -> ``CondorNavigator`` -> ``CondorMission`` -> ``FixedWingAutopilot`` ->
@@ -31,7 +31,7 @@ from visnav.sensors.gps import Gps
 from visnav.sensors.link import Link
 from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
 from visnav.sim.parts import CurrentTruth, IntegrityStatus, MissionParts
-from visnav.sim.rmax_parts import WindEnvironment
+from visnav.app.rmax_parts import WindEnvironment
 from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
 from visnav.vehicles.fixedwing import FixedWingParams, trim
 from visnav.vision.condor_pipeline import VisionRange

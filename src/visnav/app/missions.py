@@ -1,4 +1,4 @@
-"""What a scenario's ``mission.type`` flies with: the parts of the one loop (``sim/loop.py``).
+"""What a scenario's ``mission.type`` flies with: the parts of the one loop (``app/loop.py``).
 
 A builder takes a ``BuildContext`` (the scenario, the log's recorder, the run's random generators) and
 returns the ``MissionParts``: world, sensors, navigator, mission, controller, metrics, start pose,
@@ -7,8 +7,8 @@ simulation builds nothing else: a builder asks for the textured world (``ctx.tex
 standard R-MAX sensors (``ctx.rmax_sensors()``) only when its mission uses them. A new mission registers
 its builder here with ``@register("name")`` (and its pydantic config in ``scenarios/schema.py``); a mission
 that flies another vehicle gives its vehicle, truth, environment, logger and contact parts too
-(``sim/deck_parts.py``, ``sim/condor_parts.py``, ``sim/geoloc_parts.py``); left out, they are the R-MAX's
-(``sim/rmax_parts.py``).
+(``app/deck_parts.py``, ``app/condor_parts.py``, ``app/geoloc_parts.py``); left out, they are the R-MAX's
+(``app/rmax_parts.py``).
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ REGISTRY: dict[str, Builder] = {}
 #: the missions the R-MAX flies (the others fly their own vehicle, from their own parts)
 RMAX_MISSIONS = ("palace", "hover", "pfcm", "witas-homing", "pad-landing")
 
-#: the one loop, which flies every mission from its builder's parts (named, not imported: sim/loop.py imports
+#: the one loop, which flies every mission from its builder's parts (named, not imported: app/loop.py imports
 #: this module's ``build``, and the package's imports have no cycle, tests/test_import_rules.py)
-SIMULATION = "visnav.sim.loop:Simulation"
+SIMULATION = "visnav.app.loop:Simulation"
 
 
 def simulation_class():
@@ -84,7 +84,7 @@ class BuildContext:
 
     def camera_geometry(self):
         """(PinholeCamera, FixedMount) of ``[sensors.camera]``."""
-        from visnav.io.navigators import rmax_camera
+        from visnav.app.navigators import rmax_camera
 
         return rmax_camera(self.scenario)
 
@@ -111,9 +111,9 @@ class BuildContext:
         return out
 
     def navigator(self, name: str, **parts):
-        """The registered navigator ``name`` (``io/navigators.py``) configured by the scenario (wrapped by
+        """The registered navigator ``name`` (``app/navigators.py``) configured by the scenario (wrapped by
         ``navigator_wrapper`` when given)."""
-        from visnav.io.navigators import make_navigator
+        from visnav.app.navigators import make_navigator
 
         nav = make_navigator(name, self.scenario, self.record, **parts)
         return nav if self.navigator_wrapper is None else self.navigator_wrapper(nav)
@@ -187,34 +187,34 @@ def _pfcm(ctx: BuildContext) -> MissionParts:
 
 @register("witas-homing")
 def _witas(ctx: BuildContext) -> MissionParts:
-    from visnav.sim.witas_parts import build as build_witas
+    from visnav.app.witas_parts import build as build_witas
 
     return build_witas(ctx)
 
 
 @register("pad-landing")
 def _pad(ctx: BuildContext) -> MissionParts:
-    from visnav.sim.pad_parts import build as build_pad
+    from visnav.app.pad_parts import build as build_pad
 
     return build_pad(ctx)
 
 
 @register("deck")
 def _deck(ctx: BuildContext) -> MissionParts:
-    from visnav.sim.deck_parts import build as build_deck
+    from visnav.app.deck_parts import build as build_deck
 
     return build_deck(ctx)
 
 
 @register("condor")
 def _condor(ctx: BuildContext) -> MissionParts:
-    from visnav.sim.condor_parts import build as build_condor
+    from visnav.app.condor_parts import build as build_condor
 
     return build_condor(ctx)
 
 
 @register("mav-geolocation")
 def _geolocation(ctx: BuildContext) -> MissionParts:
-    from visnav.sim.geoloc_parts import build as build_geolocation
+    from visnav.app.geoloc_parts import build as build_geolocation
 
     return build_geolocation(ctx)

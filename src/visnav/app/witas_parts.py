@@ -1,4 +1,4 @@
-"""Builds the WITAS homing mission for the R-MAX loop (registered as ``witas-homing`` in ``sim/missions.py``):
+"""Builds the WITAS homing mission for the R-MAX loop (registered as ``witas-homing`` in ``app/missions.py``):
 the world (procedural rural map, or ``mission.map.file``), the navigator's degraded reference map, the
 downward camera, the barometer (and compass), the navigator and the PFCM mission over the loop of
 ``mission/witas.py``. Here, not in ``mission/``, because it builds world and sensors (DESIGN §1).
@@ -25,7 +25,7 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
 def build(ctx):
     from visnav.analysis.witas_metrics import witas_metrics
     from visnav.control.rmax_path import PathFollowingController
-    from visnav.io.navigators import NAVIGATORS
+    from visnav.app.navigators import NAVIGATORS
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
     from visnav.scenarios.schema import PfcmMissionConfig
     from visnav.sensors.baro import Compass, baro_sensor

@@ -1,4 +1,4 @@
-"""The one registry of navigators by name: the closed loop (``sim/missions.py``), ``visnav replay`` and
+"""The one registry of navigators by name: the closed loop (``app/missions.py``), ``visnav replay`` and
 ``visnav bridge`` all build a navigator here, from a scenario's configuration.
 
 ``make_navigator(name, sc, recorder, camera=..., mount=..., reference=..., **parts)`` builds it; what is not
@@ -135,7 +135,7 @@ def _condor_camera(sc):
 
 
 def _condor(sc, recorder, camera, mount, **_):
-    from visnav.sim.condor_parts import build_navigator
+    from visnav.app.condor_parts import build_navigator
 
     if sc.mission.experiment != "orbit":
         raise ValueError(f"the condor navigator flies the orbit experiment; this scenario's is "
@@ -144,7 +144,7 @@ def _condor(sc, recorder, camera, mount, **_):
 
 
 def _geolocation_camera(sc):
-    from visnav.sim.geoloc_parts import mav_camera
+    from visnav.app.geoloc_parts import mav_camera
 
     return mav_camera(sc.sensors.camera), None  # on the pitch-roll gimbal: no fixed mount
 
@@ -152,7 +152,8 @@ def _geolocation_camera(sc):
 def _geolocation(sc, recorder, camera, mount, reference=None, **_):
     """``GeolocationNavigator`` of ``navigation`` (kind geolocation); the reference image given (``--map``) or, for a
     simulated recording, the closed loop's (the mission's map, degraded)."""
-    from visnav.sim.geoloc_parts import build_navigator, mission_map, mission_reference
+    from visnav.app.geoloc_parts import build_navigator, mission_reference
+    from visnav.world.rural import mission_map
 
     if reference is None:
         reference = mission_reference(sc.mission, mission_map(sc.mission), sc.run.seed)
@@ -167,7 +168,7 @@ def _target_row(e) -> dict:
 
 
 def _geolocation_finish(nav, log) -> None:
-    from visnav.sim.geoloc_parts import log_samples
+    from visnav.app.geoloc_parts import log_samples
 
     log_samples(log.record, nav)
 

@@ -4,7 +4,7 @@ The loop is not rewritten: the navigator is wrapped in ``RecordingNavigator``, a
 everything through and logs, with one global sequence number, every ``update(m)`` (the measurement and
 the loop time it was delivered at), every mission request (``command(NavCommand)``: its time, name and
 arguments; older recordings hold the bespoke methods ``request_tracking``, ``set_source``, ...), every
-explicit start (``initialize(NavInit)``) and every ``estimate(t)`` / ``health(t)`` query. ``io/replay.py`` feeds them back
+explicit start (``initialize(NavInit)``) and every ``estimate(t)`` / ``health(t)`` query. ``app/replay.py`` feeds them back
 in the same order, which is what makes a replay reproduce the closed loop's estimates exactly.
 """
 
@@ -105,17 +105,17 @@ def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool =
     ``sim/loop.Simulation`` with the mission's parts) and write the recording to ``out_dir`` (refused when it holds files,
     unless ``force``: then the recording's own files are removed first); returns the closed-loop result beside
     the folder. Ctrl-C stops the flight and the recording keeps what it had (``result.run.interrupted``)."""
-    from visnav.io.navigators import NAVIGATORS, navigator_for
+    from visnav.app.navigators import NAVIGATORS, navigator_for
     from visnav.io.recording import COMMANDS, STREAMS, TRUTH
-    from visnav.io.runs import OutputDirError, prepare_out_dir
-    from visnav.sim.missions import RMAX_MISSIONS, make_simulation
+    from visnav.app.runs import OutputDirError, prepare_out_dir
+    from visnav.app.missions import RMAX_MISSIONS, make_simulation
 
     kind = scenario.mission.type
     if kind not in RMAX_MISSIONS:
         name = next((n for n, s in NAVIGATORS.items() if kind in s.mission_types), None)
         if name is None:
             raise RecordingError(f"visnav record: mission.type {kind!r} has no registered navigator "
-                                 f"(io/navigators.py) to record for; recordable: the missions of "
+                                 f"(app/navigators.py) to record for; recordable: the missions of "
                                  f"{', '.join(sorted(NAVIGATORS))}")
         if kind == "condor" and scenario.mission.experiment != "orbit":
             raise RecordingError(f"visnav record: the CONDOR {scenario.mission.experiment!r} experiment has no "
