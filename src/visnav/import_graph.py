@@ -6,7 +6,7 @@ prints the module-level and the deferred (inside a function or under ``if TYPE_C
 between visnav modules and every cycle, and exits 1 if there is one. A cycle is searched on the
 module-level imports and, separately, on all imports together (a deferred import still makes two
 modules depend on each other); tests/test_import_rules.py asserts both are acyclic. A name imported
-through ``importlib`` (the "module:attr" registries ``sim/missions.SIMULATION``,
+through ``importlib`` (the "module:attr" registries ``app/missions.SIMULATION``,
 ``analysis/run_metrics.METRICS``) is not an edge: those registries name plug-ins, they do not import them.
 """
 

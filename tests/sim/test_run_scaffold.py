@@ -1,4 +1,4 @@
-"""The one run scaffold (sim/loop.run_scaffold) of every system: Ctrl-C or an exception stops the run, which
+"""The one run scaffold (app/loop.run_scaffold) of every system: Ctrl-C or an exception stops the run, which
 keeps the log it had and scores it from that log."""
 
 import numpy as np

@@ -4,7 +4,7 @@ Every metrics function reads the run's ``FlightLog`` (the same data as its ``log
 scenario, never the live simulation, so a run directory, a replayed or a recorded flight is scored by the
 same code: ``metrics_for(scenario)(log, scenario, wall_time_s=..., error=...)``, ``visnav metrics RUN_DIR``
 (``from_run_dir``). Targets are named ("module:function") and imported on use, like
-``sim/missions.SIMULATION``; a new mission adds its line here (or calls ``register_metrics``).
+``app/missions.SIMULATION``; a new mission adds its line here (or calls ``register_metrics``).
 """
 
 from __future__ import annotations

@@ -561,7 +561,7 @@ class Bridge:
 
 class BridgeRecording:
     """The bridge's log in the recorded-flight format (``io/recording.py``), replayable with ``visnav replay
-    DIR --navigator NAME``: a ``sim/record.RecordingNavigator`` around the navigator, so every sample,
+    DIR --navigator NAME``: a ``app/record.RecordingNavigator`` around the navigator, so every sample,
     frame (lossless PNG, written on a background thread: no latency), mission request and estimate / health
     query is logged with one sequence number in the order the navigator got it; an estimate row carries the
     instant it was asked for (a frame's exposure, asked after later samples arrived: ``args`` ``t``). Times

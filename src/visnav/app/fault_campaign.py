@@ -1,7 +1,7 @@
 """``visnav faults SCENARIO --faults all -n N``: every fault that applies to a scenario, on N seeds, plus the
 fault-free case (issue #18).
 
-Each fault is one ``analysis/montecarlo.Campaign`` in ``DIR/<fault>/`` (the scenario with
+Each fault is one ``app/montecarlo.Campaign`` in ``DIR/<fault>/`` (the scenario with
 ``faults=[{...}]`` added to its overrides): runs, resume, ``--new`` and Ctrl-C are the Monte Carlo
 runner's. ``DIR/faults.csv`` (one row per fault, ``none`` first) and ``DIR/faults.md`` are written from
 the sub-campaigns' ``runs.csv`` (the integrity metrics of ``analysis/integrity_metrics.py``).

@@ -111,7 +111,7 @@ class Simulation:
         self.defer_deliveries = navigator_wrapper is None
         #: frames render on a worker thread (the second core) while the loop steps on; off, they render on the
         #: loop's thread when taken (the same numbers): a campaign that runs a simulation per core does not
-        #: gain a core from the thread, and the thread's hand-overs cost CPU (``analysis/montecarlo``)
+        #: gain a core from the thread, and the thread's hand-overs cost CPU (``app/montecarlo``)
         self.render_thread = True
 
     @property

@@ -33,7 +33,7 @@ SIMULATION = "visnav.app.loop:Simulation"
 
 
 def simulation_class():
-    """The one simulation class (``sim/loop.Simulation``)."""
+    """The one simulation class (``app/loop.Simulation``)."""
     import importlib
 
     module, name = SIMULATION.split(":")

@@ -102,7 +102,7 @@ class RecordResult:
 
 def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool = False) -> RecordResult:
     """Fly ``scenario`` in its closed loop (the R-MAX loop, the deck loop, the CONDOR orbit, the geo-location flight: the one
-    ``sim/loop.Simulation`` with the mission's parts) and write the recording to ``out_dir`` (refused when it holds files,
+    ``app/loop.Simulation`` with the mission's parts) and write the recording to ``out_dir`` (refused when it holds files,
     unless ``force``: then the recording's own files are removed first); returns the closed-loop result beside
     the folder. Ctrl-C stops the flight and the recording keeps what it had (``result.run.interrupted``)."""
     from visnav.app.navigators import NAVIGATORS, navigator_for

@@ -14,7 +14,7 @@ def mode_gate(wanted):
     """Marks a sensor gate (``camera_wanted``) that reads only the mission's own mode, which the mission
     changes in ``step`` and ``on_touchdown``, both after the loop has delivered what was due: the gate says
     the same whether or not the loop delivers the measurements still waiting first, so the loop may sample
-    the sensor before it does (``sim/loop``: a frame then renders while the one before is delivered)."""
+    the sensor before it does (``app/loop``: a frame then renders while the one before is delivered)."""
     wanted.reads_deliveries = False
     return wanted
 

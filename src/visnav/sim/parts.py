@@ -1,5 +1,5 @@
-"""What a mission builder returns (``app/missions.py`` ``@register``): the parts ``sim/loop.Simulation`` drives.
-A leaf module, so that the builders in ``sim/*_parts.py`` import it without importing the registry."""
+"""What a mission builder returns (``app/missions.py`` ``@register``): the parts ``app/loop.Simulation`` drives.
+A leaf module, so that the builders in ``app/*_parts.py`` import it without importing the registry."""
 
 from __future__ import annotations
 
