@@ -176,3 +176,22 @@ def test_short_window_inflation_is_relative_to_the_streams_usual_nis():
     assert mon.inflation() > 20.0  # 3 of the last 5 at 50x the usual level: (3 * 50 + 2) / 5 ~ 30
     assert off.inflation() == 1.0  # the absolute test alone sees NIS/dof 0.4 over 20: nothing
     assert abs(mon.baseline("vision") - 0.025) < 0.005  # the fault's updates stay out of the baseline
+
+
+def test_witas_frame_stamped_ahead_of_the_imu_is_a_camera_gap_until_the_clock_agrees():
+    from tests.navigation.test_witas_navigator import _engaged, _hover
+    from visnav.measurements import Frame
+
+    nav = _engaged()  # IMU delivered up to 2.99 s
+    rng = np.random.default_rng(2)
+    nav.update(Frame(3.2, rng.integers(0, 255, (288, 384), dtype=np.uint8)))  # 0.21 s ahead (> 0.1)
+    h = nav.health(3.0)
+    assert h.integrity != "ok" and "ahead of the IMU clock" in h.integrity_reason
+    _hover(nav, 3.0, 3.3, gps=False)
+    # 0.01 s behind the IMU: live (a queued frame is processed on the next frame's arrival)
+    nav.update(Frame(3.28, rng.integers(0, 255, (288, 384), dtype=np.uint8)))
+    assert "ahead" not in nav.health(3.3).integrity_reason
+    assert nav.n_frames == 2 and nav.registrations == 0
+    notes = " ".join(nav.h.notes)
+    assert "3.2s odometry skipped: frame stamped 0.21 s ahead of the IMU clock" in notes
+    assert "3.3s odometry skipped: frame stamped" not in notes

@@ -95,6 +95,9 @@ class WitasIntegrityConfig(GpsCheckBlock, GyroCheckBlock):
     handover_alpha: float = Field(1e-4, gt=0, lt=0.5, description="level of the hand-over test (chi-square(2))")
     handover_updates: int = Field(3, ge=1, le=100, description="registrations in a row above the bound to latch")
     # issue #30: an accelerometer bias the ESKF takes for a tilt (navigation/integrity.TiltCheck)
+    frame_ahead_s: float = Field(0.1, gt=0, le=10, description="a frame stamped more than this ahead of the newest "
+                                 "IMU sample (a camera clock jump; the camera's latency is 0.05 s) is a camera gap: "
+                                 "not fused, degraded while it lasts (issue #30)")
     tilt_check: bool = Field(True, description="compare the ESKF's roll / pitch with the autopilot's attitude "
                              "solution; a lasting difference (an accelerometer bias taken for a tilt) -> degraded, "
                              "HPL + what it can have built, the autopilot's attitude fused from then on and the "
