@@ -1,0 +1,82 @@
+"""``visnav replay PHOTOS --navigator vo --gps-until T`` on the real Seneca survey (../shared/data/survey_seneca):
+a short stretch downscaled in the default run, the whole 80-photo flight as a slow case."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tests.shared_data import missing_reason, shared_data_dir
+
+SENECA = shared_data_dir() / "survey_seneca"
+
+
+def _need_seneca():
+    if not SENECA.is_dir():
+        pytest.skip(missing_reason(SENECA))
+
+
+@pytest.fixture(scope="module")
+def stretch(tmp_path_factory):
+    """The first 9 photos (one straight leg, ~42 s) at half size with their EXIF, and camera.yaml scaled to it."""
+    _need_seneca()
+    from PIL import Image
+
+    d = tmp_path_factory.mktemp("seneca9")
+    for f in sorted((SENECA / "images").glob("*.jpg"))[:9]:
+        with Image.open(f) as im:
+            im.resize((600, 450), Image.Resampling.LANCZOS).save(d / f.name, exif=im.getexif(), quality=92)
+    (d / "camera.yaml").write_text("image_size: [600, 450]\nintrinsics: {fx: 416.3, fy: 416.3, cx: 299.5, cy: 224.5}\n")
+    return d
+
+
+def test_vo_replay_of_a_survey_stretch_through_the_cli(stretch, tmp_path):
+    from visnav.cli import app
+
+    out = tmp_path / "run"
+    r = CliRunner().invoke(app, ["replay", str(stretch), "--navigator", "vo", "--gps-until", "20", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    m = json.loads((out / "metrics.json").read_text())
+    for k in ("pairs_registered_share", "final_error_m", "final_error_pct_of_distance", "ate_rmse_m"):
+        assert k in m and np.isfinite(m[k])
+    print({k: m[k] for k in ("pairs_registered_share", "final_error_m", "final_error_pct_of_distance", "ate_rmse_denied_m", "replay_cpu_s")})
+    assert m["reference"] == "gps.csv" and m["gps_withheld"] == 5 and m["photos"] == 9
+    assert m["pairs_registered_share"] == 1.0  # every photo of the leg registers to the one before
+    assert m["distance_denied_m"] > 80
+    assert m["final_error_pct_of_distance"] < 10.0  # the issue's bound (5 photos, ~135 m of VO after the last fix)
+    assert m["vo_scale_m"] == pytest.approx(60, abs=12)  # the height above ground: a survey flight's tens of metres
+    assert (out / "estimate.tum").is_file() and (out / "truth.tum").is_file()
+
+
+def test_replay_refuses_a_photo_folder_without_gps(tmp_path):
+    _need_seneca()
+    from PIL import Image
+
+    from visnav.cli import app
+
+    f = sorted((SENECA / "images").glob("*.jpg"))[1]
+    with Image.open(f) as im:
+        ex = im.getexif()
+        del ex[0x8825]  # the GPS IFD
+        im.resize((120, 90)).save(tmp_path / "a.jpg", exif=ex)
+    (tmp_path / "camera.yaml").write_text("image_size: [120, 90]\nintrinsics: {fx: 83, fy: 83, cx: 59.5, cy: 44.5}\n")
+    r = CliRunner().invoke(app, ["replay", str(tmp_path), "--navigator", "vo", "--out", str(tmp_path / "run")])
+    assert r.exit_code == 2 and "gps.csv" in r.output and "Traceback" not in r.output
+
+
+@pytest.mark.slow
+def test_vo_replay_whole_seneca_survey():
+    """All 80 photos, GPS withheld after 30 s (~3.3 km of VO): the figures of docs/real-data.md."""
+    _need_seneca()
+    from visnav.io.logs import open_recording
+    from visnav.io.replay import ReplayOptions, replay
+
+    res = replay(open_recording(SENECA), "vo", ReplayOptions(gps_until_s=30.0))
+    m = res.metrics
+    assert m["photos"] == 80 and m["gps_withheld"] == 74
+    assert m["pairs_registered_share"] >= 0.94
+    assert m["final_error_pct_of_distance"] <= 10.0
+    assert m["ate_rmse_denied_m"] < 20.0
