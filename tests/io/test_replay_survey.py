@@ -80,3 +80,32 @@ def test_vo_replay_whole_seneca_survey():
     assert m["pairs_registered_share"] >= 0.94
     assert m["final_error_pct_of_distance"] <= 10.0
     assert m["ate_rmse_denied_m"] < 20.0
+
+
+def test_witas_and_geolocation_registration_on_survey_pairs(stretch):
+    """Consecutive photos of the stretch registered to each other: the earlier photo orthorectified (its GPS fix,
+    the VO's attitude and height) is the map; the later one is registered by WITAS NCC and by the geo-location
+    edge correlation, searched 15 m around its GPS fix moved by (6, -4) m; errors against its GPS fix."""
+    from visnav.analysis.survey_pairs import measure_pairs, summary
+    from visnav.io.logs import open_recording
+    from visnav.navigation.vo import VONavigator
+
+    rec = open_recording(stretch)
+    nav = VONavigator(rec.camera.camera, mount=rec.camera.mount)
+    images = []
+    for i in range(rec.count("frames")):
+        nav.update(rec.sample("gps", i))
+        f = rec.sample("frames", i)
+        images.append(f.image)
+        nav.update(f)
+    g = rec.streams["gps"]
+    gps = np.column_stack([g["n_m"], g["e_m"]])
+    pairs = [(i - 1, i) for i in range(1, len(images))]
+    res = measure_pairs(images, rec.camera.camera, rec.camera.mount, [nav.photo_pose(i) for i in range(len(images))],
+                        gps, pairs, vo_offsets={p: nav.chain_offset(*p) for p in pairs})
+    s = summary(res)
+    print(s)
+    assert s["witas_registered"] == 8 and s["geo_registered"] == 8
+    # GPS noise of two EXIF fixes (metres each) is in every figure; the search recovered most of the 7.2 m offset
+    assert s["witas_median_error_m"] < 10.0 and s["geo_median_error_m"] < 10.0
+    assert s["feature_median_error_m"] < 4.0  # the feature homography: the best of the three on these fields

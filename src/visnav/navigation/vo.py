@@ -278,6 +278,24 @@ class VONavigator(CommandDispatch):
         Rcb = np.asarray(self.mount.R_cam_to_body, float) if self.mount is not None else R_CHAIN0
         return dcm_to_euler(Rz @ p.R @ Rcb.T)  # body -> world
 
+    def photo_pose(self, i: int) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """Photo ``i`` in the world: (camera -> NED rotation, NED position [m], height above the ground [m]),
+        None before the chain is tied to the world."""
+        p = self.photos[i]
+        if self.sim is None or p.P is None:
+            return None
+        s, R2 = self.sim[0], self.sim[1]
+        Rz = np.eye(3)
+        Rz[:2, :2] = R2
+        return Rz @ p.R, np.asarray(p.P, float), float(-s * p.C[2])
+
+    def chain_offset(self, a: int, b: int) -> np.ndarray | None:
+        """Horizontal NE displacement from photo a to photo b by the VO chain alone (through the similarity)."""
+        if self.sim is None:
+            return None
+        s, R2 = self.sim[0], self.sim[1]
+        return s * R2 @ (self.photos[b].C[:2] - self.photos[a].C[:2])
+
     def estimate(self, t: float) -> NavEstimate:
         placed = [p for p in self.photos if p.P is not None]
         if not placed:
