@@ -762,9 +762,10 @@ def record_(
 
 @app.command("replay")
 def replay_(
-    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), ArduPilot .bin, PX4 .ulg or "
-                                    "ROS bag"),
-    navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (io/navigators.py)"),
+    recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), folder of geotagged photos, "
+                                    "ArduPilot .bin, PX4 .ulg or ROS bag"),
+    navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor, geolocation or vo "
+                                  "(io/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
     time_offset: Optional[str] = typer.Option(None, help="camera clock offset: 'auto' (gyro/camera "

@@ -25,8 +25,8 @@ from visnav.io.streams import gps_stream, heading_stream
 
 
 def open_recording(path: str | Path) -> Recording:
-    """A recording folder (or a ``visnav bridge`` log folder: its ``recording/``), a DataFlash ``.bin``, a PX4
-    ``.ulg`` or a ROS bag (``.bag`` / ROS 2 folder)."""
+    """A recording folder (or a ``visnav bridge`` log folder: its ``recording/``), a folder of geotagged photos
+    (``io/photos.py``), a DataFlash ``.bin``, a PX4 ``.ulg`` or a ROS bag (``.bag`` / ROS 2 folder)."""
     p = Path(path)
     if p.is_dir() and (p / "bridge.tlog").is_file() and (p / "recording").is_dir():  # a `visnav bridge` log folder
         p = p / "recording"

@@ -60,7 +60,7 @@ class FeatureMatcher:
 
     def __init__(self, method: str = "sift", work_width: int = 600, n_features: int = 2500, ratio: float = 0.8,
                  ransac_px: float = 3.0, min_inliers: int = 25, min_inlier_share: float = 0.15,
-                 scale_range: tuple[float, float] = (0.6, 1.6), max_perspective: float = 0.3, clahe: float = 3.0,
+                 scale_range: tuple[float, float] = (0.6, 1.6), max_perspective: float = 0.6, clahe: float = 3.0,
                  contrast_threshold: float = 0.02) -> None:
         import cv2
 
