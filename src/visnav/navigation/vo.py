@@ -38,7 +38,7 @@ from visnav.log_schema import register_stream
 from visnav.measurements import Frame, GpsSample, Health, NavCommand, NavEstimate, NavInit
 from visnav.navigation.base import CommandDispatch
 
-register_stream("vo_photo", registered=("bool", "", "the photo was registered to an earlier one (else placed by prediction)"),
+register_stream("vo_photo", registered=("bool", "", "registered to an earlier photo (else placed by prediction)"),
                 refs=("count", "", "earlier photos it was registered to"), inliers=("count", "", "homography inliers"),
                 height=("chain units", "", "height above the ground in the first photo's heights"))
 

@@ -82,8 +82,9 @@ class FeatureMatcher:
         self.ransac_px, self.min_inliers, self.min_inlier_share = float(ransac_px), int(min_inliers), min_inlier_share
         self.scale_range, self.max_perspective = scale_range, float(max_perspective)
         # SIFT: approximate nearest neighbours (FLANN k-d trees); binary descriptors: brute force, Hamming
-        self._matcher = (cv2.FlannBasedMatcher({"algorithm": 1, "trees": 4}, {"checks": 64}) if self._norm == cv2.NORM_L2
-                         else cv2.BFMatcher(self._norm))
+        flann = self._norm == cv2.NORM_L2
+        self._matcher = cv2.FlannBasedMatcher({"algorithm": 1, "trees": 4}, {"checks": 64}) if flann \
+            else cv2.BFMatcher(self._norm)
 
     def detect(self, image: np.ndarray) -> Features:
         import cv2
