@@ -8,8 +8,9 @@ from visnav.estimation import deck as dm
 from visnav.measurements import AttitudeSample, Frame, ImuSample, NavCommand, NavInit
 from visnav.navigation.base import Navigator
 from visnav.navigation.deck import DeckNavConfig, DeckNavigator
-from tests.deck_ideal import load_ideal_deck
 from visnav.world.deck import LEDS_EQ_5_10
+
+from tests.deck_ideal import load_ideal_deck
 
 CAM = dm.CameraGeometry(rho=np.array([0.101, 0.008, 0.11]),
                         T_cam=np.array([[0, 1, 0], [-np.sin(0.76), 0, np.cos(0.76)], [np.cos(0.76), 0, np.sin(0.76)]]))

@@ -3,8 +3,9 @@ approach's last second must not end in an unsafe touchdown."""
 
 import numpy as np
 
-from tests.deck_ideal import load_ideal_deck
 from visnav.sim.missions import make_simulation
+
+from tests.deck_ideal import load_ideal_deck
 
 
 def test_blackout_in_the_commit_window_lands_on_the_plate():

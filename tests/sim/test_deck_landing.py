@@ -5,8 +5,9 @@ import pytest
 
 from visnav.analysis.deck_metrics import NEES_BAND_12
 from visnav.scenarios.schema import ScenarioError
-from tests.deck_ideal import load_ideal_deck
 from visnav.sim.missions import make_simulation
+
+from tests.deck_ideal import load_ideal_deck
 
 
 def _run(name, seed, *sets):
