@@ -27,6 +27,7 @@ __all__ = [
     "cross3",
     "wrap_angle",
     "kabsch",
+    "matrix3",
 ]
 
 _GIMBAL_EPS = 1e-12
@@ -39,7 +40,7 @@ def _vec3(x, name: str) -> np.ndarray:
     return a
 
 
-def _matrix(rows) -> np.ndarray:
+def matrix3(rows) -> np.ndarray:
     """A (..., 3, 3) array of nine entries given row by row (numbers, or arrays that broadcast)."""
     shape = np.broadcast_shapes(*(np.shape(x) for row in rows for x in row))
     if not shape:
@@ -77,7 +78,7 @@ def skew(v) -> np.ndarray:
     v = _vec3(v, "v")
     if v.shape == (3,):
         return np.array(_skew_rows(*v.tolist()))
-    return _matrix(_skew_rows(v[..., 0], v[..., 1], v[..., 2]))
+    return matrix3(_skew_rows(v[..., 0], v[..., 1], v[..., 2]))
 
 
 def cross3(a, b) -> np.ndarray:
@@ -135,7 +136,7 @@ def euler_to_dcm(euler) -> np.ndarray:
         return euler_to_dcm3(*e.tolist())
     _check_finite_euler(e)
     c, s = np.cos(e), np.sin(e)
-    return _matrix(_dcm_rows(c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2]))
+    return matrix3(_dcm_rows(c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2]))
 
 
 def euler_rate_matrix(euler) -> np.ndarray:
@@ -150,7 +151,7 @@ def euler_rate_matrix(euler) -> np.ndarray:
         phi, theta, _ = e.tolist()
         return np.array(_rate_rows(math.cos(phi), math.sin(phi), math.cos(theta), math.tan(theta)))
     phi, theta = e[..., 0], e[..., 1]
-    return _matrix(_rate_rows(np.cos(phi), np.sin(phi), np.cos(theta), np.tan(theta)))
+    return matrix3(_rate_rows(np.cos(phi), np.sin(phi), np.cos(theta), np.tan(theta)))
 
 
 def euler_to_dcm_and_rate_matrix(euler) -> tuple[np.ndarray, np.ndarray]:
@@ -158,8 +159,8 @@ def euler_to_dcm_and_rate_matrix(euler) -> tuple[np.ndarray, np.ndarray]:
     e = _vec3(euler, "euler")
     c, s = np.cos(e), np.sin(e)
     cf, sf, ct, st = c[..., 0], s[..., 0], c[..., 1], s[..., 1]
-    return (_matrix(_dcm_rows(cf, sf, ct, st, c[..., 2], s[..., 2])),
-            _matrix(_rate_rows(cf, sf, ct, st / ct)))
+    return (matrix3(_dcm_rows(cf, sf, ct, st, c[..., 2], s[..., 2])),
+            matrix3(_rate_rows(cf, sf, ct, st / ct)))
 
 
 def dcm_to_euler(C) -> np.ndarray:
@@ -172,12 +173,14 @@ def dcm_to_euler(C) -> np.ndarray:
         raise ValueError(f"C must have shape (..., 3, 3), got shape {C.shape}")
     # Read the angles off eq. 3.2: C31 = -sinθ, C32 = sinφ cosθ, C33 = cosφ cosθ,
     # C21 = cosθ sinψ, C11 = cosθ cosψ.
-    pitch = -np.arcsin(np.clip(C[..., 2, 0], -1.0, 1.0))
+    euler = np.empty(C.shape[:-1])
+    euler[..., 1] = -np.arcsin(C[..., 2, 0].clip(-1.0, 1.0))  # pitch
     locked = np.hypot(C[..., 2, 1], C[..., 2, 2]) < 1e-9
-    roll = np.where(locked, 0.0, np.arctan2(C[..., 2, 1], C[..., 2, 2]))
+    euler[..., 0] = np.where(locked, 0.0, np.arctan2(C[..., 2, 1], C[..., 2, 2]))  # roll
     # At gimbal lock only yaw -+ roll is defined: take it from the second row / column.
     yaw = np.where(locked, np.arctan2(-C[..., 0, 1], C[..., 1, 1]), np.arctan2(C[..., 1, 0], C[..., 0, 0]))
-    return np.stack([roll, pitch, wrap_angle(yaw)], axis=-1)
+    euler[..., 2] = np.where(yaw <= -np.pi, np.pi, yaw)  # atan2 is in [-pi, pi]: -pi reads as pi
+    return euler
 
 
 # ---------------------------------------------------------------- angular rates
@@ -199,7 +202,7 @@ def euler_rates_to_body_rates(euler, euler_dot) -> np.ndarray:
         E_inv = np.array(_inverse_rate_rows(math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)))
     else:
         phi, theta = e[..., 0], e[..., 1]
-        E_inv = _matrix(_inverse_rate_rows(np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta)))
+        E_inv = matrix3(_inverse_rate_rows(np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta)))
     return (E_inv @ d[..., None])[..., 0]
 
 
