@@ -5,7 +5,7 @@ Convention (seed 002 §3.4): Euler angles are (roll φ, pitch θ, yaw ψ) in rad
 ``C_n^b = (C_b^n)^T`` (eq. 3.3). Every function accepts a leading batch axis (``...``).
 
 Each equation is written once, as a function of its entries (numbers or arrays alike): the one-vector
-functions (``euler_to_dcm3``, ``cross3``) feed it Python floats, the batch functions numpy arrays.
+functions (``euler_to_dcm3``, ``cross3``) feed it numbers, the batch functions numpy arrays.
 """
 
 from __future__ import annotations
