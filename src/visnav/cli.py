@@ -876,7 +876,8 @@ def replay_(
     recording: str = typer.Argument(..., help="recording folder (docs/recordings.md), a visnav bridge log folder, an "
                                     "EuRoC folder, a folder of geotagged photos, PX4 .ulg, ArduPilot DataFlash .bin, "
                                     "MAVLink .tlog, or ROS bag (.bag / ROS 2 folder)"),
-    navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor or geolocation (app/navigators.py)"),
+    navigator: str = typer.Option(..., help="navigator: palace, witas, pad, deck, condor, geolocation or vo "
+                                  "(app/navigators.py)"),
     map_: Optional[str] = typer.Option(None, "--map", help="reference map (PNG/JPEG + world file) for witas and geolocation"),
     out: Optional[str] = typer.Option(None, help="run directory (default runs/replay-<navigator>-<time>)"),
     time_offset: Optional[str] = typer.Option(None, help="camera clock offset: 'auto' (gyro/camera "

@@ -165,42 +165,49 @@ def test_bad_input_raises(call):
         call()
 
 
-def test_single_vector_fast_paths_equal_the_batch_arithmetic_to_the_ulp():
-    """The one-vector paths (scalar math, the 100 Hz loops) give the batch (numpy) path's numbers: the
-    same arithmetic, bit for bit where numpy's ufuncs use libm; on a CPU where numpy takes its own SIMD
-    arctan2 / arcsin (AVX-512) the two may differ in the last bit, so the check is a few ulp, not equality."""
+def test_every_entry_point_agrees_with_scipy_single_and_batched():
+    """One vector and a batch, against an independent implementation (scipy's ``Rotation``, ZYX intrinsic
+    = ``Rz(yaw) Ry(pitch) Rx(roll)``), gimbal lock and the yaw wrap included."""
+    from visnav.geometry.rotations import euler_to_dcm3, euler_to_dcm_and_rate_matrix
+
     rng = np.random.default_rng(7)
     e = _random_euler(rng, 300)
     e[:5, 2] = [np.pi, -np.pi, np.nextafter(-np.pi, 0.0), 0.0, np.pi / 2]
-    C = euler_to_dcm(e)
-    C[5] = euler_to_dcm([0.3, np.pi / 2, 0.2])  # gimbal lock: roll set to 0
-    single = np.array([dcm_to_euler(c) for c in C])
-    batch = dcm_to_euler(C)
-    np.testing.assert_array_max_ulp(single, batch, maxulp=4)
-    assert single[5, 0] == 0.0 and np.all((single[:, 2] > -np.pi) & (single[:, 2] <= np.pi))
+    ref = Rotation.from_euler("ZYX", e[:, ::-1]).as_matrix()
+    np.testing.assert_allclose(euler_to_dcm(e), ref, atol=1e-15)
+    np.testing.assert_allclose(np.array([euler_to_dcm3(*x) for x in e]), ref, atol=1e-15)
+    np.testing.assert_allclose(euler_to_dcm_and_rate_matrix(e)[0], ref, atol=1e-15)
+    single = np.array([dcm_to_euler(c) for c in ref])
+    np.testing.assert_allclose(single, dcm_to_euler(ref), atol=1e-15)
+    yaw_ok = np.abs(np.abs(e[:, 2]) - np.pi) > 1e-9  # +-pi both read as +pi
+    np.testing.assert_allclose(single[yaw_ok], e[yaw_ok], atol=1e-9)
+    assert np.all((single[:, 2] > -np.pi) & (single[:, 2] <= np.pi))
+    locked = dcm_to_euler(Rotation.from_euler("ZYX", [0.2, np.pi / 2, 0.3]).as_matrix())
+    assert locked[0] == 0.0 and locked[1] == pytest.approx(np.pi / 2)
+    np.testing.assert_allclose(euler_to_dcm([0.0, locked[1], locked[2]]),  # the same rotation, roll folded into yaw
+                               Rotation.from_euler("ZYX", [0.2, np.pi / 2, 0.3]).as_matrix(), atol=1e-7)
     ed = rng.normal(0.0, 1.0, (300, 3))
     np.testing.assert_allclose(np.array([euler_rates_to_body_rates(a, b) for a, b in zip(e, ed)]),
-                               euler_rates_to_body_rates(e, ed), rtol=1e-15, atol=1e-15)
+                               euler_rates_to_body_rates(e, ed), rtol=1e-14, atol=1e-14)
     a, b = rng.normal(0.0, 10.0, (2, 300, 3))
-    assert np.array_equal(np.array([cross3(x, y) for x, y in zip(a, b)]), np.cross(a, b))
+    np.testing.assert_allclose(np.array([cross3(x, y) for x, y in zip(a, b)]), np.cross(a, b), rtol=1e-14, atol=1e-12)
     assert np.array_equal(cross3([1.0, 0.0, 0.0], (0.0, 1.0, 0.0)), [0.0, 0.0, 1.0])
 
 
-def test_the_level_attitude_from_three_floats_is_euler_to_dcm_of_the_list_bit_for_bit():
-    """The deck's 50 / 100 Hz code takes ``euler_to_dcm3(roll, pitch, 0.0)`` where it took
-    ``euler_to_dcm([roll, pitch, 0.0])``: the same matrix to the bit (signs of zero included) and the same
-    refusal of a NaN attitude."""
-    from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
+def test_euler_rate_matrix_is_the_closed_form_of_eq_3_7_and_inverts_the_body_rates():
+    """E(e) (seed 002 eq. 3.7) entry by entry from its printed form, and E(e) E(e)^-1 = I through the two
+    rate conversions, for one vector and for a batch."""
+    from visnav.geometry.rotations import euler_rate_matrix, euler_to_dcm_and_rate_matrix
 
-    rng = np.random.default_rng(12)
-    for k in range(3000):
-        r, p = (float(v) for v in rng.normal(0, [0.3, 1.2][k % 2], 2))
-        if k % 10 == 0:
-            r, p = float(rng.choice([0.0, -0.0])), float(rng.choice([0.0, -0.0, p]))
-        a, b = euler_to_dcm([np.float64(r), p, 0.0]), euler_to_dcm3(r, p, 0.0)
-        assert np.array_equal(a.view(np.int64), b.view(np.int64))
-    for bad in ((np.nan, 0.1), (0.1, np.inf)):
-        with pytest.raises(ValueError, match="finite"):
-            euler_to_dcm([bad[0], bad[1], 0.0])
-        with pytest.raises(ValueError, match="finite"):
-            euler_to_dcm3(bad[0], bad[1], 0.0)
+    rng = np.random.default_rng(3)
+    e = _random_euler(rng, 50)
+    for x in e[:5]:
+        phi, th = x[0], x[1]
+        printed = [[1, np.sin(phi) * np.tan(th), np.cos(phi) * np.tan(th)], [0, np.cos(phi), -np.sin(phi)],
+                   [0, np.sin(phi) / np.cos(th), np.cos(phi) / np.cos(th)]]
+        np.testing.assert_allclose(euler_rate_matrix(x), printed, rtol=1e-14, atol=1e-15)
+    E = euler_rate_matrix(e)
+    np.testing.assert_allclose(E, np.array([euler_rate_matrix(x) for x in e]), rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(euler_to_dcm_and_rate_matrix(e)[1], E, rtol=1e-13, atol=1e-14)
+    w = rng.normal(size=(50, 3))
+    np.testing.assert_allclose(euler_rates_to_body_rates(e, body_rates_to_euler_rates(e, w)), w, atol=1e-12)

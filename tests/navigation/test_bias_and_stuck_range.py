@@ -154,3 +154,44 @@ def test_palace_navigator_drops_a_stuck_laser_and_leaves_ok():
     assert all(ok and i == "ok" for _, ok, i in before)
     assert all(not ok and i != "ok" for _, ok, i in after)
     assert all(math.isnan(m.range) for m in nav.lasers if m.t >= 2.2)
+
+
+def test_short_window_inflation_is_relative_to_the_streams_usual_nis():
+    from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
+
+    rng = np.random.default_rng(0)
+    mon = IntegrityMonitor(IntegrityConfig(window=20, short_window=5, inflation_streams=("vision",)))
+    off = IntegrityMonitor(IntegrityConfig(window=20, inflation_streams=("vision",)))
+    k2 = []
+    for k in range(300):  # a conservative fix noise: NIS/dof ~ exponential with mean 0.025 (chi2(2) / 2 / 40)
+        nis = rng.chisquare(2) / 40
+        mon.record(0.05 * k, "vision", nis, 2, True)
+        off.record(0.05 * k, "vision", nis, 2, True)
+        k2.append(mon.inflation())
+    assert abs(mon.baseline("vision") - 0.025) < 0.005
+    assert max(k2[60:]) < 5.0  # fault-free: at most a few times (a mean of 10 dof over its mean)
+    for k in range(3):  # a fault: NIS per dof 50 times the usual level
+        mon.record(15.0 + 0.05 * k, "vision", 50 * 0.05, 2, True)
+        off.record(15.0 + 0.05 * k, "vision", 50 * 0.05, 2, True)
+    assert mon.inflation() > 20.0  # 3 of the last 5 at 50x the usual level: (3 * 50 + 2) / 5 ~ 30
+    assert off.inflation() == 1.0  # the absolute test alone sees NIS/dof 0.4 over 20: nothing
+    assert abs(mon.baseline("vision") - 0.025) < 0.005  # the fault's updates stay out of the baseline
+
+
+def test_witas_frame_stamped_ahead_of_the_imu_is_a_camera_gap_until_the_clock_agrees():
+    from tests.navigation.test_witas_navigator import _engaged, _hover
+    from visnav.measurements import Frame
+
+    nav = _engaged()  # IMU delivered up to 2.99 s
+    rng = np.random.default_rng(2)
+    nav.update(Frame(3.2, rng.integers(0, 255, (288, 384), dtype=np.uint8)))  # 0.21 s ahead (> 0.1)
+    h = nav.health(3.0)
+    assert h.integrity != "ok" and "ahead of the IMU clock" in h.integrity_reason
+    _hover(nav, 3.0, 3.3, gps=False)
+    # 0.01 s behind the IMU: live (a queued frame is processed on the next frame's arrival)
+    nav.update(Frame(3.28, rng.integers(0, 255, (288, 384), dtype=np.uint8)))
+    assert "ahead" not in nav.health(3.3).integrity_reason
+    assert nav.n_frames == 2 and nav.registrations == 0
+    notes = " ".join(nav.h.notes)
+    assert "3.2s odometry skipped: frame stamped 0.21 s ahead of the IMU clock" in notes
+    assert "3.3s odometry skipped: frame stamped" not in notes

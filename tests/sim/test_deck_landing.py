@@ -4,12 +4,14 @@ import numpy as np
 import pytest
 
 from visnav.analysis.deck_metrics import NEES_BAND_12
-from visnav.scenarios.schema import ScenarioError, load_scenario
+from visnav.scenarios.schema import ScenarioError
 from visnav.app.missions import make_simulation
+
+from tests.deck_ideal import load_ideal_deck
 
 
 def _run(name, seed, *sets):
-    sim = make_simulation(load_scenario(name, list(sets), seed=seed))
+    sim = make_simulation(load_ideal_deck(name, list(sets), seed=seed))
     res = sim.run()
     assert res.error is None, res.error
     return sim, res.metrics
@@ -75,10 +77,10 @@ def test_one_light_leaving_the_view():
 
 def test_layout_with_fewer_than_three_lights_is_refused():
     with pytest.raises(ScenarioError, match="at least 3"):
-        load_scenario("deck-static", ["mission.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
+        load_ideal_deck("deck-static", ["mission.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
     for key in ("navigation.gate", "mission.filter.gate"):  # the old layout's key: the error names the new one
         with pytest.raises(ScenarioError, match=r"invalid value for 'navigation\.gate': -1"):
-            load_scenario("deck-static", [f"{key}=-1"])
+            load_ideal_deck("deck-static", [f"{key}=-1"])
 
 
 def test_filter_restarts_when_it_locks_on_a_wrong_yaw():
@@ -118,7 +120,7 @@ def _bearing_errors(sim):
 def test_filter_noise_matches_the_simulated_camera():
     # R after hand-over is sigma_px / f and sqrt(2) sigma_b rate (closed form), and the simulated
     # bearings scatter about the truth by that sigma (hovering, so rates carry no manoeuvre lag)
-    sc = load_scenario("deck-static", ["run.duration_s=2.0", "mission.start.manual_s=5.0"], seed=3)
+    sc = load_ideal_deck("deck-static", ["run.duration_s=2.0", "mission.start.manual_s=5.0"], seed=3)
     sim = make_simulation(sc)
     sig_b, sig_r = sim.nav.cfg.tracking_sigmas
     assert sig_b == pytest.approx(np.hypot(0.3, 0.025) / 420.0, rel=1e-12)
@@ -129,14 +131,14 @@ def test_filter_noise_matches_the_simulated_camera():
     assert np.std(er) == pytest.approx(sig_r, rel=0.15)
     assert abs(np.mean(eb)) < 4 * sig_b / np.sqrt(eb.size)
     # the thesis' R can still be chosen
-    sc2 = load_scenario("deck-static", ["mission.filter.bearing_noise_deg=2", "mission.filter.bearing_rate_noise_deg_s=2"])
+    sc2 = load_ideal_deck("deck-static", ["mission.filter.bearing_noise_deg=2", "mission.filter.bearing_rate_noise_deg_s=2"])
     assert make_simulation(sc2).nav.cfg.tracking_sigmas == pytest.approx((np.radians(2), np.radians(2)))
 
 
 def test_imu_pilot_hovers_level_without_truth_before_hand_over():
     # start.pilot = "imu" (default): before the hand-over the commands are level with no heading rate,
     # thrust from the vertical-acceleration PI only; the vehicle stays near its start (no wind)
-    sim = make_simulation(load_scenario("deck-static", ["run.duration_s=4.0"], seed=1))
+    sim = make_simulation(load_ideal_deck("deck-static", ["run.duration_s=4.0"], seed=1))
     assert sim.sc.mission.start.pilot == "imu"
     sim.run()
     cmd, veh = sim.log.get("command"), sim.log.get("vehicle")
@@ -146,7 +148,7 @@ def test_imu_pilot_hovers_level_without_truth_before_hand_over():
     np.testing.assert_array_equal(cmd["yaw_rate"], 0.0)
     assert np.linalg.norm(veh["position"][-1] - veh["position"][0]) < 0.05
     # the truth pilot (the thesis' safety pilot) steers
-    sim = make_simulation(load_scenario("deck-static", ["run.duration_s=4.0", "mission.start.pilot=truth"], seed=1))
+    sim = make_simulation(load_ideal_deck("deck-static", ["run.duration_s=4.0", "mission.start.pilot=truth"], seed=1))
     sim.run()
     assert np.any(sim.log.get("command")["roll"] != 0.0)
 
@@ -162,11 +164,11 @@ def test_thesis_camera_loses_every_light_over_the_deck_origin():
     Higher up (0.5-0.8 m) fewer are in view there: the lens distortion (applied once, as a real lens does)
     does not pull the near lights into the image the way the earlier double distortion did.
     """
-    sim = make_simulation(load_scenario("deck-static", seed=1))
+    sim = make_simulation(load_ideal_deck("deck-static", seed=1))
     cam, lights, go = sim.camera, sim.world.lights, sim.info["params"].gear_offset
     assert np.max(lights[:, 0]) < sim.sc.sensors.camera.position_m[0]
     np.testing.assert_array_equal(sim.info["landing_point"], 0.0)
-    land = make_simulation(load_scenario("deck-moving", seed=1)).info["landing_point"]
+    land = make_simulation(load_ideal_deck("deck-moving", seed=1)).info["landing_point"]
     np.testing.assert_allclose(land, [-0.2, 0.0, 0.0])
     for gear_h in (0.05, 0.1, 0.2, 0.3, 0.5, 0.8):  # level, deck frame = NED at the deck origin
         _, over = cam.project(lights, np.array([0.0, 0.0, -(gear_h + go)]), np.eye(3))
@@ -180,14 +182,14 @@ def test_thesis_camera_loses_every_light_over_the_deck_origin():
 
 def test_landing_point_off_the_plate_is_refused():
     with pytest.raises(ScenarioError, match="landing_point_m"):
-        load_scenario("deck-moving", ["mission.guidance.landing_point_m=[0.35, 0.0, 0.0]"])
+        load_ideal_deck("deck-moving", ["mission.guidance.landing_point_m=[0.35, 0.0, 0.0]"])
 
 
 def test_flare_turns_the_specific_force_onto_the_deck_normal():
     """Full flare: specific force along the predicted normal with the vertical part kept; none before flare_s."""
     from visnav.control.deck import flare
 
-    fs = load_scenario("deck-moving", seed=1).mission.guidance.flare_s
+    fs = load_ideal_deck("deck-moving", seed=1).mission.guidance.flare_s
     g = 9.81
     n_up = np.array([np.sin(0.1), -np.sin(0.05), 0.0])
     n_up[2] = -np.sqrt(1.0 - n_up[0] ** 2 - n_up[1] ** 2)
@@ -202,12 +204,12 @@ def test_flare_turns_the_specific_force_onto_the_deck_normal():
 
 
 def test_truth_start_uses_the_sensor_noise_from_the_first_frame():
-    sim = make_simulation(load_scenario("deck-moving", seed=1))
+    sim = make_simulation(load_ideal_deck("deck-moving", seed=1))
     sb, sr = sim.nav.cfg.tracking_sigmas
     assert sim.nav.bearing_var == pytest.approx(sb**2) and sim.nav.rate_var == pytest.approx(sr**2)
     init = sim.log.get("nav_init")  # the Vicon start: an explicit, logged NavInit from the motion capture
     assert list(init["source"]) == ["truth+noise"]
-    sim = make_simulation(load_scenario("deck-static", seed=1))  # eq. 5.12 start: the thesis' 2 deg while acquiring
+    sim = make_simulation(load_ideal_deck("deck-static", seed=1))  # eq. 5.12 start: the thesis' 2 deg while acquiring
     assert sim.nav.bearing_var == pytest.approx(np.radians(2.0) ** 2)
 
 

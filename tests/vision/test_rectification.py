@@ -156,52 +156,52 @@ def test_lut_calibration_corrects_distortion():
     assert np.median(err_th) > 5 * np.median(err_ours)
 
 
-def test_lut_one_point_path_equals_the_interpolator():
-    """``DistortionLUT.correct`` of one point (scalar bilinear, the per-frame call) gives the same bits as
-    the array path (scipy's ``RegularGridInterpolator``), inside the table, on its grid lines and
-    extrapolated beyond it, for both table kinds."""
-    cam = PinholeCamera(W, H, F, F, (W - 1) / 2 + 14.0, (H - 1) / 2 - 8.0, (-0.28, 0.08, 0, 0, 0, 0, 0, 0))
-    board = synthetic_board(cam, 2.0, 0.04)
+def test_lut_interpolation_is_exact_on_bilinear_tables_one_point_and_batches():
+    """Eq. 3.7's linear interpolation reproduces a bilinear function a + b x + c y + d x y exactly, inside
+    the table, on its grid lines and (the end cells extended) beyond it: one point (the per-frame call) and
+    a batch against that closed form, both table kinds (factor: mirrored to |x|, |y|; offset: added)."""
+    from visnav.vision.distortion_lut import DistortionLUT
+
+    def f(x, y, k):
+        return [1.0, 0.9][k] + [0.03, -0.05][k] * x + [-0.02, 0.04][k] * y + [0.01, 0.02][k] * x * y
+
     rng = np.random.default_rng(3)
-    for lut in (full_lut(board, GEOM), thesis_lut(board, GEOM)):
-        assert lut._scalar_ok
-        on_grid = np.c_[rng.choice(lut.gx, 40) * W / 2, rng.choice(lut.gy, 40) * H / 2]
-        pts = np.r_[np.c_[rng.uniform(-1.3, 1.3, 400) * W / 2, rng.uniform(-1.3, 1.3, 400) * H / 2], on_grid]
-        xa, ya = lut.correct(pts[:, 0], pts[:, 1])  # array path
-        n_diff = 0
-        for (x, y), ex, ey in zip(pts, xa, ya):
-            x1, y1 = lut.correct(np.array([x]), np.array([y]))
-            assert x1.shape == (1,) and y1.shape == (1,)
-            n_diff += (x1[0] != ex) + (y1[0] != ey)
-        assert n_diff == 0
-    assert np.isnan(lut.correct(np.array([np.nan]), np.array([0.0]))[0][0])  # NaN stays NaN (array path)
+    for kind, g in (("factor", np.linspace(0.0, 1.0, 11)), ("offset", np.linspace(-1.0, 1.0, 9))):
+        gx, gy = np.meshgrid(g, g, indexing="ij")
+        lut = DistortionLUT(kind, g, g, f(gx, gy, 0), f(gx, gy, 1), W, H)
+        on_grid = np.c_[rng.choice(g, 20) * W / 2, rng.choice(g, 20) * H / 2]
+        pts = np.r_[np.c_[rng.uniform(-1.3, 1.3, 200) * W / 2, rng.uniform(-1.3, 1.3, 200) * H / 2], on_grid]
+        nx, ny = pts[:, 0] / (W / 2), pts[:, 1] / (H / 2)
+        if kind == "factor":
+            nx, ny = np.abs(nx), np.abs(ny)
+            want = pts[:, 0] * f(nx, ny, 0), pts[:, 1] * f(nx, ny, 1)
+        else:
+            want = pts[:, 0] + f(nx, ny, 0), pts[:, 1] + f(nx, ny, 1)
+        np.testing.assert_allclose(lut.correct(pts[:, 0], pts[:, 1]), want, rtol=1e-13, atol=1e-12)
+        one = np.array([[v[0] for v in lut.correct(np.array([x]), np.array([y]))] for x, y in pts])
+        np.testing.assert_allclose(one.T, want, rtol=1e-13, atol=1e-12)
+    assert np.isnan(lut.correct(np.array([np.nan]), np.array([0.0]))[0][0])  # NaN stays NaN
 
 
-def test_one_pixel_path_equals_the_vectorised_chain_bit_for_bit():
-    """``estimate_range``'s scalar chain (``_ground_range_1``) against ``ground_range`` on arrays: the same
-    D_T, L_T, D_X, D_Y and bearing bits (NaN where it gives NaN), both methods, rays above and below the
-    horizon; ``altimeter_correction`` of one float against its array path."""
-    import math
-
-    import numpy as np
-
-    from visnav.vision.rectification import (CameraGeometry, _ground_range_1, altimeter_correction, ground_range,
-                                             vision_bearing)
-
-    geom = CameraGeometry(640, 480, math.radians(26.5), math.atan(math.tan(math.radians(26.5)) * 480 / 640))
-    rng = np.random.default_rng(3)
-    n = 4000
-    X, Y = rng.uniform(-320, 320, n), rng.uniform(-240, 240, n)
-    h, tilt, roll = rng.uniform(1.0, 300.0, n), rng.uniform(-1.6, 0.3, n), rng.normal(0.0, 0.3, n)
-    for method in ("exact", "thesis"):
-        want = ground_range(X, Y, h, tilt, roll, geom, method)
-        bearing = vision_bearing(want[2], want[3])[0]
-        for i in range(n):
-            got = _ground_range_1(float(X[i]), float(Y[i]), float(h[i]), float(tilt[i]), float(roll[i]), geom, method)
-            ref = tuple(float(w[i]) for w in want)
-            assert np.array_equal(got, ref, equal_nan=True), (i, got, ref)
-            if math.isfinite(got[0]):
-                assert float(np.arctan2(got[2], got[3])) == float(bearing[i])
-    hb = rng.uniform(0.0, 400.0, 500)
-    arr = altimeter_correction(hb, 20.0, 0.0004, 5e-06)
-    assert all(altimeter_correction(float(v), 20.0, 0.0004, 5e-06) == a for v, a in zip(hb, arr))
+def test_one_pixel_estimate_is_the_true_range_of_projected_targets():
+    """``estimate_range`` (one pixel, the per-frame call) against the geometry it inverts: ground points
+    projected through a pinhole camera at height h, tilt and roll give back their horizontal distance
+    and bearing; ``altimeter_correction`` of one float and of an array against eq. 2.1 by hand."""
+    h, tilt, roll = 120.0, math.radians(-35.0), math.radians(6.0)
+    pts, X, Y = _targets(np.random.default_rng(9), 40, h, tilt, 0.0, roll)
+    for p, x, y in zip(pts, X, Y):
+        if abs(x) > W / 2 or abs(y) > H / 2:
+            continue
+        r = estimate_range(float(x), float(y), h, tilt, roll, GEOM, "exact")
+        assert r.valid
+        assert r.ground_range == pytest.approx(math.hypot(p[0], p[1]), rel=1e-9)
+        assert r.slant_range == pytest.approx(math.sqrt(p[0] ** 2 + p[1] ** 2 + h * h), rel=1e-9)
+        assert r.bearing == pytest.approx(math.atan2(p[1], p[0]), abs=1e-9)
+        th = estimate_range(float(x), float(y), h, tilt, roll, GEOM, "thesis")
+        want = ground_range(np.array([x]), np.array([y]), h, tilt, roll, GEOM, "thesis")[0][0]
+        assert th.valid and th.ground_range == pytest.approx(want, rel=1e-14)
+    hb = np.random.default_rng(2).uniform(0.0, 400.0, 50)
+    want = hb * (1.0 - (0.0004 + (15.0 - 20.0) * 5e-06) * hb)
+    np.testing.assert_allclose(altimeter_correction(hb, 20.0, 0.0004, 5e-06), want, rtol=1e-15)
+    assert all(altimeter_correction(float(v), 20.0, 0.0004, 5e-06) == pytest.approx(w, rel=1e-15)
+               for v, w in zip(hb, want))

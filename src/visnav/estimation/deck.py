@@ -129,7 +129,7 @@ def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
     C, E = euler_dcm_batch(e, rate=True)  # C_h^d, E(e)
     w_rel = u.gyro - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
     edot = np.einsum("nij,nj->ni", E, w_rel)  # eq. 3.2
-    return np.hstack([r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd])
+    return np.concatenate([r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd], axis=1)
 
 
 def ship_acceleration_bound(amplitude, omega, sigma_amplitude=0.0, sigma_omega=0.0) -> np.ndarray:

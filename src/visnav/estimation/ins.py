@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm, matrix3
 
 __all__ = [
     "OMEGA_EARTH",
@@ -54,30 +54,22 @@ _FLAT = 1.0 / 298.257223563
 _M = 0.00344978650684  # w^2 a^2 b / GM
 
 
-# ---------------------------------------------------------------- quaternions (vectorised)
+# ---------------------------------------------------------------- quaternions
+def _hamilton(pw, px, py, pz, qw, qx, qy, qz):
+    """p ⊗ q, the Hamilton product of two scalar-first quaternions, component by component."""
+    return (pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw)
+
+
 def quat_mult(p, q) -> np.ndarray:
     """Hamilton product ``p ⊗ q`` of (..., 4) scalar-first quaternions."""
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
-    if p.shape == (4,) and q.shape == (4,):  # fast path for the per-sample loops
-        return np.array(_quat_mult4(*p.tolist(), *q.tolist()))
-    pw, px, py, pz = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
-    qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            pw * qw - px * qx - py * qy - pz * qz,
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw,
-        ],
-        axis=-1,
-    )
-
-
-def _quat_mult4(pw, px, py, pz, qw, qx, qy, qz) -> list[float]:
-    """``quat_mult`` of two quaternions given as floats, the product's components as floats."""
-    return [pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw]
+    if p.shape == (4,) and q.shape == (4,):  # one product (the per-sample loops): from the floats
+        return np.array(_hamilton(*p.tolist(), *q.tolist()))
+    return np.stack(np.broadcast_arrays(*_hamilton(*np.moveaxis(p, -1, 0), *np.moveaxis(q, -1, 0))), axis=-1)
 
 
 def quat_conj(q) -> np.ndarray:
@@ -85,54 +77,37 @@ def quat_conj(q) -> np.ndarray:
     return q * np.array([1.0, -1.0, -1.0, -1.0])
 
 
+def _quat_exp(x, y, z):
+    """Exact exponential map of the rotation vector θ = (x, y, z): q = (cos(|θ|/2), sin(|θ|/2) θ / |θ|)."""
+    a = np.sqrt(x * x + y * y + z * z)  # |θ|
+    k = np.sin(0.5 * a) / (a + (a == 0.0))  # sin(|θ|/2) / |θ| (at θ = 0 any finite k: θ is zero)
+    return np.cos(0.5 * a), k * x, k * y, k * z
+
+
 def quat_from_rotvec(rv) -> np.ndarray:
     """Exact exponential map: rotation vector (..., 3) [rad] -> unit quaternion (..., 4)."""
     rv = np.asarray(rv, dtype=float)
-    if rv.shape == (3,):
-        return np.array(_quat_from_rotvec3(*rv.tolist()))
-    ang = np.linalg.norm(rv, axis=-1)
-    half = 0.5 * ang
-    # sin(a/2)/a with its Taylor series near zero
-    small = ang < 1e-8
-    s = np.where(small, 0.5 - ang**2 / 48.0, np.sin(half) / np.where(small, 1.0, ang))
-    return np.concatenate([np.cos(half)[..., None], rv * s[..., None]], axis=-1)
+    if rv.shape == (3,):  # one vector (the per-sample loops): from the floats
+        return np.array(_quat_exp(*rv.tolist()))
+    return np.stack(np.broadcast_arrays(*_quat_exp(*np.moveaxis(rv, -1, 0))), axis=-1)
 
 
-def _quat_from_rotvec3(x: float, y: float, z: float) -> list[float]:
-    """``quat_from_rotvec`` of one rotation vector given as floats, the quaternion as floats."""
-    a = math.sqrt(x * x + y * y + z * z)
-    k = 0.5 - a * a / 48.0 if a < 1e-8 else math.sin(0.5 * a) / a
-    return [math.cos(0.5 * a), x * k, y * k, z * k]
+def _quat_dcm_rows(w, x, y, z):
+    """C_b^n of the quaternion (w, x, y, z) / |q| (so normalised here)."""
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return [[1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
+            [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
+            [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)]]
 
 
 def quat_to_dcm(q) -> np.ndarray:
     """``C_b^n`` (..., 3, 3) from unit quaternion(s) (..., 4) (normalised here)."""
     q = np.asarray(q, dtype=float)
-    if q.shape == (4,):
-        return np.array(_quat_to_dcm4(*q.tolist()))
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=-2,
-    )
-
-
-def _quat_to_dcm4(w: float, x: float, y: float, z: float) -> list[list[float]]:
-    """``quat_to_dcm`` of one quaternion given as floats, the rows as lists of floats."""
-    n2 = w * w + x * x + y * y + z * z
-    if not n2 > 0.0:
-        raise ValueError(f"quaternion must be non-zero and finite, got {[w, x, y, z]}")
-    s = 2.0 / n2
-    return [
-        [1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
-        [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
-        [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)],
-    ]
+    if q.shape == (4,):  # one quaternion (the per-sample loops): from the floats
+        if not float(q @ q) > 0.0:
+            raise ValueError(f"quaternion must be non-zero and finite, got {q.tolist()}")
+        return np.array(_quat_dcm_rows(*q.tolist()))
+    return matrix3(_quat_dcm_rows(*np.moveaxis(q, -1, 0)))
 
 
 def dcm_to_quat(C) -> np.ndarray:
@@ -147,7 +122,7 @@ def dcm_to_quat(C) -> np.ndarray:
 
 
 def rotvec_from_dcm(C) -> np.ndarray:
-    """Logarithm of one rotation matrix (3, 3): its rotation vector [rad] (|.| <= pi), in scalar math.
+    """Logarithm of one rotation matrix (3, 3): its rotation vector [rad] (|.| <= pi).
 
     The quaternion by Shepperd's choice of the largest of the trace and the diagonal (well conditioned
     at every angle), normalised (a product of rotations off orthogonality by rounding), turned to
@@ -178,15 +153,6 @@ def rotvec_from_dcm(C) -> np.ndarray:
 
 def quat_to_euler(q) -> np.ndarray:
     """(roll, pitch, yaw) [rad] of quaternion(s), ZYX as in geometry/rotations.py."""
-    q = np.asarray(q, dtype=float)
-    if q.shape == (4,):  # scalar fast path (the navigators call this at 50-100 Hz): dcm_to_euler's
-        (c00, c01, _), (c10, c11, _), (c20, c21, c22) = quat_to_dcm(q).tolist()
-        pitch = -math.asin(min(max(c20, -1.0), 1.0))  # formulas, without its array overhead
-        if math.hypot(c21, c22) < 1e-9:
-            roll, yaw = 0.0, math.atan2(-c01, c11)
-        else:
-            roll, yaw = math.atan2(c21, c22), math.atan2(c10, c00)
-        return np.array([roll, pitch, yaw if yaw > -math.pi else yaw + 2.0 * math.pi])
     return dcm_to_euler(quat_to_dcm(q))
 
 
@@ -315,56 +281,23 @@ class StrapdownINS:
         [m/s^2], body rates [rad/s]) held over the interval; returns a new state."""
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"IMU interval dt must be positive and finite, got {dt}")
-        if not self.earth_rotation and self._g_const is not None:
-            return self._propagate_flat(s, accel, gyro, dt)
         f = _check_finite(accel, "accel") - s.accel_bias
         w = _check_finite(gyro, "gyro") - s.gyro_bias
         if self.earth_rotation:
             w_ie, w_en = self.rates_at(s.position, s.velocity)
-            w_in = w_ie + w_en
-            C = quat_to_dcm(s.quat)
-            # attitude: C' = C [W_ib x] - [w_in x] C, i.e. body increment w_ib - C^T w_in
-            w_nb = w - C.T @ w_in
+            # attitude: C' = C [w_ib x] - [w_in x] C, i.e. the body increment w_ib - C^T w_in
+            w_nb = w - quat_to_dcm(s.quat).T @ (w_ie + w_en)
             coriolis = cross3(2.0 * w_ie + w_en, s.velocity)
-        else:  # flat non-rotating Earth: both rates are zero, nothing to subtract (the same numbers)
-            w_nb, coriolis = w, None
-        dq = quat_from_rotvec(w_nb * dt)
+        else:  # flat non-rotating Earth: both rates are zero
+            w_nb, coriolis = w, 0.0
         q_mid = quat_mult(s.quat, quat_from_rotvec(w_nb * (0.5 * dt)))
-        q_new = quat_mult(s.quat, dq)
-        q_new /= math.sqrt(q_new.dot(q_new))  # np.linalg.norm's own formula, without its overhead
-        # velocity: specific force through the mid-interval attitude, Coriolis, gravity
+        q_new = quat_mult(s.quat, quat_from_rotvec(w_nb * dt))
+        q_new /= np.linalg.norm(q_new)
+        # velocity: specific force through the mid-interval attitude, Coriolis, gravity (eq. A.1)
         g = self._g_const if self._g_const is not None else self.gravity_at(s.position)
-        acc = quat_to_dcm(q_mid) @ f
-        if coriolis is not None:
-            acc = acc - coriolis
-        acc = acc + g
-        v_new = s.velocity + acc * dt
+        v_new = s.velocity + (quat_to_dcm(q_mid) @ f - coriolis + g) * dt
         p_new = s.position + 0.5 * (s.velocity + v_new) * dt
         return NavState(s.t + dt, p_new, v_new, q_new, s.accel_bias.copy(), s.gyro_bias.copy())
-
-    def _propagate_flat(self, s: NavState, accel, gyro, dt: float) -> NavState:
-        """``propagate`` on a flat non-rotating Earth with constant gravity, its element operations in Python
-        floats (the same IEEE operations in the same order); the DCM product and the quaternion's norm stay
-        numpy's (BLAS: their sums are not a Python sum's)."""
-        a0, a1, a2 = _check_finite(accel, "accel").tolist()
-        w0, w1, w2 = _check_finite(gyro, "gyro").tolist()
-        ba0, ba1, ba2 = s.accel_bias.tolist()
-        bg0, bg1, bg2 = s.gyro_bias.tolist()
-        f = np.array([a0 - ba0, a1 - ba1, a2 - ba2])
-        w0, w1, w2 = w0 - bg0, w1 - bg1, w2 - bg2
-        q = s.quat.tolist()
-        h = 0.5 * dt
-        q_mid = _quat_mult4(*q, *_quat_from_rotvec3(w0 * h, w1 * h, w2 * h))
-        q_new = np.array(_quat_mult4(*q, *_quat_from_rotvec3(w0 * dt, w1 * dt, w2 * dt)))
-        q_new /= math.sqrt(q_new.dot(q_new))  # np.linalg.norm's own formula, without its overhead
-        c0, c1, c2 = (np.array(_quat_to_dcm4(*q_mid)) @ f).tolist()
-        g0, g1, g2 = self._g_const.tolist()
-        c0, c1, c2 = c0 + g0, c1 + g1, c2 + g2
-        v0, v1, v2 = s.velocity.tolist()
-        n0, n1, n2 = v0 + c0 * dt, v1 + c1 * dt, v2 + c2 * dt
-        p0, p1, p2 = s.position.tolist()
-        p_new = np.array([p0 + 0.5 * (v0 + n0) * dt, p1 + 0.5 * (v1 + n1) * dt, p2 + 0.5 * (v2 + n2) * dt])
-        return NavState(s.t + dt, p_new, np.array([n0, n1, n2]), q_new, s.accel_bias.copy(), s.gyro_bias.copy())
 
     def run(self, s0: NavState, t, accel, gyro) -> dict[str, np.ndarray]:
         """Free inertial run over sample arrays (N,), (N,3), (N,3): over [t_k, t_{k+1}] the mean

@@ -7,7 +7,14 @@
 - The share of updates the filter's own gate rejected over the same window.
 - A consistency factor ``k^2 = max(1, mean(NIS) / dof)`` that inflates the covariance when the
   innovations say it is too small (pooled over the streams a navigator names in ``inflation_streams``,
-  its horizontal position updates: a vertical baro NIS says nothing of the horizontal error).
+  its horizontal position updates: a vertical baro NIS says nothing of the horizontal error). With
+  ``short_window = n > 0`` (issue #30) also the mean NIS per dof of each such stream's last ``n`` accepted
+  updates over the stream's own usual level (``baseline``, at most 1: a filter whose assumed fix noise is
+  conservative has NIS far below chi-square's, and a fault that multiplies its innovations by ``r`` is no
+  less a fault for staying under 1), the largest of them: a fault that moves the estimate off within a
+  second (an accelerometer bias step under 20 Hz fixes) shows in the last few innovations, relative to their
+  usual size, before the long window's mean rises. The baseline is the mean NIS per dof of the stream's
+  accepted updates below 4 baselines (the fault's own are left out; 1 until 50 have come).
 - A horizontal protection level (HPL): with a horizontal error ``e ~ N(0, k^2 P_h)``,
   ``|e|^2 <= lambda_max(k^2 P_h) e^T (k^2 P_h)^-1 e`` and the last factor is chi2(2), so
   ``HPL = k sqrt(lambda_max(P_h) chi2.ppf(p, 2)) = k sqrt(-2 ln(1 - p) lambda_max(P_h))``
@@ -73,6 +80,7 @@ class IntegrityConfig:
     stale_s: float = math.inf  # unusable when no accepted update for this long
     # streams whose NIS inflates the HPL (k^2): the horizontal position streams; None: every stream
     inflation_streams: tuple[str, ...] | None = None
+    short_window: int = 0  # > 0: k^2 also from each inflation stream's last this-many accepted updates
 
     def __post_init__(self):
         if self.window < 1:
@@ -98,6 +106,7 @@ class IntegrityMonitor:
         # streams' tests and the horizontal k^2 as they were)
         self._tests: dict[str, StreamTest] = {}
         self._k2: float | None = None
+        self._base: dict[str, list[float]] = {}  # stream -> [sum of NIS/dof, count] of its usual updates
 
     def clear(self) -> None:
         """Empty every stream's window (a filter re-initialised: its predecessor's innovations say nothing)."""
@@ -120,6 +129,16 @@ class IntegrityMonitor:
             self._k2 = None
         if accepted:
             self._last_accept = max(self._last_accept, float(t))
+            if self.config.short_window > 0 and dof > 0 and (only is None or stream in only):
+                b = self._base.setdefault(stream, [0.0, 0])
+                if nis / dof < 4.0 * self.baseline(stream):
+                    b[0] += nis / dof
+                    b[1] += 1
+
+    def baseline(self, stream: str) -> float:
+        """The stream's usual NIS per dof (``short_window``): 1 until 50 updates, then their mean, at most 1."""
+        b = self._base.get(stream)
+        return 1.0 if b is None or b[1] < 50 else min(1.0, b[0] / b[1])
 
     def _bounds(self, dof: int) -> tuple[float, float]:
         b = self._quantiles.get(dof)
@@ -141,6 +160,8 @@ class IntegrityMonitor:
     def inflation(self) -> float:
         """k^2 = max(1, mean NIS per degree of freedom) over the windows of the ``inflation_streams``."""
         tot_n = tot_d = 0.0
+        short = 1.0
+        m = self.config.short_window
         only = self.config.inflation_streams
         for name, q in self._streams.items():
             if only is not None and name not in only:
@@ -148,7 +169,12 @@ class IntegrityMonitor:
             for n, d, ok in q:
                 if ok:
                     tot_n, tot_d = tot_n + n, tot_d + d
-        return max(1.0, tot_n / tot_d) if tot_d else 1.0
+            if m > 0:
+                last = [(n, d) for n, d, ok in q if ok][-m:]
+                sd = sum(d for _, d in last)
+                if sd:
+                    short = max(short, sum(n for n, _ in last) / sd / max(self.baseline(name), 1e-6))
+        return max(1.0, tot_n / tot_d if tot_d else 1.0, short)
 
     def _windows(self) -> tuple:
         """The windowed tests, k^2 and the state they give alone, computed once per change of the windows (the

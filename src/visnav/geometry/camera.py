@@ -8,6 +8,7 @@ Distortion coefficients follow OpenCV's order (k1, k2, p1, p2, k3, k4, k5, k6).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,7 @@ BLUEFOX_DIST: tuple[float, ...] = (-0.188, -0.1631, 0.00136, 0.001605, 0.1631, 0
 
 _UNDISTORT_ITERS = 30
 _UNDISTORT_TOL = 1e-14  # normalized units
-_UNDISTORT_SCALAR_MAX = 16  # up to this many points the Newton iteration runs in Python floats (same bits)
+_UNDISTORT_FEW = 16  # up to this many points Newton's method runs on floats, point by point
 
 
 def _points(x, dim: int, name: str) -> np.ndarray:
@@ -94,14 +95,17 @@ class PinholeCamera:
 
     # --- distortion (seed 003 eq. 5.3-5.5) -----------------------------------------------
 
-    def _radial(self, r2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Radial factor g(r^2) of eq. 5.3-5.4 and its derivative dg/d(r^2)."""
+    def _radial(self, r2, derivative: bool = False):
+        """Radial factor of eq. 5.3-5.4, ``g(r^2) = (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)``,
+        and with ``derivative`` also dg/d(r^2) (the Newton inversion's)."""
         k1, k2, _, _, k3, k4, k5, k6 = self.dist
         num = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
         den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6))
+        if not derivative:
+            return num / den
         dnum = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2)
         dden = k4 + r2 * (2.0 * k5 + 3.0 * k6 * r2)
-        return num / den, (dnum * den - num * dden) / den**2
+        return num / den, (dnum * den - num * dden) / (den * den)
 
     def distort_normalized(self, xy) -> np.ndarray:
         """Distorted normalized coordinates (x'', y'') of undistorted (x', y'), seed 003 eq. 5.3-5.5.
@@ -114,98 +118,58 @@ class PinholeCamera:
             return xy.copy()
         return _pair(*self._distort_xy(xy[..., 0], xy[..., 1]))
 
-    def _distort_xy(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Eq. 5.3-5.5 on the coordinate arrays: (x'', y''). The radial factor is ``_radial``'s g (the same
-        operations) without its derivative, which only the Newton inversion needs."""
-        k1, k2, p1, p2, k3, k4, k5, k6 = self.dist
+    def _distort_xy(self, x, y):
+        """Eq. 5.3-5.5 on the coordinate arrays: radial factor g(r^2) and tangential terms (p1, p2)."""
+        _, _, p1, p2, *_ = self.dist
         r2 = x * x + y * y
-        g = (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1.0 + r2 * (k4 + r2 * (k5 + r2 * k6)))
+        g = self._radial(r2)
         xd = x * g + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
         yd = y * g + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
         return xd, yd
 
-    def _distortion_jacobian(self, x: np.ndarray, y: np.ndarray):
+    def _distortion_jacobian(self, x, y):
+        """The Jacobian d(x'', y'') / d(x', y') = [[a, b], [b, d]] of eq. 5.3-5.5 (symmetric)."""
         _, _, p1, p2, *_ = self.dist
-        r2 = x * x + y * y
-        g, dg = self._radial(r2)
+        g, dg = self._radial(x * x + y * y, derivative=True)
         a = g + 2.0 * x * x * dg + 2.0 * p1 * y + 6.0 * p2 * x
         b = 2.0 * x * y * dg + 2.0 * p1 * x + 2.0 * p2 * y
-        c = 2.0 * x * y * dg + 2.0 * p1 * x + 2.0 * p2 * y
         d = g + 2.0 * y * y * dg + 6.0 * p1 * y + 2.0 * p2 * x
-        return a, b, c, d
+        return a, b, d
 
     def undistort_normalized(self, xy_distorted) -> np.ndarray:
         """Invert :meth:`distort_normalized` by Newton's method; NaN where it does not converge."""
         target = _points(xy_distorted, 2, "xy_distorted")
         if not self.has_distortion:
             return target.copy()
-        if target.ndim == 2 and target.shape[0] <= _UNDISTORT_SCALAR_MAX:
-            out = self._undistort_few(target)
-            if out is not None:
-                return out
-        xy = target.copy()
-        for _ in range(_UNDISTORT_ITERS):
-            res = target - self.distort_normalized(xy)
-            if np.all(~(np.abs(res) > _UNDISTORT_TOL)):
-                break
-            a, b, c, d = self._distortion_jacobian(xy[..., 0], xy[..., 1])
-            det = a * d - b * c
-            step = _pair(d * res[..., 0] - b * res[..., 1], a * res[..., 1] - c * res[..., 0])
-            with np.errstate(divide="ignore", invalid="ignore"):
-                xy = xy + step / det[..., None]
-        res = np.abs(target - self.distort_normalized(xy)).max(axis=-1, initial=0.0)
-        a, b, c, d = self._distortion_jacobian(xy[..., 0], xy[..., 1])
-        # Reject non-convergence and roots beyond the fold of the lens model (det J <= 0).
-        bad = ~(res < 1e-9 / max(self.fx, self.fy)) | ~(a * d - b * c > 0)
-        return np.where(bad[..., None], np.nan, xy)
+        if target.ndim == 2 and len(target) <= _UNDISTORT_FEW:  # the per-frame calls: on floats, point by point
+            return np.array([self._newton_point(tx, ty) for tx, ty in target.tolist()]).reshape(target.shape)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # (diverging points: rejected)
+            return _pair(*self._newton(target[..., 0], target[..., 1]))
 
-    def _undistort_few(self, target: np.ndarray) -> np.ndarray | None:
-        """:meth:`undistort_normalized` of a few points (N, 2) in Python floats: the array path's arithmetic
-        operation for operation (the same Newton steps, the same stop when every point has converged, the
-        same rejection), so the same bits without numpy's per-call cost. None where a division by zero would
-        raise (numpy gives inf / NaN there): the caller takes the array path."""
-        k1, k2, p1, p2, k3, k4, k5, k6 = self.dist
-        tp1, tp2, sp1, sp2, tk2, hk3, tk5, hk6 = 2.0 * p1, 2.0 * p2, 6.0 * p1, 6.0 * p2, 2.0 * k2, 3.0 * k3, 2.0 * k5, 3.0 * k6
-        tol = _UNDISTORT_TOL
-
-        def residual(tx, ty, x, y):  # target - distort_normalized(x, y)
-            r2 = x * x + y * y
-            g = (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1.0 + r2 * (k4 + r2 * (k5 + r2 * k6)))
-            return (tx - (x * g + tp1 * x * y + p2 * (r2 + 2.0 * x * x)),
-                    ty - (y * g + p1 * (r2 + 2.0 * y * y) + tp2 * x * y))
-
-        def jacobian(x, y):  # _distortion_jacobian
-            r2 = x * x + y * y
-            num = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
-            den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6))
-            dnum = k1 + r2 * (tk2 + hk3 * r2)
-            dden = k4 + r2 * (tk5 + hk6 * r2)
-            g, dg = num / den, (dnum * den - num * dden) / (den * den)
-            b = 2.0 * x * y * dg + tp1 * x + tp2 * y
-            return g + 2.0 * x * x * dg + tp1 * y + sp2 * x, b, b, g + 2.0 * y * y * dg + sp1 * y + tp2 * x
-
-        tgt = target.tolist()
-        pts = [list(p) for p in tgt]
+    def _newton_point(self, tx: float, ty: float) -> tuple[float, float]:
+        """``_newton`` of one point given as floats (a zero Jacobian: no convergence, NaN)."""
         try:
-            for _ in range(_UNDISTORT_ITERS):
-                res = [residual(tx, ty, p[0], p[1]) for (tx, ty), p in zip(tgt, pts)]
-                if all(not (abs(rx) > tol or abs(ry) > tol) for rx, ry in res):
-                    break
-                for p, (rx, ry) in zip(pts, res):
-                    a, b, c, d = jacobian(p[0], p[1])
-                    det = a * d - b * c
-                    p[0], p[1] = p[0] + (d * rx - b * ry) / det, p[1] + (a * ry - c * rx) / det
-            lim = 1e-9 / max(self.fx, self.fy)
-            nan = float("nan")
-            out = []
-            for (tx, ty), (x, y) in zip(tgt, pts):
-                rx, ry = residual(tx, ty, x, y)
-                a, b, c, d = jacobian(x, y)
-                ok = abs(rx) < lim and abs(ry) < lim and a * d - b * c > 0
-                out.append((x, y) if ok else (nan, nan))
+            return self._newton(tx, ty)
         except ZeroDivisionError:
-            return None
-        return np.array(out, float).reshape(target.shape)
+            return math.nan, math.nan
+
+    def _newton(self, tx, ty):
+        """Newton's method on eq. 5.3-5.5 from (x', y') = (x'', y'') (floats or arrays): (x', y'), NaN where it
+        has not converged or has converged beyond the fold of the lens model (det J <= 0)."""
+        x, y = tx, ty
+        for _ in range(_UNDISTORT_ITERS):
+            xd, yd = self._distort_xy(x, y)
+            rx, ry = tx - xd, ty - yd
+            if not (np.any(np.abs(rx) > _UNDISTORT_TOL) or np.any(np.abs(ry) > _UNDISTORT_TOL)):
+                break
+            a, b, d = self._distortion_jacobian(x, y)
+            det = a * d - b * b
+            x, y = x + (d * rx - b * ry) / det, y + (a * ry - b * rx) / det
+        xd, yd = self._distort_xy(x, y)
+        a, b, d = self._distortion_jacobian(x, y)
+        lim = 1e-9 / max(self.fx, self.fy)
+        ok = (abs(tx - xd) < lim) & (abs(ty - yd) < lim) & (a * d - b * b > 0)
+        return np.where(ok, x, np.nan), np.where(ok, y, np.nan)
 
     # --- projection ------------------------------------------------------------------------
 

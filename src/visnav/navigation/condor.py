@@ -94,10 +94,6 @@ def centred(camera, u: float, v: float) -> tuple[float, float]:
     return u - (camera.width - 1) / 2.0, (camera.height - 1) / 2.0 - v
 
 
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
-
-
 class CondorNavigator(AutopilotNavigator):
     def __init__(self, vision, camera, altimeter: tuple[float, float, float], tracker: BlobTracker | None = None,
                  radius_filter: RadiusFilter | None = None, gps_gain: float = 0.3, gps_stale_s: float = 1.0,
@@ -292,19 +288,14 @@ class CondorNavigator(AutopilotNavigator):
         cov = _NAN66
         if self.source == "gps":
             if self.gps_pos is not None:
-                # gps_pos + gps_vel (t - gps_t) per axis in floats (the same operations)
-                dt = t - self.gps_t
-                (p0, p1, p2), (v0, v1, v2) = self.gps_pos.tolist(), self.gps_vel.tolist()
-                pn, pe = p0 + v0 * dt, p1 + v1 * dt
-                pos = np.array([pn, pe, p2 + v2 * dt])
+                pos = self.gps_pos + self.gps_vel * (t - self.gps_t)  # the last fix carried at its velocity
                 vel = self.gps_vel
-                gs = math.hypot(v0, v1)
+                gs = math.hypot(vel[0], vel[1])
                 cov = self._position_cov(t)
                 if self.target is not None:
-                    tn, te, _ = self.target.tolist()
-                    rn, re = pn - tn, pe - te
-                    R = math.hypot(rn, re)
-                    Rdot = (rn * v0 + re * v1) / max(R, 1.0)
+                    r = (pos - self.target)[:2]  # horizontal, from the tent
+                    R = math.hypot(r[0], r[1])
+                    Rdot = float(r @ vel[:2]) / max(R, 1.0)
                     valid = t - self.gps_t <= self.gps_stale_s
         else:
             R, Rdot = self.radius.predict(t)
@@ -312,14 +303,11 @@ class CondorNavigator(AutopilotNavigator):
             if self.fix is not None and self.target is not None and math.isfinite(self.fix[4]):
                 tf, Rf, psi_vb, pan, head = self.fix
                 b = head + pan + psi_vb  # eq. 3.24: bearing of the tent from the aircraft
-                # target + (-R cos b, -R sin b), carried by va (t - tf) along the heading: per axis in floats
-                tn, te, _ = self.target.tolist()
-                pn, pe = tn + -Rf * math.cos(b), te + -Rf * math.sin(b)
+                pos = self.target - Rf * np.array([math.cos(b), math.sin(b), 0.0])  # eq. 3.23-3.24
                 h_now = self._heading_now()
-                if math.isfinite(self.va) and math.isfinite(h_now):
-                    k = self.va * (t - tf)
-                    pn, pe = pn + k * math.cos(h_now), pe + k * math.sin(h_now)
-                pos = np.array([pn, pe, -base["height"]])
+                if math.isfinite(self.va) and math.isfinite(h_now):  # carried along the heading at airspeed
+                    pos = pos + self.va * (t - tf) * np.array([math.cos(h_now), math.sin(h_now), 0.0])
+                pos[2] = -base["height"]
                 cov = self._position_cov(t)
         return FixedWingEstimate(t=t, position=pos, velocity=vel, covariance=cov,
                                  valid=math.isfinite(pos[0]) and math.isfinite(pos[1]), source=self.source, ground_speed=gs,

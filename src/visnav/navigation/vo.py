@@ -38,7 +38,7 @@ from visnav.log_schema import register_stream
 from visnav.measurements import Frame, GpsSample, Health, NavCommand, NavEstimate, NavInit
 from visnav.navigation.base import CommandDispatch
 
-register_stream("vo_photo", registered=("bool", "", "the photo was registered to an earlier one (else placed by prediction)"),
+register_stream("vo_photo", registered=("bool", "", "registered to an earlier photo (else placed by prediction)"),
                 refs=("count", "", "earlier photos it was registered to"), inliers=("count", "", "homography inliers"),
                 height=("chain units", "", "height above the ground in the first photo's heights"))
 
@@ -53,9 +53,14 @@ class VOConfig:
     work_width: int = 600  # photos are matched at this width [px]
     max_refs: int = 2  # recent photos fused per photo
     recent: int = 3  # how many of the latest photos are tried first
-    bridge_tries: int = 10  # earlier photos tried (nearest to the prediction first) when no recent one registers
+    bridge_tries: int = 100  # earlier photos tried (nearest to the prediction first) when no recent one registers
+    overlap_tries: int = 2  # older photos near the new one (an earlier leg of the survey) also registered to it
+    overlap_radius: float = 1.2  # ... within this horizontal distance in heights
+    hold_height: float = 0.3  # per photo, the height is pulled this share toward the one learned while GPS was
+    # allowed (a survey holds its altitude; 0: the chain's heights alone, which drift)
     min_segment_fixes: int = 3  # GPS photos of the current stretch the similarity needs (else all GPS photos)
     gps_match_s: float = 0.5  # a GPS fix this close in time to a photo belongs to it
+    max_predict_s: float = 10.0  # a constant-velocity prediction goes no further (a long gap: a turn, a loiter)
 
 
 @dataclass
@@ -113,6 +118,7 @@ class VONavigator(CommandDispatch):
         self.gps: list[GpsSample] = []
         self.sim: tuple[float, np.ndarray, np.ndarray] | None = None  # chain xy -> world NE
         self.ground_d = 0.0  # world down of the ground [m] (GPS down + height)
+        self.h_ref: float | None = None  # height above the ground learned while GPS was allowed [chain units]
         self.pairs_tried = 0
         self.bridged = 0
         self.notes: list[str] = []
@@ -171,7 +177,8 @@ class VONavigator(CommandDispatch):
         a, b = ph[-2], ph[-1]
         dt = b.t - a.t
         v = (b.C - a.C) / dt if dt > 0 else np.zeros(3)
-        return b.C + v * (t - b.t)
+        v[2] = 0.0  # the height is held
+        return b.C + v * min(t - b.t, self.cfg.max_predict_s)
 
     def _frame(self, m: Frame) -> None:
         from scipy.spatial.transform import Rotation
@@ -184,25 +191,38 @@ class VONavigator(CommandDispatch):
             self._fit()
             return
         found, tried = [], set()
-        for j in range(k - 1, max(-1, k - 1 - self.cfg.recent), -1):
+
+        def attempt(j: int) -> bool:
             tried.add(j)
             self.pairs_tried += 1
             pm = self.matcher.match(self.photos[j].feats, feats, self.K)
             if pm.ok and (rel := self._relative(j, pm.H)) is not None:
                 found.append((j, pm.inliers, rel))
-                if len(found) >= self.cfg.max_refs:
-                    break
-        if not found:  # bridge: the earlier photos nearest to the predicted position
-            pred = self._predict(m.t)
+                return True
+            return False
+
+        for j in range(k - 1, max(-1, k - 1 - self.cfg.recent), -1):
+            if attempt(j) and sum(self.photos[f[0]].registered for f in found) >= self.cfg.max_refs:
+                break
+        pred = self._predict(m.t)
+        if not any(self.photos[f[0]].registered for f in found):
+            # bridge: the registered earlier photos nearest to where this one is predicted
             cand = sorted((j for j in range(k) if j not in tried and self.photos[j].registered),
                           key=lambda j: np.linalg.norm(self.photos[j].C[:2] - pred[:2]))
             for j in cand[: self.cfg.bridge_tries]:
-                self.pairs_tried += 1
-                pm = self.matcher.match(self.photos[j].feats, feats, self.K)
-                if pm.ok and (rel := self._relative(j, pm.H)) is not None:
-                    found.append((j, pm.inliers, rel))
+                if attempt(j):
                     self.bridged += 1
                     break
+        reg = [f for f in found if self.photos[f[0]].registered]
+        found = reg or found  # a photo placed by prediction is a reference only when nothing else registers
+        if found and self.cfg.overlap_tries:  # an earlier leg seen again: register to it too (drift bounded there)
+            here = found[0][2][1]
+            h = -here[2]
+            cand = sorted((j for j in range(k - self.cfg.recent) if j not in tried and self.photos[j].registered
+                           and np.linalg.norm(self.photos[j].C[:2] - here[:2]) < self.cfg.overlap_radius * h),
+                          key=lambda j: np.linalg.norm(self.photos[j].C[:2] - here[:2]))
+            for j in cand[: self.cfg.overlap_tries]:
+                attempt(j)
         last = self.photos[-1]
         if found:
             w = np.array([f[1] for f in found], float)
@@ -213,6 +233,8 @@ class VONavigator(CommandDispatch):
         else:
             ph = _Photo(m.t, feats, last.R.copy(), self._predict(m.t), False, [], last.segment + 1, gps)
         self.photos.append(ph)
+        if self.sim is not None and self.cfg.hold_height > 0 and self.h_ref is not None:
+            ph.C[2] += self.cfg.hold_height * (-self.h_ref - ph.C[2])
         self.recorder("vo_photo", m.t, registered=int(ph.registered), refs=len(ph.refs),
                       inliers=int(sum(r[1] for r in ph.refs)), height=float(-ph.C[2]))
         self._fit()
@@ -237,6 +259,8 @@ class VONavigator(CommandDispatch):
                 self.sim = umeyama_2d(X, Y)
                 s = self.sim[0]
                 self.ground_d = float(np.mean([p.gps[2] - s * p.C[2] for p in use]))  # ground down = d + height
+                # the height above the ground while GPS is allowed: GPS altitude over the ground, chain units
+                self.h_ref = float(np.mean([(self.ground_d - p.gps[2]) / s for p in use]))
         for p in ph:
             if p.gps is not None:
                 p.P = p.gps
@@ -254,6 +278,24 @@ class VONavigator(CommandDispatch):
         Rcb = np.asarray(self.mount.R_cam_to_body, float) if self.mount is not None else R_CHAIN0
         return dcm_to_euler(Rz @ p.R @ Rcb.T)  # body -> world
 
+    def photo_pose(self, i: int) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """Photo ``i`` in the world: (camera -> NED rotation, NED position [m], height above the ground [m]),
+        None before the chain is tied to the world."""
+        p = self.photos[i]
+        if self.sim is None or p.P is None:
+            return None
+        s, R2 = self.sim[0], self.sim[1]
+        Rz = np.eye(3)
+        Rz[:2, :2] = R2
+        return Rz @ p.R, np.asarray(p.P, float), float(-s * p.C[2])
+
+    def chain_offset(self, a: int, b: int) -> np.ndarray | None:
+        """Horizontal NE displacement from photo a to photo b by the VO chain alone (through the similarity)."""
+        if self.sim is None:
+            return None
+        s, R2 = self.sim[0], self.sim[1]
+        return s * R2 @ (self.photos[b].C[:2] - self.photos[a].C[:2])
+
     def estimate(self, t: float) -> NavEstimate:
         placed = [p for p in self.photos if p.P is not None]
         if not placed:
@@ -266,7 +308,7 @@ class VONavigator(CommandDispatch):
         a = placed[-2] if len(placed) > 1 else None
         v = (b.P - a.P) / (b.t - a.t) if a is not None and b.t > a.t else np.zeros(3)
         src = "gps" if b.gps is not None else "vo"
-        return NavEstimate(t, b.P + v * (t - b.t), v, self._world_attitude(b), source=src)
+        return NavEstimate(t, b.P + v * min(t - b.t, self.cfg.max_predict_s), v, self._world_attitude(b), source=src)
 
     def health(self, t: float) -> Health:
         h = Health(source="vo" if self.photos and self.photos[-1].gps is None else "gps",

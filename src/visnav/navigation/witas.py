@@ -191,7 +191,7 @@ class WitasNavigator(CommandDispatch):
         self.odo_track: np.ndarray | None = None
         self.last_gps: GpsSample | None = None
         self.baro: BaroSample | None = None
-        self.frames: deque[tuple[Frame, bool]] = deque(maxlen=8)  # (frame, frozen)
+        self.frames: deque[tuple[Frame, str]] = deque(maxlen=8)  # (frame, why it is a camera gap; "": live)
         self.n_frames = 0
         self.t_vision: float | None = None
         self.h = Health(source="gps")
@@ -263,8 +263,20 @@ class WitasNavigator(CommandDispatch):
                                        "previous one: not fused)", lambda _t: 0.0)
             else:
                 self.integrity.clear("frozen")
+            # a frame stamped ahead of the IMU clock (a camera clock jump, issue #30): its stamp cannot be the
+            # instant it shows (it came before its own time), so the filter state it is matched with would be
+            # the wrong one: a camera gap too, degraded while it lasts
+            ahead = m.t - self._last_imu.t if self._last_imu is not None else 0.0
+            lim = getattr(getattr(self.cfg, "integrity", None), "frame_ahead_s", math.inf)
+            if ahead > lim:
+                self.integrity.suspect("clock", f"frame stamped {ahead:.2f} s ahead of the IMU clock (a camera clock "
+                                       "jump?): not fused", lambda _t: 0.0)
+            else:
+                self.integrity.clear("clock")
             if self.backend is not None:
-                self.frames.append((m, frozen))
+                gap = "frozen camera (frame repeated)" if frozen else (
+                    f"frame stamped {ahead:.2f} s ahead of the IMU clock" if ahead > lim else "")
+                self.frames.append((m, gap))
                 self._process_frames()
 
     def frame_prework(self):
@@ -453,14 +465,15 @@ class WitasNavigator(CommandDispatch):
     # ------------------------------------------------------------------ vision
     def _process_frames(self) -> None:
         while self.frames:
-            f, frozen = self.frames[0]
+            f, gap = self.frames[0]
             if self.hist.k == 0 or self.hist.newest_t < f.t:
                 return  # the filter has not reached the frame's instant yet
             self.frames.popleft()
-            self._vision(f, frozen)
+            self._vision(f, gap)
 
-    def _vision(self, f: Frame, frozen: bool = False) -> None:
-        """One frame; a ``frozen`` one (a repeat of the previous image) is a camera gap: no odometry and no
+    def _vision(self, f: Frame, gap: str = "") -> None:
+        """One frame; a ``gap`` one (a repeat of the previous image, a frame stamped ahead of the IMU clock: the
+        reason) is a camera gap: no odometry and no
         registration, the PMF carried on by the filter's own displacement (so that it follows the vehicle),
         the odometry restarted on the next live frame."""
         c = self.cfg
@@ -472,9 +485,10 @@ class WitasNavigator(CommandDispatch):
         cam, C_cn = self.mount.camera_pose(p, C_bn)
         height = -float(cam[2])
         self.n_frames += 1
+        frozen = bool(gap)
         if frozen:
             self.vo.restart()
-            step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, "frozen camera (frame repeated)")
+            step = OdometryStep(f.t, False, np.full(3, np.nan), 0, 0, 0, gap)
         else:
             step = self.vo.step(f.t, f.image, C_cn, height)
         if step is None:  # the tracker (re)started on this frame: no displacement measured

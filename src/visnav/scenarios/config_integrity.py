@@ -29,13 +29,15 @@ class IntegrityBlock(_M):
     probability: float = Field(0.999, gt=0, lt=1, description="containment probability of the HPL")
     alert_limit_m: float = Field(math.inf, gt=0, description="unusable when the HPL exceeds it")
     stale_s: float = Field(math.inf, gt=0, description="unusable when no update was accepted for this long")
+    short_window: int = Field(0, ge=0, le=1000, description="> 0: the HPL's inflation k^2 also from the mean NIS "
+                              "of the last this-many horizontal updates (reacts within a few fixes; 0: off)")
 
     def monitor_config(self):
         from visnav.estimation.integrity import IntegrityConfig
 
         return IntegrityConfig(window=self.window, alpha=self.alpha, max_rejected_share=self.max_rejected_share,
                                probability=self.probability, alert_limit_m=self.alert_limit_m,
-                               stale_s=self.stale_s)
+                               stale_s=self.stale_s, short_window=self.short_window)
 
 
 class GpsCheckBlock(IntegrityBlock):
@@ -93,6 +95,9 @@ class WitasIntegrityConfig(GpsCheckBlock, GyroCheckBlock):
     handover_alpha: float = Field(1e-4, gt=0, lt=0.5, description="level of the hand-over test (chi-square(2))")
     handover_updates: int = Field(3, ge=1, le=100, description="registrations in a row above the bound to latch")
     # issue #30: an accelerometer bias the ESKF takes for a tilt (navigation/integrity.TiltCheck)
+    frame_ahead_s: float = Field(0.1, gt=0, le=10, description="a frame stamped more than this ahead of the newest "
+                                 "IMU sample (a camera clock jump; the camera's latency is 0.05 s) is a camera gap: "
+                                 "not fused, degraded while it lasts (issue #30)")
     tilt_check: bool = Field(True, description="compare the ESKF's roll / pitch with the autopilot's attitude "
                              "solution; a lasting difference (an accelerometer bias taken for a tilt) -> degraded, "
                              "HPL + what it can have built, the autopilot's attitude fused from then on and the "
@@ -113,6 +118,9 @@ class PadIntegrityConfig(GyroCheckBlock):
 
     alert_limit_m: float = Field(1.0, gt=0, description="unusable when the HPL exceeds it")
     stale_s: float = Field(1.0, gt=0, description="unusable when no update was accepted for this long")
+    short_window: int = Field(5, ge=0, le=1000, description="> 0: the HPL's inflation k^2 also from the mean NIS "
+                              "of the last this-many vision fixes (a 0.3 m/s^2 accelerometer bias step moves the "
+                              "estimate 0.1 m in 0.6 s, before the 20-fix window's mean rises; issue #30)")
     attitude_check_deg: float = Field(2.0, gt=0, le=180, description="the filter's attitude more than this from "
                                       "the autopilot's (10 Hz) -> an IMU fault taken into the attitude: the autopilot's "
                                       "attitude is fused from then on (navigation/pad.py)")

@@ -78,18 +78,22 @@ class Multirotor:
         env = environment or Environment()
         rotor_height_m, wind = env.rotor_height_m, np.asarray(env.wind_ned, float)
         p, s = self.p, self.state
-        # roll and pitch: second order of natural frequency wn and damping zeta; yaw rate: first-order lag
+        # roll and pitch: second order of natural frequency wn and damping zeta toward the command (semi-implicit
+        # Euler: the rate first, then the angle with the new rate); yaw rate: first-order lag
         wn, zeta = p.attitude_omega, p.attitude_zeta
-        e, ed = s.euler, s.euler_rate.copy()
-        ed[:2] += (wn * wn * (np.array([cmd.roll, cmd.pitch]) - e[:2]) - 2.0 * zeta * wn * ed[:2]) * dt  # semi-implicit
-        ed[2] += (cmd.yaw_rate - ed[2]) * min(dt / p.yaw_rate_tau, 1.0)
-        e = e + ed * dt
+        phi, theta, psi = s.euler.tolist()
+        phi_d, theta_d, psi_d = s.euler_rate.tolist()
+        phi_d += (wn * wn * (cmd.roll - phi) - 2.0 * zeta * wn * phi_d) * dt
+        theta_d += (wn * wn * (cmd.pitch - theta) - 2.0 * zeta * wn * theta_d) * dt
+        psi_d += (cmd.yaw_rate - psi_d) * min(dt / p.yaw_rate_tau, 1.0)
+        ed = np.array([phi_d, theta_d, psi_d])
+        e = s.euler + ed * dt
         # thrust: first-order lag to throttle * max thrust in ground effect
         T_cmd = min(max(float(cmd.throttle), 0.0), 1.0) * p.max_thrust * p.ground_effect(rotor_height_m)
         thrust = s.thrust + (T_cmd - s.thrust) * min(dt / p.thrust_tau, 1.0)
         # translation: a = C_b^n [0, 0, -T/m] - c_d (v - v_wind) + g, trapezoidal position
         C = euler_to_dcm(e)
-        f_n = C @ np.array([0.0, 0.0, -thrust / p.mass]) - p.drag * (s.velocity - wind)  # specific force, NED
+        f_n = -thrust / p.mass * C[:, 2] - p.drag * (s.velocity - wind)  # specific force, NED (thrust along body -z)
         vel = s.velocity + (f_n + np.array([0.0, 0.0, G])) * dt
         pos = s.position + (s.velocity + vel) * 0.5 * dt
         self.state = MultirotorState(position=pos, velocity=vel, euler=e, euler_rate=ed, thrust=thrust,

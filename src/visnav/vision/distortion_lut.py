@@ -18,7 +18,6 @@ Both tables are interpolated linearly (eq. 3.7), with scipy's ``RegularGridInter
 
 from __future__ import annotations
 
-import bisect
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,46 +76,19 @@ class DistortionLUT:
     height: int
 
     def __post_init__(self) -> None:
-        opts = dict(bounds_error=False, fill_value=None)
-        self._ix = RegularGridInterpolator((self.gx, self.gy), self.table_x, **opts)
-        self._iy = RegularGridInterpolator((self.gx, self.gy), self.table_y, **opts)
-        self._grid = (np.asarray(self.gx, float).tolist(), np.asarray(self.gy, float).tolist())
-        # the interpolator's compiled 2-D path (the formula of _bilinear) runs on writeable float64 tables
-        self._scalar_ok = all(isinstance(t, np.ndarray) and t.ndim == 2 and t.dtype == np.float64
-                              and t.flags.writeable for t in (self.table_x, self.table_y))
-
-    def _cell(self, axis: int, x: float) -> tuple[int, float]:
-        """Cell index and normalised distance of ``x`` on grid ``axis`` (the end cells extrapolate)."""
-        g = self._grid[axis]
-        i = min(max(bisect.bisect_right(g, x) - 1, 0), len(g) - 2)
-        return i, (x - g[i]) / (g[i + 1] - g[i])
-
-    def _bilinear(self, table: np.ndarray, i0: int, y0: float, i1: int, y1: float) -> float:
-        """``RegularGridInterpolator``'s linear 2-D formula for one point (the same products and sums,
-        so the same bits: tests/vision/test_distortion_lut.py)."""
-        return (float(table[i0, i1]) * (1 - y0) * (1 - y1) + float(table[i0, i1 + 1]) * (1 - y0) * y1
-                + float(table[i0 + 1, i1]) * y0 * (1 - y1) + float(table[i0 + 1, i1 + 1]) * y0 * y1)
+        # eq. 3.7: linear interpolation of both tables at once (values (len(gx), len(gy), 2)), extrapolated
+        self._interp = RegularGridInterpolator((self.gx, self.gy), np.stack([self.table_x, self.table_y], axis=-1),
+                                               bounds_error=False, fill_value=None)
 
     def correct(self, Xm, Ym):
         """Corrected image coordinates (X_tgt, Y_tgt) of measured (X_tgtm, Y_tgtm) [px]."""
         Xm, Ym = np.asarray(Xm, float), np.asarray(Ym, float)
         nx, ny = Xm / (self.width / 2.0), Ym / (self.height / 2.0)
-        if self._scalar_ok and nx.shape == (1,) and ny.shape == (1,) and np.isfinite(nx[0]) and np.isfinite(ny[0]):
-            # one point (the per-frame call): the interpolation in scalar arithmetic, without the
-            # interpolator's per-call set-up
-            a, b = float(nx[0]), float(ny[0])
-            if self.kind == "factor":
-                a, b = abs(a), abs(b)
-            i0, y0 = self._cell(0, a)
-            i1, y1 = self._cell(1, b)
-            cx = np.array([self._bilinear(self.table_x, i0, y0, i1, y1)])
-            cy = np.array([self._bilinear(self.table_y, i0, y0, i1, y1)])
-            return (Xm * cx, Ym * cy) if self.kind == "factor" else (Xm + cx, Ym + cy)
-        if self.kind == "factor":
-            q = np.stack(np.broadcast_arrays(np.abs(nx), np.abs(ny)), axis=-1)
-            return Xm * self._ix(q), Ym * self._iy(q)  # eq. 3.7, 3.8
-        q = np.stack(np.broadcast_arrays(nx, ny), axis=-1)
-        return Xm + self._ix(q), Ym + self._iy(q)
+        if self.kind == "factor":  # eq. 3.7-3.8: the quadrant's table at (|X_m|, |Y_m|), a factor
+            c = self._interp(np.stack(np.broadcast_arrays(np.abs(nx), np.abs(ny)), axis=-1))
+            return Xm * c[..., 0], Ym * c[..., 1]
+        c = self._interp(np.stack(np.broadcast_arrays(nx, ny), axis=-1))
+        return Xm + c[..., 0], Ym + c[..., 1]
 
 
 def _to_grid(px, py, values, gx, gy) -> list[np.ndarray]:

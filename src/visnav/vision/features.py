@@ -58,9 +58,9 @@ def similarity_of(H: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, float, floa
 class FeatureMatcher:
     """Detect, describe and match features; ``match(a, b)`` registers image b into image a."""
 
-    def __init__(self, method: str = "sift", work_width: int = 600, n_features: int = 3000, ratio: float = 0.8,
+    def __init__(self, method: str = "sift", work_width: int = 600, n_features: int = 2500, ratio: float = 0.8,
                  ransac_px: float = 3.0, min_inliers: int = 25, min_inlier_share: float = 0.15,
-                 scale_range: tuple[float, float] = (0.6, 1.6), max_perspective: float = 0.3, clahe: float = 3.0,
+                 scale_range: tuple[float, float] = (0.6, 1.6), max_perspective: float = 0.6, clahe: float = 3.0,
                  contrast_threshold: float = 0.02) -> None:
         import cv2
 
@@ -73,15 +73,18 @@ class FeatureMatcher:
         elif method == "orb":
             self._det = cv2.ORB_create(nfeatures=n_features)
             self._norm = cv2.NORM_HAMMING
-        elif method == "akaze":
+        elif method == "akaze" and hasattr(cv2, "AKAZE_create"):  # not in every OpenCV build (5.x: contrib)
             self._det = cv2.AKAZE_create()
             self._norm = cv2.NORM_HAMMING
         else:
-            raise ValueError(f"feature method {method!r}: sift, orb or akaze")
+            raise ValueError(f"feature method {method!r}: sift, orb or akaze (where this OpenCV has it)")
         self.method, self.work_width, self.ratio = method, int(work_width), float(ratio)
         self.ransac_px, self.min_inliers, self.min_inlier_share = float(ransac_px), int(min_inliers), min_inlier_share
         self.scale_range, self.max_perspective = scale_range, float(max_perspective)
-        self._matcher = cv2.BFMatcher(self._norm)
+        # SIFT: approximate nearest neighbours (FLANN k-d trees); binary descriptors: brute force, Hamming
+        flann = self._norm == cv2.NORM_L2
+        self._matcher = cv2.FlannBasedMatcher({"algorithm": 1, "trees": 4}, {"checks": 64}) if flann \
+            else cv2.BFMatcher(self._norm)
 
     def detect(self, image: np.ndarray) -> Features:
         import cv2

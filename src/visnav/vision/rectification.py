@@ -70,11 +70,9 @@ def altimeter_correction(h_bar, t_outside_c, c0: float = 0.004, c1: float = 0.00
     """Temperature-corrected barometric height AGL, seed 004 eq. 2.1:
     ``h = h_bar (1 - (c0 + (15 - t_O) c1) h_bar)`` with the printed c0 = 0.004, c1 = 0.00005 (which
     would take 40 % off at 100 m; the simulation's altimeter uses a tenth of both, docs/condor.md)."""
-    if type(h_bar) is float and type(t_outside_c) in (float, int):  # one number (the navigators' baro): floats
-        return h_bar * (1.0 - (c0 + (15.0 - float(t_outside_c)) * c1) * h_bar)
-    h_bar = np.asarray(h_bar, float)
-    out = h_bar * (1.0 - (c0 + (15.0 - np.asarray(t_outside_c, float)) * c1) * h_bar)
-    return out if out.ndim else float(out)
+    h_bar, t_o = np.asarray(h_bar, float), np.asarray(t_outside_c, float)
+    h = h_bar * (1.0 - (c0 + (15.0 - t_o) * c1) * h_bar)  # eq. 2.1
+    return h if h.ndim else float(h)
 
 
 def roll_correct(X, Y, roll, method: str = "exact"):
@@ -177,38 +175,7 @@ def estimate_range(X: float, Y: float, h: float, tilt: float, roll: float, geom:
         return RangeEstimate(False, reason=f"no estimate: target ({X:.0f}, {Y:.0f}) px outside the image")
     if method not in ("exact", "thesis"):
         raise ValueError(f"method must be 'exact' or 'thesis', got {method!r}")
-    D_T, L_T, D_X, D_Y = _ground_range_1(float(X), float(Y), float(h), float(tilt), float(roll), geom, method)
+    D_T, L_T, D_X, D_Y = ground_range(float(X), float(Y), float(h), float(tilt), float(roll), geom, method)
     if not (math.isfinite(D_T) and math.isfinite(L_T)):
         return RangeEstimate(False, reason="no estimate: target ray at or above the horizon")
-    return RangeEstimate(True, D_T, L_T, float(np.arctan2(D_X, D_Y)))
-
-
-def _ground_range_1(X: float, Y: float, h: float, tilt: float, roll: float, geom: CameraGeometry,
-                    method: str) -> tuple[float, float, float, float]:
-    """``ground_range`` of one pixel with ``h`` > 0: the same operations in the same order, the arithmetic
-    in floats and the trigonometry through the same numpy functions (numpy's sin / cos / tan / arctan2
-    may differ from ``math``'s in the last bit; ``**`` is the same ``pow``); NaN where ``ground_range``
-    gives NaN (tests/vision/test_rectification.py: bit for bit against it)."""
-    c, s = float(np.cos(roll)), float(np.sin(roll))
-    if method == "exact":  # roll_correct
-        Xr, Yr = c * X + s * Y, -s * X + c * Y
-    else:
-        Xr, Yr = (c - s) * X, (s + c) * Y
-    # tilt_rectification
-    eta = np.pi / 2 + tilt
-    tan_y = 2.0 * Yr * math.tan(geom.half_vfov) / geom.height
-    ni = h * float(np.tan(eta / 2.0))
-    r = ni + h * tan_y
-    se = float(np.sin(eta))
-    den = h - r * se
-    if den > 0 and eta >= 0 and eta < np.pi / 2 and h > 0:
-        D_Y = ni + r + r * r * se / den
-    else:
-        D_Y = math.nan
-    L_Y = math.sqrt(D_Y * D_Y + h * h)
-    if method == "exact":  # pan_offset
-        D_X = L_Y * (Xr / geom.fx) / math.sqrt(1.0 + (Yr / geom.fy) ** 2)
-    else:
-        D_X = L_Y * float(np.tan(2.0 * geom.half_hfov * Xr / geom.width))
-    D_T = math.sqrt(D_X * D_X + D_Y * D_Y)
-    return D_T, math.sqrt(D_T * D_T + h * h), D_X, D_Y
+    return RangeEstimate(True, float(D_T), float(L_T), float(vision_bearing(D_X, D_Y)[0]))

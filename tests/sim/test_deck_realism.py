@@ -1,0 +1,95 @@
+"""Issue 30 item 3: the deck's simulated calibration and IMU errors against their configured statistics."""
+
+import numpy as np
+import pytest
+
+from visnav.navigation.deck import DeckNavConfig
+from visnav.scenarios.config_deck import IDEAL_DECK_SENSORS
+from visnav.scenarios.schema import load_scenario
+from visnav.sensors.imu import AccelGyro
+from visnav.app.deck_parts import TrueCalibration
+
+
+def _draws(n, *sets):
+    return [TrueCalibration.draw(load_scenario("deck-static", list(sets), seed=s)) for s in range(1, n + 1)]
+
+
+def test_ideal_sets_give_the_nominal_calibration():
+    sc = load_scenario("deck-static", list(IDEAL_DECK_SENSORS), seed=4)
+    t = TrueCalibration.draw(sc)
+    c = sc.sensors.camera
+    np.testing.assert_array_equal(t.lights, np.asarray(sc.mission.deck.lights_m))
+    np.testing.assert_array_equal(t.T_cam, c.rotation())
+    assert t.camera == c.pinhole()
+    assert not t.accel_bias.any() and not t.gyro_bias.any()
+    cfg = DeckNavConfig.from_mission(sc, 1 / 30)
+    assert cfg.calibration_bearing_sigma == 0.0 and cfg.light_survey_sigma == 0.0
+
+
+def test_default_errors_have_their_configured_spread():
+    """Over 150 seeds: survey offsets of 1 cm per axis, a misalignment of 1 deg per axis, focal length 1 %, principal
+    point 4 px, accelerometer bias 0.05 m/s^2 and gyro bias 0.1 deg/s (sample sigmas within 15 %)."""
+    sc = load_scenario("deck-static", seed=1)
+    lights0, T0, cam0 = np.asarray(sc.mission.deck.lights_m), sc.sensors.camera.rotation(), sc.sensors.camera.pinhole()
+    ts = _draws(150)
+    survey = np.concatenate([t.lights - lights0 for t in ts]).ravel()
+    # the misalignment: the rotation vector of T_true T0^T
+    from scipy.spatial.transform import Rotation
+
+    mis = np.degrees(np.concatenate([Rotation.from_matrix(t.T_cam @ T0.T).as_rotvec() for t in ts]))
+    focal = np.array([t.camera.fx / cam0.fx - 1.0 for t in ts])
+    pp = np.concatenate([[t.camera.cx - cam0.cx, t.camera.cy - cam0.cy] for t in ts])
+    acc = np.concatenate([t.accel_bias for t in ts])
+    gyro = np.degrees(np.concatenate([t.gyro_bias for t in ts]))
+    for x, sigma in ((survey, 0.01), (mis, 1.0), (focal, 0.01), (pp, 4.0), (acc, 0.05), (gyro, 0.1)):
+        assert np.std(x) == pytest.approx(sigma, rel=0.15)
+        assert abs(np.mean(x)) < 4 * sigma / np.sqrt(x.size)
+    assert all(t.camera.fx == pytest.approx(t.camera.fy, rel=1e-12) for t in ts)  # one focal factor
+
+
+def test_one_error_off_leaves_the_others_draws():
+    a = TrueCalibration.draw(load_scenario("deck-static", seed=7))
+    b = TrueCalibration.draw(load_scenario("deck-static", ["sensors.camera.misalignment_deg=0"], seed=7))
+    np.testing.assert_array_equal(a.lights, b.lights)
+    np.testing.assert_array_equal(a.accel_bias, b.accel_bias)
+    assert a.camera == b.camera and not np.array_equal(a.T_cam, b.T_cam)
+
+
+class _Truth:
+    def __init__(self):
+        self.specific_force, self.body_rates = np.array([0.0, 0.0, -9.81]), np.zeros(3)
+
+    def __call__(self, t):
+        return self
+
+
+def test_imu_bias_random_walk_grows_as_sigma_sqrt_t():
+    """b(t) = b0 + a Wiener process of sigma_w per sqrt(s): over 300 IMUs, the bias after 2 s has the spread
+    sigma_w sqrt(2 s) about b0 and the mean reading is truth + bias."""
+    walk_a, walk_g, rate = 0.002, 1e-4, 100.0
+    ends = []
+    for k in range(300):
+        imu = AccelGyro(np.random.default_rng(k), 0.0, 0.0, rate_hz=rate, accel_bias=(0.1, 0.0, 0.0),
+                        gyro_bias=(0.0, 0.01, 0.0), accel_bias_walk=walk_a, gyro_bias_walk=walk_g,
+                        bias_rng=np.random.default_rng(1000 + k))
+        first = imu.sample(0.0, _Truth())
+        np.testing.assert_allclose(first.accel, [0.1, 0.0, -9.81])  # no noise: the reading is truth + b0
+        for i in range(1, 201):
+            imu.sample(i / rate, _Truth())
+        ends.append(np.r_[imu.accel_bias, imu.gyro_bias])
+    ends = np.array(ends)
+    np.testing.assert_allclose(ends.mean(axis=0), [0.1, 0, 0, 0, 0.01, 0], atol=4 * walk_a * np.sqrt(2.01) / np.sqrt(300))
+    np.testing.assert_allclose(ends[:, :3].std(axis=0), walk_a * np.sqrt(2.01), rtol=0.15)
+    np.testing.assert_allclose(ends[:, 3:].std(axis=0), walk_g * np.sqrt(2.01), rtol=0.15)
+
+
+def test_filter_calibration_sigma_is_the_specified_errors():
+    sc = load_scenario("deck-moving")
+    c = sc.sensors.camera
+    cfg = DeckNavConfig.from_mission(sc, 1 / 30)
+    want = np.sqrt(np.radians(c.misalignment_deg) ** 2 + (c.principal_point_error_px / c.focal_px) ** 2
+                   + (0.3 * c.focal_error_frac) ** 2)
+    assert cfg.calibration_bearing_sigma == pytest.approx(want, rel=1e-12)
+    assert cfg.light_survey_sigma == sc.mission.deck.light_survey_error_m
+    off = DeckNavConfig.from_mission(load_scenario("deck-moving", ["navigation.calibration_bearing_deg=0.5"]), 1 / 30)
+    assert off.calibration_bearing_sigma == pytest.approx(np.radians(0.5))
