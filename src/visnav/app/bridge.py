@@ -58,6 +58,8 @@ from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_messages import mavlink
 from visnav.log_schema import register_stream
 from visnav.measurements import Frame, NavCommand, NavEstimate
+from visnav.app.record import RecordingNavigator
+from visnav.io.recording_writer import RecordingWriter
 
 register_stream(
     "bridge_estimate", position=("m", "NED about the bridge's origin", "the estimate sent (float64, before encoding)"),
@@ -569,9 +571,6 @@ class BridgeRecording:
     stamps already include the camera.yaml offset), ``scenario.toml`` its resolved scenario."""
 
     def __init__(self, navigator, out_dir: str | Path, sc, camera, mount):
-        from visnav.io.recording_writer import RecordingWriter
-        from visnav.app.record import RecordingNavigator
-
         self.sc, self.camera, self.mount = sc, camera, mount
         self._images: queue.Queue = queue.Queue()
         self._th = threading.Thread(target=self._write_images, daemon=True, name="recording-frames")

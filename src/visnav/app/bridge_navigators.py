@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from visnav.app.navigators import NAVIGATORS, make_navigator, navigator_for
 
 
 @dataclass
@@ -31,7 +32,6 @@ class BuiltNavigator:
 def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None,
                     recorder=None) -> BuiltNavigator:
     """Raises ScenarioError / FileNotFoundError / ValueError with a one-line message on bad input."""
-    from visnav.app.navigators import NAVIGATORS
     from visnav.scenarios.schema import load_scenario
 
     scenario = NAVIGATORS[name].scenario if name in NAVIGATORS else name
@@ -45,8 +45,6 @@ def build_navigator(name: str, map_path: str | None = None, overrides: list[str]
 
 def navigator_from_scenario(sc, recorder=None) -> BuiltNavigator:
     """The registered navigator a validated Scenario's mission flies with (and the camera rate it consumes)."""
-    from visnav.app.navigators import NAVIGATORS, make_navigator, navigator_for
-
     name = navigator_for(getattr(sc.mission, "type", "palace"))
     return BuiltNavigator(make_navigator(name, sc, recorder), float(NAVIGATORS[name].camera_hz(sc)), sc.run.name, sc,
                           name)

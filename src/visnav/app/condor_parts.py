@@ -35,6 +35,8 @@ from visnav.app.rmax_parts import WindEnvironment
 from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
 from visnav.vehicles.fixedwing import FixedWingParams, trim
 from visnav.vision.condor_pipeline import VisionRange
+from visnav.analysis.condor_metrics import condor_metrics
+from visnav.analysis.integrity_metrics import integrity_metrics
 
 
 class CondorWorld(AircraftAir):
@@ -130,9 +132,6 @@ def floor(vehicle, min_agl_m: float):
 
 
 def build(ctx) -> MissionParts:
-    from visnav.analysis.condor_metrics import condor_metrics
-    from visnav.analysis.integrity_metrics import integrity_metrics
-
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
     rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(14)]

@@ -38,6 +38,8 @@ from visnav.vehicles.base import Environment
 from visnav.vehicles.multirotor import Multirotor, MultirotorParams
 from visnav.world.wind import SteadyWind, Wind
 from visnav.world.deck import DeckMotion, DeckWorld
+from visnav.analysis.deck_metrics import deck_metrics
+from visnav.analysis.integrity_metrics import integrity_metrics
 
 #: the mission and controller rate [Hz]
 CONTROL_HZ = 50.0
@@ -160,9 +162,6 @@ class DeckContact:
 
 
 def build(ctx) -> MissionParts:
-    from visnav.analysis.deck_metrics import deck_metrics
-    from visnav.analysis.integrity_metrics import integrity_metrics
-
     sc, record = ctx.scenario, ctx.record
     wrap = ctx.navigator_wrapper or (lambda nav: nav)
     cfg = sc.mission

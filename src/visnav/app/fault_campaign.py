@@ -23,6 +23,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from visnav.app.montecarlo import Campaign
 
 FAULT_COLUMNS = ("fault", "runs", "detected_share", "detection_delay_s", "false_alarms", "safe", "unsafe",
                  "worst_error_while_ok_m")
@@ -135,8 +136,6 @@ def faults_for(scenario: str, overrides: list[str], names: list[str]) -> list[di
 def campaigns(scenario: str, n: int, out: Path, faults: list[dict], overrides: list[str], workers: int,
               first_seed: int = 1):
     """(name, Campaign) for the fault-free case and each fault."""
-    from visnav.app.montecarlo import Campaign
-
     seeds = list(range(first_seed, first_seed + n))
     out = Path(out)
     yield "none", Campaign(scenario, seeds, out / "none", list(overrides), {}, workers)

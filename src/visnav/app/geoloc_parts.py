@@ -40,6 +40,7 @@ from visnav.world.maps import GeoImage, degrade_reference
 from visnav.world.rural import mission_map
 from visnav.world.scene import World
 from visnav.world.targets import paste_truck
+from visnav.analysis.geolocation_metrics import geolocation_metrics
 
 
 def map_centre(geo: GeoImage) -> np.ndarray:
@@ -222,8 +223,6 @@ class GeolocLogger:
 
 
 def build(ctx) -> MissionParts:
-    from visnav.analysis.geolocation_metrics import geolocation_metrics
-
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
     dt = sc.run.dt_s

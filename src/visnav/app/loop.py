@@ -37,6 +37,8 @@ from visnav.sim.parts import Step, VehicleTruth
 from visnav.app.rmax_parts import fill_rmax_defaults
 from visnav.sim.streams import RMAX_STREAMS
 from visnav.vehicles.base import Environment
+from visnav.analysis.outcome import apply_outcome
+from visnav.io.tum import trajectory_rmse, tum_frame
 
 
 #: the interpreter's switch interval while frames render on the worker thread [s] (``Simulation._fly``): the
@@ -55,13 +57,10 @@ class RunResult:
     interrupted: bool = False  # Ctrl-C stopped the loop; the log and metrics are what it had
 
     def __post_init__(self) -> None:
-        from visnav.io.tum import trajectory_rmse, tum_frame
-
         if "ate_rmse_m" not in self.metrics and tum_frame(self.scenario) is not None:
             ate = trajectory_rmse(self.log)  # = evo_ape on the run's truth.tum / estimate.tum
             if ate is not None:
                 self.metrics["ate_rmse_m"] = ate
-        from visnav.analysis.outcome import apply_outcome
 
         apply_outcome(self.metrics, self.log, self.scenario, self.interrupted)  # issue #30: one word for the run
 

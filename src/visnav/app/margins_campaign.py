@@ -15,6 +15,7 @@ import numpy as np
 
 from visnav.analysis.delay_id import CombinedDelay, combine_delays, identify_imu_delay, identify_laser_delays
 from visnav.analysis.frequency import AXIS_INDEX, broken_loop_response, margins_from_frd
+from visnav.app.loop import Simulation
 
 
 @dataclass(frozen=True)
@@ -64,7 +65,6 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
     ``laser_delay_s`` are the simulated (unknown) sensor delays; ``attitude_delay_s`` and
     ``laser_compensation_s`` the navigator's compensation (``navigation.mpe.*``)."""
     from visnav.scenarios.schema import load_scenario
-    from visnav.app.loop import Simulation
 
     if axis not in AXIS_INDEX:
         raise ValueError(f"axis must be one of {sorted(AXIS_INDEX)}, got {axis!r}")

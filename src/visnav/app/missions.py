@@ -20,6 +20,9 @@ from typing import Callable
 import numpy as np
 
 from visnav.sim.parts import MissionParts  # noqa: F401  (re-exported)
+from visnav.analysis.metrics import palace_metrics, hover_metrics
+from visnav.analysis.path_metrics import pfcm_metrics
+from visnav.app.navigators import rmax_camera, make_navigator
 
 Builder = Callable[["BuildContext"], "MissionParts"]
 REGISTRY: dict[str, Builder] = {}
@@ -84,8 +87,6 @@ class BuildContext:
 
     def camera_geometry(self):
         """(PinholeCamera, FixedMount) of ``[sensors.camera]``."""
-        from visnav.app.navigators import rmax_camera
-
         return rmax_camera(self.scenario)
 
     def rmax_sensors(self, camera: bool = True) -> dict:
@@ -113,8 +114,6 @@ class BuildContext:
     def navigator(self, name: str, **parts):
         """The registered navigator ``name`` (``app/navigators.py``) configured by the scenario (wrapped by
         ``navigator_wrapper`` when given)."""
-        from visnav.app.navigators import make_navigator
-
         nav = make_navigator(name, self.scenario, self.record, **parts)
         return nav if self.navigator_wrapper is None else self.navigator_wrapper(nav)
 
@@ -136,7 +135,6 @@ def build(ctx: BuildContext) -> MissionParts:
 
 @register("palace")
 def _palace(ctx: BuildContext) -> MissionParts:
-    from visnav.analysis.metrics import palace_metrics
     from visnav.control.rmax import RmaxPositionController
     from visnav.mission.palace import PalaceMission
 
@@ -153,7 +151,6 @@ def _palace(ctx: BuildContext) -> MissionParts:
 
 @register("hover")
 def _hover(ctx: BuildContext) -> MissionParts:
-    from visnav.analysis.metrics import hover_metrics
     from visnav.control.rmax import RmaxPositionController
     from visnav.mission.hover import HoverMission
 
@@ -169,7 +166,6 @@ def _hover(ctx: BuildContext) -> MissionParts:
 
 @register("pfcm")
 def _pfcm(ctx: BuildContext) -> MissionParts:
-    from visnav.analysis.path_metrics import pfcm_metrics
     from visnav.control.rmax_path import PathFollowingController
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
 

@@ -27,6 +27,9 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from visnav.analysis.campaign_report import _as_number, write_campaign_report
+from visnav.app.missions import make_simulation
+from visnav.app.runs import OutputDirError, prepare_out_dir
+from visnav.io.provenance import provenance
 
 TIMING_KEYS = ("wall_time_s", "real_time_factor")
 ID_KEYS = ("seed", "status", "error")
@@ -76,7 +79,6 @@ def run_job(job: Job) -> dict:
 
     cv2.setNumThreads(1)  # one run per core
     from visnav.scenarios.schema import load_scenario
-    from visnav.app.missions import make_simulation
 
     row: dict = {"seed": job.seed, **{k: v for k, v in job.grid}}
     try:
@@ -289,8 +291,6 @@ class Campaign:
         """Check the campaign and its directory, write campaign.json; returns (runs done, runs to do).
         A directory holding another configuration's campaign (or anything else) is refused, or with
         ``new`` the campaign moves to the first free ``<out>-2``, ``<out>-3``, ... (``self.moved_from``)."""
-        from visnav.app.runs import OutputDirError, prepare_out_dir
-
         validate_campaign(self.scenario, self.overrides, self.grid)
         ident = self.identity()
         self.moved_from = None
@@ -364,7 +364,6 @@ class Campaign:
         summary = summarize(rows, list(self.grid), published)
         if published:
             summary["published_source"] = source
-        from visnav.io.provenance import provenance
 
         prov = provenance()
         prov["scenario"] = str(self.scenario)

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from visnav.sim.clock import rate_divisor
 
 
 @dataclass(frozen=True)
@@ -99,8 +100,6 @@ def _deck_camera(sc):
 
 def _deck_frame_interval(sc) -> float:
     """The interval between the frames the deck loop delivers (a whole number of dynamics steps)."""
-    from visnav.sim.clock import rate_divisor
-
     return rate_divisor(sc.sensors.camera.rate_hz, sc.run.dt_s) * sc.run.dt_s
 
 

@@ -11,9 +11,10 @@ import math
 import numpy as np
 
 from visnav.mission.pad import PadLandingMission
+from visnav.analysis.pad_report import pad_metrics
+from visnav.sim.parts import MissionParts
 
 def build(ctx):
-    from visnav.analysis.pad_report import pad_metrics
     from visnav.control.rmax import RmaxPositionController
     from visnav.geometry.camera import PinholeCamera
     from visnav.geometry.pad import PadLayout
@@ -21,7 +22,6 @@ def build(ctx):
     from visnav.sensors.pad_camera import PadCamera
     from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
     from visnav.sensors.split_imu import SplitRateImu
-    from visnav.sim.parts import MissionParts
     from visnav.world.pad import pad_board
 
     sc, record = ctx.scenario, ctx.record

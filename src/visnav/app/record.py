@@ -19,6 +19,10 @@ import numpy as np
 from visnav.io.recording import RecordingError
 from visnav.io.recording_writer import RecordingWriter
 from visnav.scenarios.schema import Scenario, to_toml
+from visnav.app.missions import RMAX_MISSIONS, make_simulation
+from visnav.app.navigators import NAVIGATORS, navigator_for
+from visnav.app.runs import OutputDirError, prepare_out_dir
+from visnav.io.recording import COMMANDS, STREAMS, TRUTH
 
 #: what a mission may ask a navigator (logged with arguments and replayed); everything else passes through
 REQUESTS = frozenset({"request_tracking", "request_tracking_rebase", "set_source", "stop_tracking", "command",
@@ -105,11 +109,6 @@ def record(scenario: Scenario, out_dir: str | Path, progress=None, force: bool =
     ``app/loop.Simulation`` with the mission's parts) and write the recording to ``out_dir`` (refused when it holds files,
     unless ``force``: then the recording's own files are removed first); returns the closed-loop result beside
     the folder. Ctrl-C stops the flight and the recording keeps what it had (``result.run.interrupted``)."""
-    from visnav.app.navigators import NAVIGATORS, navigator_for
-    from visnav.io.recording import COMMANDS, STREAMS, TRUTH
-    from visnav.app.runs import OutputDirError, prepare_out_dir
-    from visnav.app.missions import RMAX_MISSIONS, make_simulation
-
     kind = scenario.mission.type
     if kind not in RMAX_MISSIONS:
         name = next((n for n, s in NAVIGATORS.items() if kind in s.mission_types), None)

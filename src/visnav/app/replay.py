@@ -18,6 +18,11 @@ import numpy as np
 from visnav.io.recording import STREAM_NAMES, STREAMS, Recording, RecordingError
 from visnav.measurements import NavCommand, NavInit
 from visnav.sim.log import FlightLog, register_stream
+from visnav.analysis.check import camera_imu
+from visnav.analysis.trajectory_eval import Trajectory, TrajectoryError, evaluate
+from visnav.analysis.trajectory_export import write_tum_file
+from visnav.app.navigators import make_navigator, spec, NAVIGATORS, stream_table
+from visnav.app.runs import _jsonable
 
 register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv): the "
                                              "NavCommand name, initialize, or an older recording's method"),
@@ -60,8 +65,6 @@ def scenario_of(rec: Recording, default: str, overrides=()):
 # ------------------------------------------------------------------------------------ navigators
 def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
     """The registered navigator ``name`` (``app/navigators.py``) with the recording's camera and scenario."""
-    from visnav.app.navigators import make_navigator, spec
-
     s = spec(name)
     sc = scenario_of(rec, s.scenario, opts.scenario_overrides)
     kind = getattr(sc.mission, "type", "")
@@ -96,8 +99,6 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
 def offset_from_recording(rec: Recording, max_offset_s: float = 0.25):
     """Camera-to-IMU clock offset of a recording (``estimation/timesync.py``: frame rotations from feature
     tracks against the gyro, the camera-to-IMU rotation fitted with it); a ``CameraImuCalibration``."""
-    from visnav.analysis.check import camera_imu
-
     rec.require(("imu", "frames"), "time-offset estimation (--time-offset auto)")
     cal, why = camera_imu(rec, max_offset_s=max_offset_s)
     if cal is None:
@@ -135,8 +136,6 @@ def _events(rec: Recording, out_rate: float):
 def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, progress=None) -> ReplayResult:
     """Run ``navigator`` on ``rec``; an error inside the replay stops it and keeps what it has
     (``metrics["error"]``)."""
-    from visnav.app.navigators import NAVIGATORS
-
     opts = opts or ReplayOptions()
     if navigator not in NAVIGATORS:
         raise RecordingError(f"unknown navigator {navigator!r}; replay knows {', '.join(sorted(NAVIGATORS))}")
@@ -154,7 +153,6 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     elif opts.time_offset is not None:
         rec.time_offset_s = float(opts.time_offset)
         metrics["time_offset_s"] = rec.time_offset_s
-    from visnav.app.navigators import stream_table
 
     log = FlightLog(schema=stream_table(nspec))  # the loop's units and frames (deck: the relative state)
     nav, sc = _navigator(navigator, rec, opts, log.record)
@@ -202,8 +200,6 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
 
 def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict, str | None]:
     """The replay loop: samples to ``update``, recorded requests to their methods, estimates to the log."""
-    from visnav.app.navigators import NAVIGATORS
-
     kinds, a, b, times = events
     c = rec.commands
     counts = {"frames": 0, "imu": 0, "gps_withheld": 0, "fixes": 0, "fixes_delivered": 0, "fixes_missing": 0}
@@ -348,8 +344,6 @@ def trajectories(log: FlightLog, frame: str = "NED world, body FRD"):
     """(valid estimates, truth) as ``Trajectory`` (truth None when the recording has none)."""
     from scipy.spatial.transform import Rotation
 
-    from visnav.analysis.trajectory_eval import Trajectory
-
     def traj(s, name, mask=None):
         e = np.asarray(s["euler"], float).reshape(-1, 3)
         p = np.asarray(s["position"], float).reshape(-1, 3)
@@ -368,8 +362,6 @@ def trajectories(log: FlightLog, frame: str = "NED world, body FRD"):
 
 
 def _accuracy(log: FlightLog, has_truth: bool) -> dict:
-    from visnav.analysis.trajectory_eval import TrajectoryError, evaluate
-
     est, ref = trajectories(log)
     if not has_truth or est is None or ref is None or len(est) == 0:
         return {}
@@ -404,8 +396,6 @@ def denied_metrics(log: FlightLog, t_cut: float) -> dict:
 def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title: str = "visnav replay") -> Path:
     """log.h5, scenario.toml, estimate.tum (valid estimates only; the header names the frame), truth.tum,
     metrics.json, report.html."""
-    from visnav.app.runs import _jsonable
-    from visnav.analysis.trajectory_export import write_tum_file
     from visnav.scenarios.schema import to_toml
 
     result.log.to_hdf5(out_dir / "log.h5", attrs={"replay": 1})

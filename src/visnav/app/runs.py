@@ -11,6 +11,9 @@ import numpy as np
 
 from visnav.io.tum import tum_frame, write_run_tum
 from visnav.scenarios.schema import to_toml
+from visnav.analysis.outcome import apply_outcome
+from visnav.io.provenance import provenance
+from visnav.io.recording import COMMANDS, STREAMS, TRUTH
 
 # every file a run writes (``--force`` removes them first so that none is left from an earlier run)
 RUN_FILES = ("scenario.toml", "metrics.json", "log.h5", "truth.tum", "estimate.tum", "report.html")
@@ -48,7 +51,6 @@ def folder_kind(d: str | Path) -> str:
         return "a bridge log folder (bridge.tlog)"
     if "margins.csv" in names:
         return "a margins folder (margins.csv)"
-    from visnav.io.recording import COMMANDS, STREAMS, TRUTH
 
     rec = [n for n in names if n in {s.file for s in STREAMS.values()} | {TRUTH.file, COMMANDS.file, "camera.yaml"}]
     if rec:
@@ -122,12 +124,9 @@ def _jsonable(x):
 def write_run(result, out_dir: Path, report: bool = True) -> Path:
     """Write everything a run produced; each piece is written even if a later one fails. An
     interrupted run (Ctrl-C) is written as far as it got, ``"interrupted": true`` in metrics.json."""
-    from visnav.io.provenance import provenance
-
     sc, log = result.scenario, result.log
     prov = provenance(sc)
     (out_dir / "scenario.toml").write_text(to_toml(sc))
-    from visnav.analysis.outcome import apply_outcome
 
     metrics = dict(result.metrics)
     if getattr(result, "interrupted", False):

@@ -58,6 +58,10 @@ from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import (AttitudeSample, BaroSample, Frame, GpsSample, Health, ImuSample, NavEstimate,
                                  RangeSample)
 from visnav.navigation.base import propagate
+from visnav.analysis.integrity_metrics import integrity_metrics
+from visnav.app.missions import make_simulation
+from visnav.app.navigators import navigator_for
+from visnav.sim.log import FlightLog
 
 P0_HPA = 1013.25  # pressure at the NED origin's height
 ORIGIN = (58.395, 15.575, 0.0)  # the simulation's NED origin as the autopilot reports it
@@ -366,9 +370,6 @@ class SilLink:
 
 def sil_simulation(sc):
     """The scenario's simulation with ``SilLink`` in its navigator slot (``sim.sil_link``)."""
-    from visnav.app.navigators import navigator_for
-    from visnav.app.missions import make_simulation
-
     kind = getattr(sc.mission, "type", "palace")
     try:
         name = navigator_for(kind)
@@ -413,8 +414,6 @@ def _wait_ready(link: SilLink, proc, timeout_s: float, log: Path) -> None:
 
 def _merge_navigator_streams(sim, path: Path, wall0: float) -> int:
     """The bridge navigator's own streams (monotonic clock) into the flying log (simulation time)."""
-    from visnav.sim.log import FlightLog
-
     nav = FlightLog.from_hdf5(path)
     n = 0
     for name in nav.streams():
@@ -434,7 +433,6 @@ def run_sil(sc, progress=None, notify=None, sim=None, out_dir: str | Path | None
     (default: a temporary folder)."""
     import tempfile
 
-    from visnav.analysis.integrity_metrics import integrity_metrics
     from visnav.scenarios.schema import to_toml
 
     sim = sim if sim is not None else sil_simulation(sc)

@@ -17,6 +17,7 @@ from visnav.app.bridge_navigators import build_navigator
 from visnav.io.camera_source import CallableSource
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
+from visnav.app.missions import make_simulation
 
 CASES = {  # navigator -> SIL circle (radius m, speed m/s, height m) inside the scenario's world
     "witas": (80.0, 8.0, 60.0),
@@ -36,8 +37,6 @@ def _free_port() -> int:
 
 def fly(name: str, seconds: float, gps_s: float = 4.0, output: str = "odometry") -> dict:
     """Fly ``name`` (witas / palace / a scenario in CASES) for ``seconds`` of wall time; the figures."""
-    from visnav.app.missions import make_simulation
-
     built = build_navigator(name)
     sim = make_simulation(built.sc)  # its world and camera renderer serve the SIL camera
     port = _free_port()

@@ -12,6 +12,9 @@ from visnav.guidance.hermite import HermitePath
 from visnav.log_schema import register_stream
 from visnav.mission.witas import loop_waypoints
 from visnav.world.witas_map import make_ground, mission_rngs, reference_map  # noqa: F401  (re-exported)
+from visnav.analysis.witas_metrics import witas_metrics
+from visnav.app.navigators import NAVIGATORS
+from visnav.sim.parts import MissionParts
 
 register_stream("note", message=("text", "", "how the scenario was set up (e.g. the loop shrunk to fit the map)"))
 register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),
@@ -23,15 +26,12 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
 
 
 def build(ctx):
-    from visnav.analysis.witas_metrics import witas_metrics
     from visnav.control.rmax_path import PathFollowingController
-    from visnav.app.navigators import NAVIGATORS
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
     from visnav.scenarios.schema import PfcmMissionConfig
     from visnav.sensors.baro import Compass, baro_sensor
     from visnav.sensors.camera import Camera
     from visnav.sensors.faults import map_faults
-    from visnav.sim.parts import MissionParts
     from visnav.world.scene import World
 
     sc, record = ctx.scenario, ctx.record
