@@ -19,6 +19,7 @@ import numpy as np
 from visnav.estimation.ahrs import AhrsConfig, attitude_differences, run_ahrs
 from visnav.estimation.ins import euler_to_quat, integrate_gyro, quat_to_euler
 from visnav.io.ulog import read_ulog
+from visnav.io.logs import open_recording
 
 __all__ = ["ahrs_check"]
 
@@ -146,7 +147,6 @@ def _from_recording(path):
     from types import SimpleNamespace
 
     from visnav.geometry.rotations import euler_to_dcm
-    from visnav.io.logs import open_recording
     from scipy.spatial.transform import Rotation
 
     rec = open_recording(path)

@@ -36,6 +36,7 @@ import numpy as np
 from visnav.estimation.timesync import (calibrate_camera_imu, gyro_rotvecs, hand_eye_rotation,
                                         rotation_angle_deg, wide_offset)
 from visnav.geometry.rotations import euler_to_dcm
+from visnav.io.recording import STREAMS, read_csv
 
 __all__ = ["run_check", "camera_imu", "CheckResult", "write_check"]
 
@@ -366,7 +367,6 @@ def _raw_mag(rec) -> np.ndarray | None:
     f = Path(rec.path) / "magnetometer.csv"
     if not f.is_file():
         return None
-    from visnav.io.recording import STREAMS, read_csv
 
     m = read_csv(f, STREAMS["magnetometer"])
     return np.column_stack([m["t_s"], m["mx"], m["my"], m["mz"]]) if "mx" in m else None

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from visnav.analysis.published import THESIS_TABLE_4_1  # noqa: F401  (re-exported)
+from visnav.io.provenance import provenance, provenance_html
 
 
 # --------------------------------------------------------------------------- FRF storage
@@ -357,7 +358,6 @@ def write_palace_report(out_html, drift_dirs=(), margins_path=None, focal_px: fl
         for alt in sorted({k[0] for k in frfs}):
             parts.append(f"<h2>Bode plots at {alt:g} m (broken loop at the actuator)</h2>")
             parts.append(_fig_to_img(bode_figure(frfs, alt)))
-    from visnav.io.provenance import provenance, provenance_html
 
     doc = ("<!doctype html><html><head><meta charset='utf-8'><title>PALACE analysis (seed 000)</title>"
            "<style>body{font-family:sans-serif;max-width:1250px;margin:auto} td,th{padding:2px 8px;"

@@ -12,6 +12,7 @@ import numpy as np
 
 from visnav.analysis.metrics import interp_rows
 from visnav.analysis.published import notes, published, summary_rows
+from visnav.io.provenance import provenance as make_provenance, provenance_html
 
 
 def _fig_to_img(fig) -> str:
@@ -174,8 +175,6 @@ def headline_html(sc, metrics: dict) -> str:
 
 def write_report(result, path: Path, provenance: dict | None = None) -> None:
     """report.html of a run; ``provenance`` as written to metrics.json (made here when not given)."""
-    from visnav.io.provenance import provenance as make_provenance, provenance_html
-
     sc, log, m = result.scenario, result.log, result.metrics
     prov = provenance_html(provenance if provenance is not None else make_provenance(sc))
     mod = _report_module(sc)
