@@ -16,18 +16,11 @@ import numpy as np
 
 from visnav.measurements import (AirspeedSample, AttitudeSample, BaroSample, FixedWingEstimate, Health, ImuSample,
                                  NavInit, TelemetrySample)
+from visnav.geometry.rotations import body_rates_to_euler_rates, wrap_angle
 from visnav.navigation.base import CommandDispatch
 from visnav.vision.rectification import altimeter_correction
 
 NAN3 = np.full(3, np.nan)
-
-
-def euler_rates(euler, rates) -> np.ndarray:
-    """Euler-angle rates from body rates (Beard & McLain eq. 3.16)."""
-    phi, th = float(euler[0]), float(euler[1])
-    p, q, r = (float(v) for v in rates)
-    sf, cf, tt = math.sin(phi), math.cos(phi), math.tan(th)
-    return np.array([p + sf * tt * q + cf * tt * r, cf * q - sf * r, (sf * q + cf * r) / math.cos(th)])
 
 
 class AutopilotNavigator(CommandDispatch):
@@ -67,14 +60,11 @@ class AutopilotNavigator(CommandDispatch):
         if self.att is None:
             att = np.zeros(3)
         else:
-            # euler + euler_rates(euler, rates) dt per axis in floats (the same operations), yaw wrapped
+            # the AHRS attitude carried to t by the gyros' Euler rates (seed 002 eq. 3.7), yaw wrapped
             dt = min(max(t - self.att.t, 0.0), self.max_prop)
-            e0, e1, e2 = np.asarray(self.att.euler, float).tolist()
-            p, q, r = np.asarray(rates, float).tolist()
-            sf, cf, tt = math.sin(e0), math.cos(e0), math.tan(e1)
-            a2 = e2 + (sf * q + cf * r) / math.cos(e1) * dt
-            att = np.array([e0 + (p + sf * tt * q + cf * tt * r) * dt, e1 + (cf * q - sf * r) * dt,
-                            (a2 + math.pi) % (2 * math.pi) - math.pi])
+            e = np.asarray(self.att.euler, float)
+            att = e + body_rates_to_euler_rates(e, np.asarray(rates, float)) * dt
+            att[2] = wrap_angle(att[2])
         return {"attitude": att, "body_rates": np.asarray(rates, float).copy(), "specific_force": np.asarray(f, float),
                 "airspeed": self.va, "height": self.h}
 

@@ -43,13 +43,9 @@ class Ahrs:
         self.bias = np.radians([*_bias(rng, bias_deg, 2), *_bias(rng, yaw_bias_deg, 1)])
 
     def sample(self, t: float, truth_at, world=None) -> AttitudeSample:
-        # euler + bias + noise * n per axis in floats (the same operations as on the arrays)
-        e0, e1, e2 = np.asarray(truth_at(t).euler, float).tolist()
-        b0, b1, b2 = self.bias.tolist()
-        s0, s1, s2 = self.noise.tolist()
-        n0, n1, n2 = self.rng.standard_normal(3).tolist()
-        return AttitudeSample(t=t, euler=np.array([e0 + b0 + s0 * n0, e1 + b1 + s1 * n1, _wrap(e2 + b2 + s2 * n2)]),
-                              sensor="ahrs")
+        e = np.asarray(truth_at(t).euler, float) + self.bias + self.noise * self.rng.standard_normal(3)
+        e[2] = _wrap(float(e[2]))
+        return AttitudeSample(t=t, euler=e, sensor="ahrs")
 
 
 class AutopilotImu:
@@ -65,15 +61,9 @@ class AutopilotImu:
 
     def sample(self, t: float, truth_at, world=None) -> ImuSample:
         s = truth_at(t)
-        n0, n1, n2, n3, n4, n5 = self.rng.standard_normal(6).tolist()
-        # truth + bias + noise * n per axis in floats (the same operations as on the arrays)
-        f0, f1, f2 = np.asarray(s.specific_force, float).tolist()
-        a0, a1, a2 = np.asarray(self.accel_bias, float).tolist()
-        w0, w1, w2 = np.asarray(s.body_rates, float).tolist()
-        g0, g1, g2 = np.asarray(self.gyro_bias, float).tolist()
-        sa, sg = self.accel_noise, self.gyro_noise
-        return ImuSample(t=t, accel=np.array([f0 + a0 + sa * n0, f1 + a1 + sa * n1, f2 + a2 + sa * n2]),
-                         gyro=np.array([w0 + g0 + sg * n3, w1 + g1 + sg * n4, w2 + g2 + sg * n5]))
+        n = self.rng.standard_normal(6)  # truth + turn-on bias + white noise
+        return ImuSample(t=t, accel=np.asarray(s.specific_force, float) + self.accel_bias + self.accel_noise * n[:3],
+                         gyro=np.asarray(s.body_rates, float) + self.gyro_bias + self.gyro_noise * n[3:])
 
 
 class Pitot:

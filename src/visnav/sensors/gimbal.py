@@ -67,14 +67,10 @@ class Gimbal:
         self.pan_cmd, self.tilt_cmd = float(pan), _clip(tilt, -np.pi / 2, 0.0)
 
     def step(self, dt: float) -> None:
-        # (_wrap and _clip written out: the same operations, without three calls a step)
-        pi, two_pi = np.pi, 2 * np.pi
-        pan = self.pan
-        dp = (self.pan_cmd - pan + pi) % two_pi - pi
-        lo, hi = -self.pan_rate * dt, self.pan_rate * dt
-        self.pan = (pan + float(min(max(dp, lo), hi)) + pi) % two_pi - pi
-        lo, hi = -self.tilt_rate * dt, self.tilt_rate * dt
-        self.tilt += float(min(max(self.tilt_cmd - self.tilt, lo), hi))
+        """Each axis slews towards its command at most at its rate (pan the short way round)."""
+        step_pan = _clip(_wrap(self.pan_cmd - self.pan), -self.pan_rate * dt, self.pan_rate * dt)
+        self.pan = _wrap(self.pan + step_pan)
+        self.tilt += _clip(self.tilt_cmd - self.tilt, -self.tilt_rate * dt, self.tilt_rate * dt)
 
     def camera_attitude(self, euler_aircraft) -> tuple[float, float, float]:
         """(pan in NED, tilt, roll) [rad] of the camera for the aircraft's (roll, pitch, yaw)."""

@@ -296,11 +296,4 @@ class Wind:
             _finite("dt", dt, nonneg=True)
             return self.steady.ned
         gust = self.turbulence.step(dt, altitude_m, airspeed_mps)
-        # steady.ned + to_ned(gust, from_deg), element by element in scalars (the same operations)
-        st = self.steady
-        a = math.radians(st.from_deg)
-        psi = math.radians(_finite("wind_from_deg", st.from_deg)) + math.pi  # downwind heading
-        c, s = math.cos(psi), math.sin(psi)
-        u, v, w = gust.tolist()
-        return np.array([-st.speed_mps * math.cos(a) + (c * u - s * v), -st.speed_mps * math.sin(a) + (s * u + c * v),
-                         0.0 + w])
+        return self.steady.ned + to_ned(gust, self.steady.from_deg)
