@@ -38,7 +38,7 @@ def test_the_check_sees_a_forbidden_import(tmp_path):
 
 
 # ------------------------------------------------------------------------------- no import cycle
-from visnav.import_graph import cycles, import_graph  # noqa: E402
+from visnav.import_graph import cycles, import_graph, layer_diagram, layers, package_edges  # noqa: E402
 
 
 def test_no_import_cycle_module_level_or_deferred():
@@ -108,16 +108,7 @@ RUN_PACKAGES = {"app", "analysis", "io", "sim", "cli"}
 
 
 def _package_edges(root: Path = PKG) -> dict[str, set[str]]:
-    """package -> the visnav packages it imports (module-level or deferred, absolute or relative)."""
-    top, deferred = import_graph(root)
-    edges: dict[str, set[str]] = {}
-    for m in top:
-        pkg = m.split(".")[1] if "." in m else m
-        for t in top[m] | deferred[m]:
-            tgt = t.split(".")[1] if "." in t else t
-            if tgt != pkg:
-                edges.setdefault(pkg, set()).add(tgt)
-    return edges
+    return package_edges(root)
 
 
 def test_no_pair_of_packages_imports_each_other():
@@ -143,4 +134,27 @@ def test_the_package_check_sees_a_mutual_pair_and_a_relative_import(tmp_path):
                                "sim/__init__.py": "", "sim/b.py": "from pkg.io.a import f\n"})
     top, deferred = import_graph(root)
     assert deferred["pkg.io.a"] == {"pkg.sim.b"} and top["pkg.sim.b"] == {"pkg.io.a"}
-    assert _package_edges(root) == {"io": {"sim"}, "sim": {"io"}}  # a mutual pair, one side inside a function
+    assert _package_edges(root) == {"pkg": set(), "io": {"sim"}, "sim": {"io"}}  # a mutual pair, one side inside a function
+
+
+def test_the_layer_diagram_is_the_code():
+    """docs/architecture.md's layer diagram is the one generated from the imports (issue #31 item 6)."""
+    doc = (PKG.parents[1] / "docs" / "architecture.md").read_text()
+    block = doc.split("<!-- layers:begin -->\n", 1)[1].split("\n<!-- layers:end -->", 1)[0]
+    assert block == layer_diagram(), "regenerate it: python -m visnav.import_graph --layers"
+
+
+def test_layers_and_the_diagram_on_a_small_package(tmp_path):
+    root = _package(tmp_path, {
+        "top.py": "from pkg.mid import a\nfrom pkg.low import b\n",
+        "mid/__init__.py": "from pkg.low import b\n",
+        "low/__init__.py": "",
+    })
+    e = package_edges(root)
+    assert e == {"pkg": set(), "top": {"mid", "low"}, "mid": {"low"}, "low": set()}
+    assert layers({k: v for k, v in e.items() if k != "pkg"}) == {"low": 0, "mid": 1, "top": 2}
+    d = layer_diagram(root)
+    assert "  top --> mid" in d and "  mid --> low" in d
+    assert "  top --> low" not in d  # implied by top -> mid -> low
+    with pytest.raises(ValueError, match="import each other"):
+        layers({"a": {"b"}, "b": {"a"}})

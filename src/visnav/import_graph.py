@@ -1,6 +1,7 @@
 """The package's module import graph, from the source (``ast``, nothing imported), and its cycles.
 
     python -c "import visnav.import_graph as g; g.main()"
+    python -m visnav.import_graph --layers     # the package layer diagram of docs/architecture.md
 
 prints the module-level and the deferred (inside a function or under ``if TYPE_CHECKING``) imports
 between visnav modules and every cycle, and exits 1 if there is one. A cycle is searched on the
@@ -110,7 +111,76 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return sorted(out)
 
 
+def package_edges(root: Path = PKG) -> dict[str, set[str]]:
+    """package -> the other packages of visnav it imports (module-level or deferred); a top-level module
+    (``cli``, ``measurements``, ...) counts as a package of its own."""
+    top, deferred = import_graph(root)
+    edges: dict[str, set[str]] = {}
+    for m in top:
+        pkg = m.split(".")[1] if "." in m else m
+        edges.setdefault(pkg, set())
+        for t in top[m] | deferred[m]:
+            tgt = t.split(".")[1] if "." in t else t
+            if tgt != pkg:
+                edges[pkg].add(tgt)
+    return edges
+
+
+def layers(edges: dict[str, set[str]]) -> dict[str, int]:
+    """Each package's layer: 0 for one that imports no other package, else one above the highest it imports
+    (the longest import path down from it). Needs an acyclic package graph."""
+    out: dict[str, int] = {}
+
+    def depth(p: str, seen: tuple[str, ...] = ()) -> int:
+        if p in seen:
+            raise ValueError(f"packages import each other: {' -> '.join(seen + (p,))}")
+        if p not in out:
+            out[p] = 1 + max((depth(q, seen + (p,)) for q in edges.get(p, ())), default=-1)
+        return out[p]
+
+    for p in sorted(edges):
+        depth(p)
+    return out
+
+
+def layer_diagram(root: Path = PKG) -> str:
+    """The package layers as a Mermaid flowchart, generated from the imports: one row per layer (top: the
+    command line), an arrow for each import that is not implied by a longer path (transitive reduction)."""
+    edges = package_edges(root)
+    if "visnav" in edges:  # the package's own __init__ is not a layer
+        edges.pop("visnav")
+    for v in edges.values():
+        v.discard("visnav")
+    level = layers(edges)
+
+    def reach(p: str) -> set[str]:
+        seen, todo = set(), list(edges[p])
+        while todo:
+            q = todo.pop()
+            if q not in seen:
+                seen.add(q)
+                todo.extend(edges.get(q, ()))
+        return seen
+
+    below = {p: reach(p) for p in edges}
+    lines = ["```mermaid", "flowchart TD"]
+    for lv in sorted(set(level.values()), reverse=True):
+        members = sorted(p for p in level if level[p] == lv)
+        lines.append(f"  subgraph L{lv}[\"layer {lv}\"]")
+        lines.extend(f"    {p}" for p in members)
+        lines.append("  end")
+    for p in sorted(edges):
+        for q in sorted(edges[p]):
+            if not any(q in below[r] for r in edges[p] if r != q):  # not implied through another import
+                lines.append(f"  {p} --> {q}")
+    lines.append("```")
+    return "\n".join(lines)
+
+
 def main() -> None:
+    if "--layers" in sys.argv[1:]:
+        print(layer_diagram())
+        return
     top, deferred = import_graph()
     both = {m: top[m] | deferred[m] for m in top}
     n_top, n_def = sum(map(len, top.values())), sum(map(len, deferred.values()))
@@ -121,3 +191,7 @@ def main() -> None:
         print(f"{what}: {len(cyc)} cycle(s)" + "".join(f"\n  {' <-> '.join(c)}" for c in cyc))
     print(f"{len(top)} modules, {n_top} module-level and {n_def} deferred imports between them")
     raise SystemExit(1 if bad else 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
