@@ -8,6 +8,7 @@ rich markup: units in brackets are written escaped (``\\[m]``).
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -336,10 +337,11 @@ def faults(
         raise typer.Exit(130)
     write_tables(out_dir, table, per_fault, scenario, n)
     t = Table(title=f"{scenario}: faults on {n} seeds")
-    for col in FAULT_COLUMNS:
-        t.add_column(col, justify="left" if col == "fault" else "right")
+    for col in FAULT_COLUMNS:  # a narrow console folds a column name, it never cuts it (issue #32 item 7)
+        t.add_column(col, justify="left" if col == "fault" else "right", overflow="fold")
     for r in table:
-        t.add_row(*(f"{r[c]:.3g}" if isinstance(r[c], float) else str(r[c]) for c in FAULT_COLUMNS))
+        t.add_row(*(("–" if math.isnan(r[c]) else f"{r[c]:.3g}") if isinstance(r[c], float) else str(r[c])
+                    for c in FAULT_COLUMNS))
     console.print(t)
     console.print(f"fault campaign: {out_dir / 'faults.csv'}, {out_dir / 'faults.md'}")
 

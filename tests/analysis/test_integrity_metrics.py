@@ -72,10 +72,10 @@ def test_outcome_unsafe_landing_and_false_alarm_outside_the_window():
 def test_fault_row_aggregates_runs():
     rows = [{"status": "ok", "outcome": "safe", "faults_injected": "1", "faults_detected": "1",
              "detection_delay_s": "0.5", "false_alarms": "0", "false_alarm_actions": "0",
-             "worst_error_while_ok_m": "0.2"},
+             "worst_error_while_ok_m": "0.2", "hpl_bound_violations": "0", "hpl_samples_ok": "600"},
             {"status": "ok", "outcome": "unsafe", "faults_injected": "1", "faults_detected": "0",
              "detection_delay_s": "", "false_alarms": "2", "false_alarm_actions": "1",
-             "worst_error_while_ok_m": "3.0"},
+             "worst_error_while_ok_m": "3.0", "hpl_bound_violations": "3", "hpl_samples_ok": "200"},
             {"status": "ok", "outcome": "safe", "faults_injected": "1", "faults_detected": "1",
              "detection_delay_s": "1.5", "false_alarms": "0", "false_alarm_actions": "0",
              "worst_error_while_ok_m": "0.1"}]
@@ -83,6 +83,7 @@ def test_fault_row_aggregates_runs():
     assert r["runs"] == 3 and r["detected_share"] == pytest.approx(2 / 3)
     assert r["detection_delay_s"] == pytest.approx(1.0) and r["false_alarms"] == 1 and r["navigator_alarms"] == 2
     assert (r["safe"], r["unsafe"]) == (2, 1) and r["worst_error_while_ok_m"] == 3.0
+    assert r["over_hpl_while_ok_pct"] == pytest.approx(100 * 3 / 800)  # the third run has no HPL samples
 
 
 def test_fault_sets_validate_and_unknown_names_are_one_line():
