@@ -138,6 +138,19 @@ def test_clock_jump_moves_the_stamps_not_the_data():
         assert w.t == pytest.approx(c.t + (0.25 if f.active(t) else 0.0))
 
 
+def test_clock_jump_arrives_when_the_unjumped_stamp_would():
+    """A sensor whose clock jumped still sends on time: stamp + latency is the unjumped delivery time, so the
+    navigator sees a measurement stamped ahead of its own clock (issue #30; the loop schedules stamp + latency)."""
+    f = fault(kind="clock_jump", sensor="gps", jump_s=0.2)
+    w = FaultySensor(FakeGps(), [f], np.random.default_rng(0))
+    for t in (0.5, 1.0, 2.0, 2.99, 3.0, 4.0):
+        m = w.sample(t)
+        jump = 0.2 if f.active(t) else 0.0
+        assert m.t == pytest.approx(t + jump)
+        assert w.latency_s == pytest.approx(0.05 - jump)
+        assert m.t + w.latency_s == pytest.approx(t + 0.05)
+
+
 def test_range_dropout_and_stuck():
     f = fault(kind="range_dropout")
     for t, c, w in run(FakeRange(), f):

@@ -64,13 +64,28 @@ def blur_kernel(length_px: int, angle_deg: float) -> np.ndarray:
 
 
 class FaultySensor:
-    """Wraps one sensor; every other attribute is the wrapped sensor's."""
+    """Wraps one sensor; every other attribute is the wrapped sensor's.
+
+    A ``clock_jump`` moves the stamps, not the data's arrival: the measurement taken at ``t`` carries the stamp
+    ``t + jump_s`` but reaches the navigator when the unjumped one would (``t + latency``), as a sensor whose own
+    clock jumped would against the receiver's. ``latency_s`` is therefore the wrapped sensor's minus the jump of
+    the sample just taken (the loop schedules a delivery at stamp + ``latency_s`` right after sampling)."""
 
     def __init__(self, inner, faults, rng: np.random.Generator):
         object.__setattr__(self, "_inner", inner)
         object.__setattr__(self, "_faults", list(faults))
         object.__setattr__(self, "_rng", rng)
         object.__setattr__(self, "_state", {})  # per-fault memory (frozen image, stuck range)
+        object.__setattr__(self, "_jump", 0.0)  # the clock jump of the sample just taken [s]
+
+    @property
+    def latency_s(self) -> float:
+        return self._inner.latency_s - self._jump
+
+    def _clock_jump(self, t: float) -> float:
+        jump = sum(f.jump_s for f in self._faults if f.kind == "clock_jump" and f.active(t))
+        object.__setattr__(self, "_jump", jump)
+        return jump
 
     def __getattr__(self, name):
         if name == "sample_async":  # only where the wrapped sensor renders (the loop asks ``hasattr``)
@@ -83,10 +98,14 @@ class FaultySensor:
 
     # ------------------------------------------------------------------ sampling
     def sample(self, t, *args, **kwargs):
-        return self.apply(self._inner.sample(t, *args, **kwargs))
+        out = self._inner.sample(t, *args, **kwargs)
+        first = out[0] if isinstance(out, tuple) and out else out
+        self._clock_jump(first.t if first is not None else t)
+        return self.apply(out)
 
     def _sample_async(self, t, *args, **kwargs):
         pending = self._inner.sample_async(t, *args, **kwargs)
+        self._clock_jump(pending.t if pending is not None else t)
         return _FaultyPending(pending, self) if pending is not None else None
 
     def apply(self, out):
@@ -160,8 +179,7 @@ class _FaultyPending(PendingFrame):
     """A frame still rendering; the fault is applied when the loop takes it (frames come in order)."""
 
     def __init__(self, pending, sensor: FaultySensor):
-        jump = sum(f.jump_s for f in sensor._faults if f.kind == "clock_jump" and f.active(pending.t))
-        super().__init__(pending.t + jump, pending.future, pending.index)
+        super().__init__(pending.t + sensor._jump, pending.future, pending.index)
         self._pending, self._sensor = pending, sensor
 
     def result(self):
