@@ -951,6 +951,7 @@ def replay_(
     except OSError as exc:
         err.print(f"[red]error:[/red] cannot write {escape(str(out))}: {escape(exc.strerror or str(exc))}")
         raise typer.Exit(2)
+    console.print(escape(res.verdict), style="bold", soft_wrap=True)  # the verdict first, as a run's (#32)
     table = _metrics_table(f"replay of {escape(recording)} on {navigator}", res.metrics, ">value")
     for k, v in res.metrics.items():
         table.add_row(k, _fmt(v))
