@@ -8,7 +8,7 @@ from visnav.analysis.deck_metrics import deck_metrics
 from visnav.analysis.run_metrics import compute_metrics, metrics_function
 from visnav.measurements import DeckReference, NavCommand
 from visnav.navigation.deck import DeckHealth, DeckNavConfig, DeckNavigator
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.app.missions import make_simulation
 
 from tests.deck_ideal import load_ideal_deck

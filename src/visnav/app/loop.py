@@ -30,7 +30,7 @@ from visnav.scenarios.schema import Scenario
 from visnav.sensors.camera import PendingFrame
 from visnav.sim.clock import rate_divisor as _divisor
 from visnav.sensors.faults import inject_faults
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.app.missions import BuildContext
 from visnav.app.missions import build as build_mission
 from visnav.sim.parts import Step, VehicleTruth

@@ -61,7 +61,7 @@ from visnav.navigation.base import propagate
 from visnav.analysis.integrity_metrics import integrity_metrics
 from visnav.app.missions import make_simulation
 from visnav.app.navigators import navigator_for
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 
 P0_HPA = 1013.25  # pressure at the NED origin's height
 ORIGIN = (58.395, 15.575, 0.0)  # the simulation's NED origin as the autopilot reports it
