@@ -61,7 +61,7 @@ def test_navigator_from_a_list_of_measurements_gives_the_closed_loop_estimate(na
     assert {k for k, _ in calls} == {"initialize", "update", "command", "estimate", "health"}
     assert any(k == "command" and c.name == "track" for k, c in calls)
     # a fresh navigator fed the same messages (no simulation object anywhere)
-    nav = DeckNavigator(DeckNavConfig.from_mission(sc, sim.info["frame_steps"] * sc.run.dt_s))
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc, sim.extras.frame_steps * sc.run.dt_s))
     n_est = 0
     for kind, item in calls:
         if kind in ("update", "initialize", "command"):

@@ -385,7 +385,7 @@ def sil_simulation(sc):
     # the camera is the companion computer's and streams all the time: in-process the mission's gate skips
     # rendering the frames its navigator will not use (PALACE below 1 m), behind the bridge that gap would
     # be a camera stall (no estimate out for ``BridgeConfig.stall_s``, then quality capped)
-    sim.parts.gates.pop("camera", None)
+    sim.parts.routing.gates.pop("camera", None)
     sim.sil_link = link
     return sim
 
