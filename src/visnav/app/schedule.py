@@ -168,7 +168,7 @@ class SensorSchedule:
     def _drain(self, wait: bool) -> None:
         """Deliver the backlog in order; a frame still rendering stops it unless ``wait``. While a measurement is
         delivered ``due_at`` is the step it was due at (an error names that step, as without the wait)."""
-        backlog, nav = self._backlog, self._nav
+        backlog, nav, before = self._backlog, self._nav, self.due_at
         while backlog:
             t, m = backlog[0]
             if isinstance(m, PendingFrame):
@@ -179,7 +179,7 @@ class SensorSchedule:
             backlog.popleft()
             self.due_at = t
             nav.update(m)
-        self.due_at = None
+        self.due_at = before  # (None, or the step of an error raised by an earlier delivery)
 
     def settle(self) -> None:
         """Everything due so far delivered (waiting for the frames still rendering): before anything reads the
