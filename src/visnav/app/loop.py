@@ -2,16 +2,18 @@
 controller -> vehicle.
 
 The loop owns the clock: one fixed dynamics step (``run.dt_s``, 100 Hz); every other block at its own rate
-as an integer divisor of it (``sim/clock.rate_divisor``). Each measurement is stamped with the instant it
-describes and delivered after its sensor's latency (a heap). Everything else is a part from the mission's
-builder (``app/missions.py`` -> ``sim/parts.MissionParts``): world, vehicle, truth, sensors, navigator
-(and the flight navigator it flies on, where that is another), mission, controller, environment (wind,
-ground effect), logger, contact, uplink (a latency + drop channel), metrics; the R-MAX's where a builder
-leaves them out (``app/rmax_parts.py``). The R-MAX: IMU 100 Hz, mission + position loop 10 Hz, GPS and
-laser 10 Hz, sonar 20 Hz, camera 30 Hz capture with every 3rd frame processed (only those are rendered).
-Truth reaches only the sensors (through ``truth_at``), the log, the system's contact / logging parts and an
-explicit, logged ``NavInit``. ``run_scaffold``: the one run scaffold (wall time, errors, Ctrl-C, metrics
-from the log).
+as an integer divisor of it (``sim/clock.rate_divisor``). Each step: truth advanced, sensors sampled, what is
+due delivered, mission and controller on the navigator's estimate, the log, contact, the vehicle stepped.
+When each sensor samples and when its measurements are delivered (the latency heap, frames rendered on a
+worker thread, deliveries deferred behind a frame still rendering) is ``app/schedule.SensorSchedule``.
+Everything else is a part from the mission's builder (``app/missions.py`` -> ``sim/parts.MissionParts``):
+world, vehicle, truth, sensors, navigator, mission, controller, logger, metrics, timing; hooks (environment:
+wind, ground effect; contact; after-step; ...); routing (gates, observers, uplink, the flight navigator it
+flies on where that is another); the R-MAX's from ``app/rmax_parts.rmax_parts``. The R-MAX: IMU 100 Hz,
+mission + position loop 10 Hz, GPS and laser 10 Hz, sonar 20 Hz, camera 30 Hz capture with every 3rd frame
+processed (only those are rendered). Truth reaches only the sensors (through ``truth_at``), the log, the
+system's contact / logging parts and an explicit, logged ``NavInit``. ``run_scaffold``: the one run scaffold
+(wall time, errors, Ctrl-C, metrics from the log).
 """
 
 from __future__ import annotations
@@ -65,6 +67,14 @@ class Simulation:
         self.schedule = SensorSchedule(self.dt)
         #: what the loop has at the step (the logger's argument; a part that logs a step of its own reads it)
         self.step_state = Step(0.0, None, None, None, None, None, "")
+        #: deliveries may wait (in order) for a frame still rendering until something reads the navigator
+        #: (``settle``); off for a wrapped navigator: ``visnav record`` logs the step each measurement is
+        #: delivered at, ``--sil`` forwards it to another process in wall-clock time
+        self.defer_deliveries = navigator_wrapper is None
+        #: frames render on a worker thread (the second core) while the loop steps on; off, they render on the
+        #: loop's thread when taken (the same numbers): a campaign that runs a simulation per core does not
+        #: gain a core from the thread, and the thread's hand-overs cost CPU (``app/montecarlo``)
+        self.render_thread = True
         ctx = BuildContext(sc, self.log.record, navigator_wrapper, step=self.step_state, settle=self.settle)
         self.parts = parts = build_mission(ctx) if builder is None else builder(ctx)
         self.log.set_schema(parts.streams)
@@ -82,14 +92,6 @@ class Simulation:
         self.nav = parts.navigator  # (wrapped by navigator_wrapper where given: the mission holds the same)
         self.vehicle, self.controller, self.logger = parts.vehicle, parts.controller, parts.logger
         self.history = parts.truth
-        #: deliveries may wait (in order) for a frame still rendering until something reads the navigator
-        #: (``settle``); off for a wrapped navigator: ``visnav record`` logs the step each measurement is
-        #: delivered at, ``--sil`` forwards it to another process in wall-clock time
-        self.defer_deliveries = navigator_wrapper is None
-        #: frames render on a worker thread (the second core) while the loop steps on; off, they render on the
-        #: loop's thread when taken (the same numbers): a campaign that runs a simulation per core does not
-        #: gain a core from the thread, and the thread's hand-overs cost CPU (``app/montecarlo``)
-        self.render_thread = True
 
     @property
     def flight_nav(self):

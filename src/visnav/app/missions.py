@@ -1,14 +1,12 @@
 """What a scenario's ``mission.type`` flies with: the parts of the one loop (``app/loop.py``).
 
 A builder takes a ``BuildContext`` (the scenario, the log's recorder, the run's random generators) and
-returns the ``MissionParts``: world, sensors, navigator, mission, controller, metrics, start pose,
-and, where the mission has them, an actuator injection and an explicit navigator initialisation. The
-simulation builds nothing else: a builder asks for the textured world (``ctx.textured_world()``) or the
-standard R-MAX sensors (``ctx.rmax_sensors()``) only when its mission uses them. A new mission registers
-its builder here with ``@register("name")`` (and its pydantic config in ``scenarios/schema.py``); a mission
-that flies another vehicle gives its vehicle, truth, environment, logger and contact parts too
-(``app/deck_parts.py``, ``app/condor_parts.py``, ``app/geoloc_parts.py``); left out, they are the R-MAX's
-(``app/rmax_parts.py``).
+returns the ``MissionParts`` (``sim/parts.py``): every part of its system, stated. The simulation builds
+nothing else: a builder asks for the textured world (``ctx.textured_world()``) or the standard R-MAX sensors
+(``ctx.rmax_sensors()``) only when its mission uses them. A new mission registers its builder here with
+``@register("name")`` (and its pydantic config in ``scenarios/schema.py``). The R-MAX's missions take the
+helicopter's parts from ``app/rmax_parts.rmax_parts``; the other systems build theirs in
+``app/deck_parts.py``, ``app/condor_parts.py``, ``app/geoloc_parts.py``.
 """
 
 from __future__ import annotations
