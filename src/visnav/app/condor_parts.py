@@ -16,7 +16,6 @@ flies, the loop's ``evaluate`` part runs it inside the same run scaffold.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -132,18 +131,6 @@ def floor(vehicle, min_agl_m: float):
     return check
 
 
-@dataclass(frozen=True)
-class CondorExtras:
-    """What reports and tests read of a CONDOR flight besides its parts."""
-
-    target: np.ndarray  # the tent's position, NED [m]
-    gimbal: Gimbal
-    renderer: TargetCamera
-    trim: object  # vehicles/fixedwing.trim at the airspeed: the level trim
-    params: FixedWingParams
-    link: Link  # the telemetry uplink of the radius fixes
-
-
 def build(ctx) -> MissionParts | GroundTest:
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
@@ -213,4 +200,4 @@ def build(ctx) -> MissionParts | GroundTest:
                     start=operator.start),
         routing=Routing(uplink=link, on_delivered=operator.after),
         nav_init=NavInit(0.0, "survey", position=target.copy()), camera_model=camera,
-        extra_metrics=(integrity_metrics,), extras=CondorExtras(target, gimbal, renderer, trim_level, params, link))
+        extra_metrics=(integrity_metrics,))

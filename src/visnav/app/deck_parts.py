@@ -78,12 +78,11 @@ class TrueCalibration:
 
 @dataclass(frozen=True)
 class DeckExtras:
-    """What reports and tests read of a deck run besides its parts."""
+    """What tests read of a deck run besides its parts."""
 
     landing_point: np.ndarray  # where the gear should touch, deck frame [m]
     frame_steps: int  # dynamics steps per camera frame
     params: MultirotorParams
-    calibration: TrueCalibration  # the true lights, camera and IMU biases
 
 
 class MultirotorTruth(VehicleTruth):
@@ -241,4 +240,4 @@ def build(ctx) -> MissionParts:
         timing=Timing(mission_hz=1.0 / (d_ctrl * dt), sensor_grid=True, log_hz=1.0 / dt, end_inclusive=True),
         hooks=Hooks(environment=deck.environment, contact=deck.contact),
         routing=Routing(observers={RelativeStateSample: mission.observe}),
-        extra_metrics=(integrity_metrics,), extras=DeckExtras(deck.landing_point, frame_steps, params, true))
+        extra_metrics=(integrity_metrics,), extras=DeckExtras(deck.landing_point, frame_steps, params))

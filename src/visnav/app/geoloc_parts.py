@@ -225,13 +225,9 @@ class GeolocLogger:
 
 @dataclass(frozen=True)
 class GeolocExtras:
-    """What reports and tests read of a geo-location flight besides its parts."""
+    """What tests read of a geo-location flight besides its parts."""
 
     target: np.ndarray  # the truck's position, north and east [m]
-    reference: GeoImage  # the reference image the navigator registers to
-    path: FigureEight
-    mission: GeolocationMission  # the ground station's mission (the loop's mission is the GroundStation)
-    gimbal: PitchRollGimbal
 
 
 def build(ctx) -> MissionParts:
@@ -303,4 +299,4 @@ def build(ctx) -> MissionParts:
                     after_step=floor(vehicle, 10.0), start=station.start, finish=logger.finish),
         routing=Routing(observers={OperatorClick: nav.update, Frame: nav.update}, on_delivered=station.delivered,
                         flight_navigator=ap_nav),
-        camera_model=camera, extras=GeolocExtras(target, reference, path, mission, gimbal))
+        camera_model=camera, extras=GeolocExtras(target))

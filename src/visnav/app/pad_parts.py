@@ -7,7 +7,6 @@ sensors and world (DESIGN §1).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,13 +14,6 @@ from visnav.geometry.pad import PadLayout
 from visnav.mission.pad import PadLandingMission
 from visnav.analysis.pad_report import pad_metrics
 from visnav.app.rmax_parts import rmax_parts
-
-
-@dataclass(frozen=True)
-class PadExtras:
-    """What reports and tests read of a pad landing besides its parts."""
-
-    layout: PadLayout  # the board's
 
 
 def build(ctx):
@@ -61,5 +53,4 @@ def build(ctx):
     # GPS-free: the split-rate IMU (with the attitude solution) and the pan-tilt camera only
     return rmax_parts(ctx, world=world, sensors={"imu": SplitRateImu(imu, fc.accel_hz), "camera": camera}, navigator=nav,
                       mission=mission, controller=RmaxPositionController(), metrics=pad_metrics,
-                      start_position=mission.start_position(), start_yaw=0.0, camera_model=cam,
-                      extras=PadExtras(layout))
+                      start_position=mission.start_position(), start_yaw=0.0, camera_model=cam)

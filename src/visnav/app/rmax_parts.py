@@ -125,7 +125,7 @@ class Touchdown:
 
 
 def rmax_parts(ctx, *, world, sensors: dict, navigator, mission, controller, metrics, start_position, start_yaw: float,
-               camera_model=None, mount=None, injection=None, notes=(), extras=None) -> MissionParts:
+               camera_model=None, mount=None, injection=None, notes=()) -> MissionParts:
     """A mission flown by the R-MAX: the builder's world, sensors, navigator, mission, position controller and
     metrics with the helicopter at ``start_position`` / ``start_yaw`` (at rest), its truth history, the wind at
     the rotor (``WindEnvironment``), the trim until the first position solution (``HoldTrim``), the touchdown,
@@ -148,4 +148,4 @@ def rmax_parts(ctx, *, world, sensors: dict, navigator, mission, controller, met
                     after_step=Touchdown(vehicle, mission, navigator, logger, record, ctx.step, ctx.settle)),
         routing=Routing(gates=gates), camera_model=camera_model, mount=mount,
         extra_metrics=(integrity_metrics,),  # from the log (issue #18)
-        notes=list(notes), extras=extras)
+        notes=list(notes))

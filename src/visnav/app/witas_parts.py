@@ -6,8 +6,6 @@ downward camera, the barometer (and compass), the navigator and the PFCM mission
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from visnav.guidance.hermite import HermitePath
@@ -25,14 +23,6 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
                 home=("m", "NED world (origin at the scenario's home)", "home (the first waypoint)"),
                 map_extent=("m", "NED: north min, north max, east min, east max", "extent of the ground map"),
                 reference_resolution=("m/px", "", "resolution of the degraded reference map"))
-
-
-@dataclass(frozen=True)
-class WitasExtras:
-    """What reports and tests read of a WITAS run besides its parts."""
-
-    reference: object  # the navigator's degraded reference map (world/maps.GeoImage)
-    path: HermitePath  # the loop flown
 
 
 def build(ctx):
@@ -87,4 +77,4 @@ def build(ctx):
     controller = PathFollowingController(path_loop_gains(pf), recorder=record)
     return rmax_parts(ctx, world=world, sensors=sensors, navigator=nav, mission=mission, controller=controller,
                       metrics=witas_metrics, start_position=mission.start_position(), start_yaw=mission.start_yaw,
-                      camera_model=model, mount=mount, notes=notes, extras=WitasExtras(reference, path))
+                      camera_model=model, mount=mount, notes=notes)

@@ -62,8 +62,8 @@ class MissionParts:
     sent before the first step and logged in ``nav_init``. ``camera_model`` / ``mount``: the navigator's camera
     (recordings write them to camera.yaml). ``extra_metrics``: more ``metrics(log, scenario) -> dict`` merged
     into the run's (integrity). ``notes``: how the scenario was set up (the command line prints them).
-    ``extras``: what is particular to the system, typed by it, for reports and tests (``DeckExtras``,
-    ``CondorExtras``, ``GeolocExtras``, ``WitasExtras``, ``PadExtras`` in ``app/*_parts.py``).
+    ``extras``: what is particular to the system, typed by it, for tests (``DeckExtras``, ``GeolocExtras`` in
+    ``app/*_parts.py``).
     """
 
     world: object  # world/scene.World: ground (rendered by the cameras) and wind; DeckWorld; CondorWorld; ...
