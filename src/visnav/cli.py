@@ -686,7 +686,7 @@ def bridge(
     from visnav.io.mavlink_messages import mavlink
     from visnav.app.navigators import NAVIGATORS
     from visnav.scenarios.schema import ScenarioError
-    from visnav.sim.log import FlightLog
+    from visnav.flightlog import FlightLog
 
     fail = _fail
     navlog = FlightLog()  # what the navigator records (its own streams), in the bridge's monotonic clock

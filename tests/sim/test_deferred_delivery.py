@@ -10,6 +10,7 @@ from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import load_scenario
 from visnav.sensors.camera import CameraRenderer
 from visnav.app.loop import Simulation
+from visnav.app.schedule import SensorSchedule
 
 SHORT = ["mission.start_height_m=14", "mission.settle_s=1"]
 
@@ -32,13 +33,13 @@ def _run(sets, defer: bool, monkeypatch=None):
     sim.defer_deliveries = defer
     waited = []
     if monkeypatch is not None:
-        drain = Simulation._drain
+        drain = SensorSchedule._drain
 
         def counting(self, wait):
             waited.append(len(self._backlog))
             return drain(self, wait)
 
-        monkeypatch.setattr(Simulation, "_drain", counting)
+        monkeypatch.setattr(SensorSchedule, "_drain", counting)
     return sim.run(), waited
 
 
@@ -69,7 +70,7 @@ def _backlog_at_sampling(sim, monkeypatch) -> list[int]:
     sample_async = Camera.sample_async
 
     def spy(self, *a, **k):
-        seen.append(sum(isinstance(m, PendingFrame) for _, m in sim._backlog))
+        seen.append(sum(isinstance(m, PendingFrame) for _, m in sim.schedule._backlog))
         return sample_async(self, *a, **k)
 
     monkeypatch.setattr(Camera, "sample_async", spy)
@@ -99,7 +100,7 @@ def test_a_gate_that_reads_the_navigator_is_asked_after_the_backlog_is_delivered
     """A gate not marked ``mode_gate`` may read what the deliveries change: the loop delivers first."""
     sim = Simulation(load_scenario("palace-landing", SHORT + ["run.duration_s=3"], seed=2))
     mission = sim.mission
-    sim.parts.gates["camera"] = lambda t: mission.camera_wanted(t)  # (an unmarked gate)
+    sim.parts.routing.gates["camera"] = lambda t: mission.camera_wanted(t)  # (an unmarked gate)
     seen = _backlog_at_sampling(sim, monkeypatch)
     assert sim.run().error is None
     assert len(seen) >= 20 and not any(seen)
@@ -126,7 +127,7 @@ def test_the_switch_interval_is_short_while_frames_render_and_restored_after(mon
     within ``RENDER_SWITCH_INTERVAL_S``; after the run (or an error) the process has its own setting back."""
     import sys
 
-    from visnav.app import loop
+    from visnav.app import schedule
 
     seen = []
     execute = CameraRenderer.execute  # (the worker's part of a frame)
@@ -138,7 +139,7 @@ def test_the_switch_interval_is_short_while_frames_render_and_restored_after(mon
     monkeypatch.setattr(CameraRenderer, "execute", spy)
     before = sys.getswitchinterval()
     res, _ = _run(["run.duration_s=1"], True)
-    assert res.error is None and seen and max(seen) <= loop.RENDER_SWITCH_INTERVAL_S < before
+    assert res.error is None and seen and max(seen) <= schedule.RENDER_SWITCH_INTERVAL_S < before
     assert sys.getswitchinterval() == before
 
 

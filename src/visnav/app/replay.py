@@ -17,7 +17,7 @@ import numpy as np
 
 from visnav.io.recording import STREAM_NAMES, STREAMS, Recording, RecordingError
 from visnav.measurements import NavCommand, NavInit
-from visnav.sim.log import FlightLog, register_stream
+from visnav.flightlog import FlightLog, register_stream
 from visnav.analysis.outcome import replay_verdict
 from visnav.analysis.check import camera_imu
 from visnav.analysis.trajectory_eval import Trajectory, TrajectoryError, evaluate
