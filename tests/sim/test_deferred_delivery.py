@@ -179,3 +179,33 @@ def test_frames_rendered_on_the_loops_thread_give_the_same_run(scenario, sets, m
             assert same, f"{s}.{k}"
     frames_used = {"palace-landing": "tracker", "witas-homing": "odometry"}[scenario]
     assert len(a.log.get(frames_used)["t"]) >= 20  # frames were rendered and used
+
+
+def test_a_sensor_whose_latency_changes_is_read_after_each_sample():
+    """A sensor whose clock jumped (``sensors/faults``: stamp + jump, latency - jump) arrives when its unjumped
+    sample would: the schedule reads ``latency_s`` after each sample, not once at set-up."""
+    from visnav.measurements import RangeSample
+
+    class Jumpy:
+        rate_hz, phase_s = 10.0, 0.0
+
+        def __init__(self):
+            self.latency_s = 0.05
+
+        def sample(self, t, truth=None, world=None):
+            jump = 0.2 if 0.25 < t < 0.55 else 0.0
+            self.latency_s = 0.05 - jump
+            return RangeSample(t=t + jump, range=1.0, sensor="laser", beam_offset=0.0)
+
+    sched = SensorSchedule(0.01)
+    sched.open({"laser": Jumpy()}, {}, None, None, None, on_grid=False, render_thread=False, defer=False)
+    got = []
+    for k in range(80):
+        t = k * 0.01
+        sched.sample(k, t)
+        while sched.due(t):
+            got.append((round(t, 6), sched.pop().t))
+    sent = [(0.1 * k, 0.1 * k + (0.2 if 0.25 < 0.1 * k < 0.55 else 0.0)) for k in range(8)]
+    assert [stamp for _, stamp in got] == pytest.approx([stamp for _, stamp in sent])  # in order, stamps jumped
+    for (arrived, _), (taken, _) in zip(got, sent):  # each when the unjumped one would arrive (the next step)
+        assert taken + 0.05 - 1e-9 <= arrived <= taken + 0.05 + 0.01 + 1e-9

@@ -82,7 +82,9 @@ class SensorSchedule:
             sample = lambda t: s.sample_async(t, truth, world, pool)  # noqa: E731
         else:
             sample = lambda t: s.sample(t, truth, world)  # noqa: E731
-        emit, latency = self.emit, s.latency_s
+        emit = self.emit
+        # the latency is read after each sample: a sensor whose clock jumped (``sensors/faults``) stamps the sample
+        # ahead and shortens its latency by as much, so it arrives when the unjumped one would
         # a gate reads the mission, a navigator's prework its state now, a pan-tilt camera the head the navigator
         # points: what was due before is delivered first. A camera that reads nothing but the truth and the world
         # (``samples_truth_only``), under no gate or one that reads only the mission's mode
@@ -95,13 +97,13 @@ class SensorSchedule:
                 if self._backlog:
                     self.settle()
                 if gate is None or gate(t):
-                    emit(sample(t), latency)
+                    emit(sample(t), s.latency_s)
         elif gate is not None:
             def fn(t):
                 if gate(t):
-                    emit(sample(t), latency)
+                    emit(sample(t), s.latency_s)
         else:
-            fn = lambda t: emit(sample(t), latency)  # noqa: E731
+            fn = lambda t: emit(sample(t), s.latency_s)  # noqa: E731
         return fn
 
     def close(self) -> None:
