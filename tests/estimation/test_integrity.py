@@ -169,3 +169,10 @@ def test_per_stream_memo_equals_the_windows_recomputed_bit_for_bit(only):
             m.clear()
         m.assess(0.01 * k, P)
         assert repr(m._windows()) == repr(_windows_reference(m))  # repr: floats to the bit, NaN equal to NaN
+
+
+def test_hpl_of_an_unbounded_or_unknown_covariance():
+    """A variance of +inf (no bound: visual odometry alone) gives an infinite HPL, a NaN (not modelled) a NaN one
+    (and ``assess`` then no alert from it)."""
+    assert horizontal_protection_level(np.diag([np.inf, np.inf])) == math.inf
+    assert math.isnan(horizontal_protection_level(np.array([[np.nan, 0.0], [0.0, 1.0]])))
