@@ -11,6 +11,9 @@ State (12), everything in the vehicle (helicopter) body frame h, FRD:
 * ``v``: the derivative of r as seen from the rotating vehicle frame (eq. 2.5-2.6);
 * ``w_d``: the deck's own body rates, deck frame (the [p_d q_d r_d] of eq. 2.14), modelled constant.
 
+Optionally augmented (issue 30, not in the thesis) by ``b_a`` (3): the accelerometer's bias, body frame, a
+random walk; the prediction then takes ``z_acc - b_a`` for the specific force. States 0-11 are the thesis'.
+
 Prediction (eq. 3.1-3.5): zero deck acceleration, vehicle acceleration from the IMU,
 ``a_h = z_acc + T_g g`` (eq. 3.4 with the accelerometer's specific force convention), the angular
 acceleration of the vehicle from the numerical derivative of the gyro rates:
@@ -41,6 +44,8 @@ from visnav.geometry.rotations import cross, euler_rate_matrix, euler_to_dcm, eu
 
 N_STATE = 12
 POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+BIAS = slice(12, 15)  # the accelerometer-bias augmentation (issue 30)
+N_AUGMENTED = 15
 
 # name -> (amplitude [m, m, m, rad, rad, rad], omega [rad/s], sigma_amplitude, sigma_omega)
 SEA_STATES: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {
@@ -120,16 +125,20 @@ class ImuInput:
 
 
 def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
-    """Discrete eq. 3.1-3.5 for a batch of states (N, 12): one explicit step of length ``dt``, every sigma point
-    in one array expression (row vectors: ``x @ M.T`` is ``M x`` for each row)."""
+    """Discrete eq. 3.1-3.5 for a batch of states (N, 12) or (N, 15) (with the accelerometer bias b_a, a random
+    walk: kept): one explicit step of length ``dt``, every sigma point in one array expression (row vectors:
+    ``x @ M.T`` is ``M x`` for each row)."""
     r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
     W, Wdot = skew(u.gyro), skew(u.gyro_dot)
-    a_h = u.accel + u.gravity_body  # the vehicle's inertial acceleration, h components (eq. 3.4)
+    aug = sig.shape[1] > N_STATE
+    # the vehicle's inertial acceleration, h components (eq. 3.4), the bias estimate taken off the reading
+    a_h = (u.accel - sig[:, BIAS] if aug else u.accel) + u.gravity_body
     vdot = -a_h - r @ (Wdot + W @ W).T - 2.0 * v @ W.T  # eq. 3.5: -a_h - wdot x r - w x (w x r) - 2 w x v
     C, E = euler_dcm_batch(e, rate=True)  # C_h^d, E(e)
     w_rel = u.gyro - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
     edot = np.einsum("nij,nj->ni", E, w_rel)  # eq. 3.2
-    return np.concatenate([r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd], axis=1)
+    parts = [r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd]
+    return np.concatenate(parts + [sig[:, N_STATE:]] if aug else parts, axis=1)
 
 
 def ship_acceleration_bound(amplitude, omega, sigma_amplitude=0.0, sigma_omega=0.0) -> np.ndarray:

@@ -76,6 +76,7 @@ class DeckNavStats:
     blobs_rejected: int = 0
     lights_used_last: int = 0
     reties: int = 0  # gate lock-outs undone (``DeckNavConfig.retie_after_frames``)
+    bias_steps: int = 0  # accelerometer-bias variance widened by the NIS test (``DeckNavigator._bias_test``)
 
 
 @dataclass
@@ -124,6 +125,16 @@ class DeckNavConfig:
     # the calibration's errors are constant, not white: after each update the position and attitude variances are
     # kept at least at what they leave (``DeckNavigator._calibration_floor``)
     calibration_floor: bool = True
+    # the accelerometer bias as three more states (issue 30; 0: the thesis' 12 states): its prior sigma per axis
+    # [m/s^2] and its random walk [m/s^2/sqrt(s)], from the IMU's specification
+    accel_bias_sigma: float = 0.0
+    accel_bias_walk: float = 0.0
+    # a bias step (NIS test): the NIS of the last ``bias_test_frames`` frames' whole updates (bearings and rates,
+    # before the update gate) above the chi2 1 - bias_test_alpha quantile of their summed dof -> the bias variance
+    # widened to at least bias_step_sigma^2 per axis (at most once per bias_test_frames frames)
+    bias_test_frames: int = 6
+    bias_test_alpha: float = 1e-5
+    bias_step_sigma: float = 0.5
 
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
@@ -151,7 +162,10 @@ class DeckNavConfig:
                else float(np.hypot(np.hypot(np.radians(c.misalignment_deg), c.principal_point_error_px / c.focal_px),
                                    0.3 * c.focal_error_frac)))
         survey = f.light_survey_sigma_m if f.light_survey_sigma_m is not None else sc.mission.deck.light_survey_error_m
-        return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,lights=np.asarray(sc.mission.deck.lights_m, float),
+        bias = imu.accel_bias_mps2 if f.estimate_accel_bias else 0.0
+        return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,
+                   accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
+                   lights=np.asarray(sc.mission.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,
@@ -170,7 +184,8 @@ class DeckNavConfig:
 @dataclass(frozen=True)
 class DeckEstimate:
     """The navigator's estimate at ``t``: the 12 relative states, their covariance, and the newest IMU and
-    autopilot readings the controller flies on (gyro, specific force, roll, pitch)."""
+    autopilot readings the controller flies on (gyro, specific force with the filter's accelerometer-bias estimate
+    ``accel_bias`` taken off, roll, pitch)."""
 
     t: float
     state: np.ndarray
@@ -180,6 +195,7 @@ class DeckEstimate:
     roll: float
     pitch: float
     valid: bool = True
+    accel_bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     @property
     def position(self) -> np.ndarray:
@@ -250,6 +266,7 @@ class DeckNavigator(CommandDispatch):
         self._locked = 0  # frames in a row with >= 3 blobs and every light rejected
         self._retying = False  # fusing a frame again after a re-tie (it cannot re-tie again)
         self._widen_until = -np.inf  # accelerometer noise widened in Q until then (after a re-tie)
+        self._nis_window: deque = deque(maxlen=max(1, config.bias_test_frames))  # (NIS, dof) of whole updates
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -278,14 +295,16 @@ class DeckNavigator(CommandDispatch):
             return DeckEstimate(t=t, state=np.full(12, np.nan), covariance=np.full((12, 12), np.nan),
                                 gyro=self.last_gyro.copy(), accel=self._accel.copy(), roll=np.nan, pitch=np.nan,
                                 valid=False)
-        x, P = self.ukf.x.copy(), self.covariance()
+        n = dm.N_STATE
+        x, P = self.ukf.x.copy(), self.covariance()[:n, :n]
         dt = t - self._t
         if dt > 1e-9 and self._u is not None:  # propagate the mean with the newest input (zero-order hold)
             x = dm.process_model(x[None, :], dt, self._u)[0]
             P = P + dm.process_noise(x, dt, self._u, self.imu_cov, self.ship_cov)
         rp = self._rp if self._rp is not None else np.full(2, np.nan)
-        return DeckEstimate(t=t, state=x, covariance=P, gyro=self.last_gyro.copy(), accel=self._accel.copy(),
-                            roll=float(rp[0]), pitch=float(rp[1]))
+        bias = x[dm.BIAS] if x.size > n else np.zeros(3)
+        return DeckEstimate(t=t, state=x[:n], covariance=P, gyro=self.last_gyro.copy(), accel=self._accel - bias,
+                            roll=float(rp[0]), pitch=float(rp[1]), accel_bias=bias.copy())
 
     def health(self, t: float) -> DeckHealth:
         recent = [f for f in self._frames if f[0] > t - 1.0]
@@ -329,7 +348,28 @@ class DeckNavigator(CommandDispatch):
     def P(self) -> np.ndarray:
         return self.ukf.P
 
+    def _log_init(self, t: float, x, var, source: str) -> None:
+        """A (re)start in the ``nav_init`` stream: the 12 relative states and their sigmas (the bias states are
+        not part of the stream's order)."""
+        if self.recorder is not None:
+            n = dm.N_STATE
+            self.recorder("nav_init", t, x0=np.array(x[:n], float), sigma=np.sqrt(np.asarray(var, float)[:n]),
+                          source=source)
+
+    def _augment(self, x0, P0):
+        """The 12 relative states and their covariance with the accelerometer bias appended (zero, its prior
+        sigma ``accel_bias_sigma`` per axis, uncorrelated) when the filter estimates it; unchanged otherwise."""
+        x0, P0 = np.asarray(x0, float), np.asarray(P0, float)
+        if self.cfg.accel_bias_sigma <= 0.0 or x0.size > dm.N_STATE:
+            return x0, P0
+        n = dm.N_STATE
+        P = np.zeros((dm.N_AUGMENTED, dm.N_AUGMENTED))
+        P[:n, :n] = P0
+        P[dm.BIAS, dm.BIAS] = np.eye(3) * self.cfg.accel_bias_sigma**2
+        return np.r_[x0, np.zeros(3)], P
+
     def _start(self, t, x0, P0, sigmas, source) -> None:
+        x0, P0 = self._augment(x0, P0)
         if self.ukf is None:
             c = self.cfg
             self.ukf = UnscentedKalmanFilter(x0, P0, dm.process_model, alpha=c.alpha, beta=c.beta, kappa=c.kappa,
@@ -343,7 +383,7 @@ class DeckNavigator(CommandDispatch):
         self._hist.clear()
         self._hist.append(_Step(self._t, self.ukf.x.copy(), self.ukf.P.copy(), None))
         if self.recorder is not None:
-            self.recorder("nav_init", t, x0=np.array(x0, float), sigma=np.sqrt(np.diag(P0)), source=source)
+            self._log_init(t, x0, np.diag(P0), source)
 
     def covariance(self) -> np.ndarray:
         """Covariance of the estimate including the gyro's white noise in the velocity (what NEES should use).
@@ -411,6 +451,11 @@ class DeckNavigator(CommandDispatch):
             imu_cov = imu_cov + np.diag([self.cfg.retie_accel_sigma**2] * 3 + [0.0] * 3)
         Q = dm.process_noise(self.ukf.x, dt, u, imu_cov * scale if scale != 1.0 else imu_cov,
                              self.ship_cov * scale if scale != 1.0 else self.ship_cov)
+        if self.ukf.n > dm.N_STATE:  # the bias's random walk
+            Qa = np.zeros((self.ukf.n, self.ukf.n))
+            Qa[:dm.N_STATE, :dm.N_STATE] = Q
+            Qa[dm.BIAS, dm.BIAS] = np.eye(3) * self.cfg.accel_bias_walk**2 * dt
+            Q = Qa
         try:
             self.ukf.predict(dt, Q, u=u)
         except np.linalg.LinAlgError as exc:
@@ -424,20 +469,21 @@ class DeckNavigator(CommandDispatch):
         no correlation: the protection level is then far above any landing's, the mission holds until frames
         have brought it down. Logged in ``nav_init``, counted in ``stats.divergences``."""
         x, P = self.ukf.x.copy(), self.ukf.P
-        d = np.abs(np.diag(P)) if np.all(np.isfinite(P)) else np.zeros(12)
+        n = len(x)
+        d = np.abs(np.diag(P)) if np.all(np.isfinite(P)) else np.zeros(n)
         if not np.all(np.isfinite(x)):
-            x = self._hist[0].x.copy() if self._hist else np.zeros(12)
+            x = self._hist[0].x.copy() if self._hist else np.zeros(n)
         rp = self._rp if self._rp is not None else np.zeros(2)
         var = np.asarray(self.cfg.deck_prior_var, float)
         x[3:5], x[9:12] = rp, 0.0
-        dd = np.maximum(d, np.r_[[DIVERGED_SIGMA_M**2] * 3, np.zeros(3), [DIVERGED_SIGMA_MPS**2] * 3, np.zeros(3)])
+        dd = np.maximum(d, np.r_[[DIVERGED_SIGMA_M**2] * 3, np.zeros(3), [DIVERGED_SIGMA_MPS**2] * 3, np.zeros(n - 9)])
         dd[[3, 4, 9, 10, 11]] = var
         dd[5] = max(dd[5], np.radians(10.0) ** 2)
         self.ukf.x, self.ukf.P = x, np.diag(dd)
         self.stats.divergences += 1
         if self.recorder is not None:
-            self.recorder("nav_init", self._t if self._t is not None else 0.0, x0=x.copy(), sigma=np.sqrt(dd),
-                          source=f"filter restarted where it was: {why}")
+            self._log_init(self._t if self._t is not None else 0.0, x, dd,
+                           f"filter restarted where it was: {why}")
 
     def _frame(self, f: Frame) -> None:
         self.stats.frames += 1
@@ -542,9 +588,9 @@ class DeckNavigator(CommandDispatch):
         self.stats.reacquisitions += 1
         self._t_reacq = t
         if self.recorder is not None:
-            self.recorder("nav_init", t, x0=self.ukf.x.copy(), sigma=np.sqrt(np.diag(self.ukf.P)),
-                          source=f"re-acquisition after {t - self._t_fused:.2f} s without a fused frame: "
-                                 "deck attitude and rates from the sea-state prior")
+            self._log_init(t, self.ukf.x, np.diag(self.ukf.P),
+                           f"re-acquisition after {t - self._t_fused:.2f} s without a fused frame: "
+                           "deck attitude and rates from the sea-state prior")
 
     def _fuse_late(self, t: float, bf):
         """Rewind to the stored step before ``t``, fuse there, replay the IMU inputs since. None: too old."""
@@ -685,6 +731,7 @@ class DeckNavigator(CommandDispatch):
         R = np.diag(np.concatenate([np.repeat(self.bearing_var + cal, 2), np.full(2 * ridx.size, self.rate_var)]))
         applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
                                   lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
+        nis_whole = (self.ukf.nis, int(z.size))  # the whole frame's, applied or not (the bias test's)
         if not applied and ridx.size:  # the rates (frame-to-frame blob matches) are the fragile part: try without
             nb = 2 * idx.size
             applied = self.ukf.update(z[:nb], R[:nb, :nb], hx=dm.measurement_model, max_nis=self._max_nis(nb),
@@ -703,6 +750,8 @@ class DeckNavigator(CommandDispatch):
         st.lights_used_last = int(idx.size)
         self._calibration_floor()
         if not replay:
+            self._bias_test(*nis_whole)
+        if not replay:
             self._locked = 0
         if replay:
             return int(idx.size), rejected
@@ -717,6 +766,36 @@ class DeckNavigator(CommandDispatch):
             yr = y[nb:]
             self.integrity.record(self._t, "rate", float(yr @ np.linalg.solve(S_all[nb:, nb:], yr)), yr.size, True)
         return int(idx.size), rejected
+
+    def _bias_test(self, nis: float, dof: int) -> None:
+        """Accelerometer-bias step test: the summed NIS of the last ``bias_test_frames`` frames' whole updates
+        (a normalised innovation squared is chi2 with the update's dof; the sum of independent ones with the
+        summed dof) above the ``1 - bias_test_alpha`` quantile -> the bias's variance widened to at least
+        ``bias_step_sigma^2`` per axis, so that the next frames move the bias estimate instead of leaving the
+        prediction to run off on the old one (the random walk alone follows 0.002 m/s^2/sqrt(s), not a step of
+        0.3). The window starts again after a widening. Needs the bias states (``accel_bias_sigma > 0``)."""
+        if self.ukf.n <= dm.N_STATE or self.cfg.bias_test_frames <= 0 or not np.isfinite(nis):
+            return
+        w = self._nis_window
+        w.append((nis, dof))
+        if len(w) < w.maxlen:
+            return
+        total, k = sum(a for a, _ in w), sum(b for _, b in w)
+        q = self._gates.get(("bias", k))
+        if q is None:
+            q = self._gates[("bias", k)] = float(chi2.isf(self.cfg.bias_test_alpha, k))
+        if total <= q:
+            return
+        w.clear()
+        P = self.ukf.P.copy()
+        i = np.arange(dm.BIAS.start, dm.BIAS.stop)
+        P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)  # (only the diagonal grows: P stays positive)
+        self.ukf.P = P
+        self.stats.bias_steps += 1
+        if self.recorder is not None:
+            self._log_init(self._t, self.ukf.x, np.diag(P),
+                           f"accelerometer-bias test: NIS {total:.0f} over {k} dof of the last {w.maxlen} "
+                           f"frames above {q:.0f}: bias variance widened")
 
     def _lockout(self, n_blobs: int, replay: bool) -> bool:
         """A frame with ``n_blobs`` blobs had every light rejected. After ``retie_after_frames`` such frames in
@@ -752,9 +831,9 @@ class DeckNavigator(CommandDispatch):
         self._widen_until = self._t + self.cfg.retie_hold_s
         self.stats.reties += 1
         if self.recorder is not None:
-            self.recorder("nav_init", self._t, x0=x.copy(), sigma=np.sqrt(np.diag(P)),
-                          source=f"re-tie after {n} frames with every light rejected: position, velocity and "
-                                 "deck attitude widened, accelerometer noise widened")
+            self._log_init(self._t, x, np.diag(P),
+                           f"re-tie after {n} frames with every light rejected: position, velocity and "
+                           "deck attitude widened, accelerometer noise widened")
         return True
 
     def _refuse(self, b, r, n_ok, gyro) -> tuple[int, int]:

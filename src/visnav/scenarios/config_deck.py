@@ -136,6 +136,9 @@ class DeckFilterConfig(_M):
                                     "calibration's constant share (misalignment x range, survey error over the "
                                     "layout) after each update, so that the covariance does not claim what the "
                                     "frames cannot average out")
+    estimate_accel_bias: bool = Field(True, description="the accelerometer bias as three more filter states "
+                                      "(random walk; prior and walk from sensors.imu's accel_bias_mps2 and "
+                                      "accel_bias_walk_mps2_sqrt_s; none when accel_bias_mps2 = 0; issue 30)")
     acquisition_bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="bearing sigma while the filter "
                                                  "converges before hand-over (the thesis' R; from a far-off start "
                                                  "a sensor-sized R collapses P before the nonlinear errors are gone)")
