@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from functools import partial
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -58,6 +59,8 @@ _GRAVITY_NED.flags.writeable = False
 DIVERGED_SIGMA_M, DIVERGED_SIGMA_MPS = 0.5, 0.5  # the restart's least position / velocity sigma per axis
 #: centroid error of the rendered spots alone, found by ``find_blobs`` (measured: 0.0033 deg at f = 420 px)
 RENDER_CENTROID_PX = 0.025
+#: the bias estimate taken off the specific force in the estimate is clipped at this many prior sigmas
+BIAS_CLIP_SIGMAS = 4.0
 
 
 @dataclass
@@ -125,6 +128,12 @@ class DeckNavConfig:
     # the calibration's errors are constant, not white: after each update the position and attitude variances are
     # kept at least at what they leave (``DeckNavigator._calibration_floor``)
     calibration_floor: bool = True
+    # how the calibration's constant errors enter: "inflate" (R and the floor above) or "consider" (Schmidt-Kalman
+    # consider parameters: each light's survey error, sigma light_survey_sigma per axis, and the camera's
+    # camera_sigmas = (misalignment [rad], focal factor, principal point / focal length); R then has no share)
+    calibration_model: str = "inflate"
+    camera_sigmas: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    time_offset_sigma: float = 0.0  # [s] the camera/IMU time offset's, a consider parameter too
     # the accelerometer bias as three more states (issue 30; 0: the thesis' 12 states): its prior sigma per axis
     # [m/s^2] and its random walk [m/s^2/sqrt(s)], from the IMU's specification
     accel_bias_sigma: float = 0.0
@@ -164,8 +173,9 @@ class DeckNavConfig:
                                    0.3 * c.focal_error_frac)))
         survey = f.light_survey_sigma_m if f.light_survey_sigma_m is not None else sc.mission.deck.light_survey_error_m
         bias = imu.accel_bias_mps2 if f.estimate_accel_bias else 0.0
+        cam_sig = (np.radians(c.misalignment_deg), c.focal_error_frac, c.principal_point_error_px / c.focal_px)
         return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,
-                   accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
+                   calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s, accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
                    lights=np.asarray(sc.mission.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
@@ -236,6 +246,21 @@ class DeckNavigator(CommandDispatch):
         self.cfg = config
         self.lights = np.asarray(config.lights, float)
         self.cam = config.cam
+        c = config
+        self._bias_on = c.accel_bias_sigma > 0.0
+        # the calibration's consider parameters (Schmidt-Kalman) after the 12 states and the bias
+        cam_sig = np.asarray(c.camera_sigmas, float)
+        self._consider = c.calibration_model == "consider" and (c.light_survey_sigma > 0 or bool(cam_sig.any())
+                                                                or c.time_offset_sigma > 0)
+        var = [np.full(3, c.accel_bias_sigma**2)] if self._bias_on else []
+        self._consider_slice = None
+        if self._consider:
+            k = dm.ConsiderLayout(dm.N_STATE + 3 * self._bias_on, len(self.lights))
+            self.cam = replace(config.cam, consider=k)
+            self._consider_slice = slice(k.start, k.start + k.size)
+            var += [np.full(3 * k.n_lights, c.light_survey_sigma**2), np.full(3, cam_sig[0] ** 2),
+                    [cam_sig[1] ** 2], np.full(2, cam_sig[2] ** 2), [c.time_offset_sigma**2]]
+        self._augmented_var = np.concatenate(var) if var else np.zeros(0)
         self.imu_cov, self.ship_cov = config.imu_cov, config.ship_cov
         self.gate = config.gate
         self.tracker = BearingTracker(config.camera, threshold=config.blob_threshold)
@@ -301,11 +326,15 @@ class DeckNavigator(CommandDispatch):
         x, P = self.ukf.x.copy(), self.covariance()[:n, :n]
         dt = t - self._t
         if dt > 1e-9 and self._u is not None:  # propagate the mean with the newest input (zero-order hold)
-            x = dm.process_model(x[None, :], dt, self._u)[0]
+            x = self.ukf.fx(x[None, :], dt, self._u)[0]
             P = P + dm.process_noise(x, dt, self._u, self.imu_cov, self.ship_cov)
         rp = self._rp if self._rp is not None else np.full(2, np.nan)
-        bias = x[dm.BIAS] if x.size > n else np.zeros(3)
-        return DeckEstimate(t=t, state=x[:n], covariance=P, gyro=self.last_gyro.copy(), accel=self._accel - bias,
+        bias = x[dm.BIAS] if self._bias_on else np.zeros(3)
+        # the specific force the controller flies on: the bias estimate taken off, at most BIAS_CLIP_SIGMAS of its
+        # prior (an unconverged filter's estimate swung the level hover to 3 m/s, deck-static seed 4)
+        lim = BIAS_CLIP_SIGMAS * self.cfg.accel_bias_sigma
+        return DeckEstimate(t=t, state=x[:n], covariance=P, gyro=self.last_gyro.copy(),
+                            accel=self._accel - np.clip(bias, -lim, lim),
                             roll=float(rp[0]), pitch=float(rp[1]), accel_bias=bias.copy())
 
     def health(self, t: float) -> DeckHealth:
@@ -359,22 +388,24 @@ class DeckNavigator(CommandDispatch):
                           source=source)
 
     def _augment(self, x0, P0):
-        """The 12 relative states and their covariance with the accelerometer bias appended (zero, its prior
-        sigma ``accel_bias_sigma`` per axis, uncorrelated) when the filter estimates it; unchanged otherwise."""
+        """The 12 relative states and their covariance with the accelerometer bias (zero, its prior sigma
+        ``accel_bias_sigma`` per axis) and the calibration's consider parameters (zero, their specified sigmas)
+        appended, uncorrelated, when the filter has them; unchanged otherwise."""
         x0, P0 = np.asarray(x0, float), np.asarray(P0, float)
-        if self.cfg.accel_bias_sigma <= 0.0 or x0.size > dm.N_STATE:
+        var = self._augmented_var
+        if var.size == 0 or x0.size > dm.N_STATE:
             return x0, P0
-        n = dm.N_STATE
-        P = np.zeros((dm.N_AUGMENTED, dm.N_AUGMENTED))
+        n, m = dm.N_STATE, dm.N_STATE + var.size
+        P = np.zeros((m, m))
         P[:n, :n] = P0
-        P[dm.BIAS, dm.BIAS] = np.eye(3) * self.cfg.accel_bias_sigma**2
-        return np.r_[x0, np.zeros(3)], P
+        P[n:, n:] = np.diag(var)
+        return np.r_[x0, np.zeros(var.size)], P
 
     def _start(self, t, x0, P0, sigmas, source) -> None:
         x0, P0 = self._augment(x0, P0)
         if self.ukf is None:
             c = self.cfg
-            self.ukf = UnscentedKalmanFilter(x0, P0, dm.process_model, alpha=c.alpha, beta=c.beta, kappa=c.kappa,
+            self.ukf = UnscentedKalmanFilter(x0, P0, partial(dm.process_model, bias=self._bias_on), alpha=c.alpha, beta=c.beta, kappa=c.kappa,
                                              residual_x=dm.residual_x, state_add=dm.state_add)
         else:
             self.ukf.x, self.ukf.P = np.array(x0, float), np.array(P0, float)
@@ -453,10 +484,11 @@ class DeckNavigator(CommandDispatch):
             imu_cov = imu_cov + np.diag([self.cfg.retie_accel_sigma**2] * 3 + [0.0] * 3)
         Q = dm.process_noise(self.ukf.x, dt, u, imu_cov * scale if scale != 1.0 else imu_cov,
                              self.ship_cov * scale if scale != 1.0 else self.ship_cov)
-        if self.ukf.n > dm.N_STATE:  # the bias's random walk
+        if self.ukf.n > dm.N_STATE:  # the bias's random walk; the consider parameters are constant
             Qa = np.zeros((self.ukf.n, self.ukf.n))
             Qa[:dm.N_STATE, :dm.N_STATE] = Q
-            Qa[dm.BIAS, dm.BIAS] = np.eye(3) * self.cfg.accel_bias_walk**2 * dt
+            if self._bias_on:
+                Qa[dm.BIAS, dm.BIAS] = np.eye(3) * self.cfg.accel_bias_walk**2 * dt
             Q = Qa
         try:
             self.ukf.predict(dt, Q, u=u)
@@ -643,7 +675,8 @@ class DeckNavigator(CommandDispatch):
         sig = self.ukf.sigma_points()
         vec = dm.light_vectors(sig, self.lights, self.cam)
         L = len(self.lights)
-        R = np.diag(np.repeat(self.bearing_var + np.broadcast_to(self._calibration_var(vec), (L,)), 2))
+        cal = np.zeros(L) if self._consider else np.broadcast_to(self._calibration_var(vec), (L,))
+        R = np.diag(np.repeat(self.bearing_var + cal, 2))
         zp, S, _, _ = self.ukf.predict_measurement(R, dm.bearings_only, sigmas=sig, lights=self.lights, cam=self.cam,
                                                    vectors=vec)
         j = np.arange(L)
@@ -668,7 +701,8 @@ class DeckNavigator(CommandDispatch):
         (range x sigma_survey / sqrt(S), 7 cm at 1.5 m): with it the protection level stays above the mission's
         commit limits: deck-static seed 1 did not land and deck-moving seed 1 crashed (not analysed further)."""
         c = self.cfg
-        if not c.calibration_floor or (c.calibration_bearing_sigma == 0.0 and c.light_survey_sigma == 0.0):
+        if not c.calibration_floor or self._consider or (c.calibration_bearing_sigma == 0.0
+                                                         and c.light_survey_sigma == 0.0):
             return
         b = self.lights - self.lights.mean(axis=0)
         rng = float(np.linalg.norm(self.ukf.x[dm.POS]))
@@ -729,15 +763,17 @@ class DeckNavigator(CommandDispatch):
         ridx = idx[has_rate]
         z = np.concatenate([b[m].ravel(), r[m][has_rate].ravel()])
         cal = np.broadcast_to(self._calibration_var(vec), (len(self.lights),))[idx]
-        self._calibration_rms = float(np.sqrt(np.mean(cal)))
+        self._calibration_rms = float(np.sqrt(np.mean(cal)))  # (the hand-over check's allowance)
+        if self._consider:  # the consider parameters carry the calibration's share of S
+            cal = np.zeros_like(cal)
         R = np.diag(np.concatenate([np.repeat(self.bearing_var + cal, 2), np.full(2 * ridx.size, self.rate_var)]))
         applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
-                                  lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
+                                  consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
         nis_whole = (self.ukf.nis, int(z.size))  # the whole frame's, applied or not (the bias test's)
         if not applied and ridx.size:  # the rates (frame-to-frame blob matches) are the fragile part: try without
             nb = 2 * idx.size
             applied = self.ukf.update(z[:nb], R[:nb, :nb], hx=dm.measurement_model, max_nis=self._max_nis(nb),
-                                      sigmas=sig, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
+                                      sigmas=sig, consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
                                       rate_idx=ridx[:0], vectors=vec)
             ridx = ridx[:0]
             z = z[:nb]
@@ -779,7 +815,7 @@ class DeckNavigator(CommandDispatch):
         prediction to run off on the old one (the random walk alone follows 0.002 m/s^2/sqrt(s), not a step of
         0.3). The window starts again ``bias_test_rest_s`` after a widening (the bias converging meanwhile: widened
         every 6 frames, the estimate swung the vehicle about at 2 m/s, deck-static bias seed 3). Needs the bias states (``accel_bias_sigma > 0``)."""
-        if self.ukf.n <= dm.N_STATE or self.cfg.bias_test_frames <= 0 or not np.isfinite(nis):
+        if not self._bias_on or self.cfg.bias_test_frames <= 0 or not np.isfinite(nis):
             return
         w = self._nis_window
         if self._t < self._bias_rest_until:
@@ -835,7 +871,7 @@ class DeckNavigator(CommandDispatch):
         P[ii, ii] = np.asarray(self.cfg.deck_prior_var, float)
         P[0:3, 0:3] += np.eye(3) * sp**2
         P[6:9, 6:9] += np.eye(3) * sv**2
-        if len(x) > dm.N_STATE:  # the bias states: a lock-out is what an accelerometer-bias step looks like
+        if self._bias_on:  # the bias states: a lock-out is what an accelerometer-bias step looks like
             i = np.arange(dm.BIAS.start, dm.BIAS.stop)
             P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)
         self.ukf.x, self.ukf.P = x, P

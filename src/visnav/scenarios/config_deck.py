@@ -136,6 +136,14 @@ class DeckFilterConfig(_M):
                                     "calibration's constant share (misalignment x range, survey error over the "
                                     "layout) after each update, so that the covariance does not claim what the "
                                     "frames cannot average out")
+    calibration_model: Literal["inflate", "consider"] = Field("inflate", description="how the filter takes the "
+                                                              "calibration's constant errors: 'inflate' (R widened "
+                                                              "and the calibration_floor) or 'consider' (Schmidt-"
+                                                              "Kalman consider parameters for each light's survey "
+                                                              "error, the camera's misalignment, focal, principal "
+                                                              "point and time-offset errors at their specified "
+                                                              "sigmas; experimental: consistent before the hand-over "
+                                                              "but it lost the lights after it, deck-static seed 4)")
     estimate_accel_bias: bool = Field(True, description="the accelerometer bias as three more filter states "
                                       "(random walk; prior and walk from sensors.imu's accel_bias_mps2 and "
                                       "accel_bias_walk_mps2_sqrt_s; none when accel_bias_mps2 = 0; issue 30)")
