@@ -262,7 +262,8 @@ class DeckMission:
         """The vertical acceleration (up) from the IMU's specific force and the autopilot's roll and pitch."""
         if not (np.isfinite(est.roll) and np.isfinite(est.pitch)):
             return 0.0
-        return float(-(euler_to_dcm3(float(est.roll), float(est.pitch), 0.0) @ np.asarray(est.accel, float))[2] - G)
+        f = np.asarray(est.accel, float) - est.accel_bias  # the navigator's accelerometer-bias estimate taken off
+        return float(-(euler_to_dcm3(float(est.roll), float(est.pitch), 0.0) @ f)[2] - G)
 
     def _blind_hold(self, t: float, p_ld: np.ndarray) -> DeckReference:
         """Hover without a fix (unusable for ``blind_hold_s``, or its HPL above ``hover_hpl_m``): a go-around

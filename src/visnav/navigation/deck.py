@@ -194,9 +194,9 @@ class DeckNavConfig:
 
 @dataclass(frozen=True)
 class DeckEstimate:
-    """The navigator's estimate at ``t``: the 12 relative states, their covariance, and the newest IMU and
-    autopilot readings the controller flies on (gyro, specific force with the filter's accelerometer-bias estimate
-    ``accel_bias`` taken off, roll, pitch)."""
+    """The navigator's estimate at ``t``: the 12 relative states, their covariance, the newest IMU and autopilot
+    readings the controller flies on (gyro, specific force, roll, pitch) and the filter's accelerometer-bias
+    estimate (``accel_bias``, zero without the bias states) that the IMU-only holds take off the specific force."""
 
     t: float
     state: np.ndarray
@@ -329,13 +329,12 @@ class DeckNavigator(CommandDispatch):
             x = self.ukf.fx(x[None, :], dt, self._u)[0]
             P = P + dm.process_noise(x, dt, self._u, self.imu_cov, self.ship_cov)
         rp = self._rp if self._rp is not None else np.full(2, np.nan)
-        bias = x[dm.BIAS] if self._bias_on else np.zeros(3)
-        # the specific force the controller flies on: the bias estimate taken off, at most BIAS_CLIP_SIGMAS of its
-        # prior (an unconverged filter's estimate swung the level hover to 3 m/s, deck-static seed 4)
+        # the bias estimate the IMU-only holds take off the specific force: at most BIAS_CLIP_SIGMAS of its prior (an
+        # unconverged filter's estimate swung the level hover to 3 m/s, deck-static seed 4)
         lim = BIAS_CLIP_SIGMAS * self.cfg.accel_bias_sigma
-        return DeckEstimate(t=t, state=x[:n], covariance=P, gyro=self.last_gyro.copy(),
-                            accel=self._accel - np.clip(bias, -lim, lim),
-                            roll=float(rp[0]), pitch=float(rp[1]), accel_bias=bias.copy())
+        bias = np.clip(x[dm.BIAS], -lim, lim) if self._bias_on else np.zeros(3)
+        return DeckEstimate(t=t, state=x[:n], covariance=P, gyro=self.last_gyro.copy(), accel=self._accel.copy(),
+                            roll=float(rp[0]), pitch=float(rp[1]), accel_bias=bias)
 
     def health(self, t: float) -> DeckHealth:
         recent = [f for f in self._frames if f[0] > t - 1.0]
