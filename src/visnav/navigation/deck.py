@@ -175,6 +175,8 @@ class DeckNavConfig:
         bias = imu.accel_bias_mps2 if f.estimate_accel_bias else 0.0
         cam_sig = (np.radians(c.misalignment_deg), c.focal_error_frac, c.principal_point_error_px / c.focal_px)
         return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,
+                   bias_test_frames=6 if f.accel_bias_test_alpha > 0 else 0,
+                   bias_test_alpha=f.accel_bias_test_alpha or 1e-5, bias_step_sigma=f.accel_bias_step_mps2,
                    calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s, accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
                    lights=np.asarray(sc.mission.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),

@@ -147,6 +147,11 @@ class DeckFilterConfig(_M):
     estimate_accel_bias: bool = Field(True, description="the accelerometer bias as three more filter states "
                                       "(random walk; prior and walk from sensors.imu's accel_bias_mps2 and "
                                       "accel_bias_walk_mps2_sqrt_s; none when accel_bias_mps2 = 0; issue 30)")
+    accel_bias_test_alpha: float = Field(1e-5, ge=0, lt=0.5, description="with the bias states: the summed NIS "
+                                         "of the last 6 frames above its chi2 1 - alpha quantile widens the bias "
+                                         "variance to accel_bias_step_mps2^2 (a bias step); 0: no test")
+    accel_bias_step_mps2: float = Field(0.5, gt=0, le=5, description="the bias sigma per axis the NIS test and a "
+                                        "re-tie widen to")
     acquisition_bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="bearing sigma while the filter "
                                                  "converges before hand-over (the thesis' R; from a far-off start "
                                                  "a sensor-sized R collapses P before the nonlinear errors are gone)")
