@@ -368,8 +368,12 @@ class DeckNavigator(CommandDispatch):
         self._start(t, x0, P0, self.cfg.acquisition_sigmas, f"restart from relative yaw {yaw_deg:.0f} deg")
 
     def _cmd_track(self, t: float) -> None:
-        """Hand-over: the filter has converged; from now on R is the camera's own noise."""
+        """Hand-over: the filter has converged; from now on R is the camera's own noise. The bias test rests for
+        ``bias_test_rest_s`` (its NIS jumps with the smaller R: a widening there set the approach of deck-static
+        seed 5 swinging)."""
         self.bearing_var, self.rate_var = (s**2 for s in self.cfg.tracking_sigmas)
+        self._nis_window.clear()
+        self._bias_rest_until = t + self.cfg.bias_test_rest_s
 
     # --- filter ----------------------------------------------------------------------------
     @property
