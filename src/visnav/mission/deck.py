@@ -302,13 +302,14 @@ class DeckMission:
         channel holding zero vertical speed. On the IMU alone an accelerometer bias b is a vertical acceleration
         that runs it off (0.08 m/s^2: 1 m in 5 s, deck-static seed 4; 0.2: 5 m, seed 11): while the filter uses at
         least 3 lights its vertical speed (level-deck frame, with the deck attitude it has) damps it with
-        ``BLIND_GAIN_PER_S`` (issue 30; the bias states take the rest off the specific force, ``DeckEstimate``)."""
-        a_up = 0.0
-        if getattr(health, "lights_used", 0) >= 3:
+        ``start.level_damping_per_s`` (issue 30; the bias states take the rest off the specific force,
+        ``DeckEstimate``)."""
+        a_up, k = 0.0, self.cfg.start.level_damping_per_s
+        if k > 0 and getattr(health, "lights_used", 0) >= 3:
             _, vel, _, psi_d, _ = level_deck_geometry(est.state, est.gyro, est.roll, est.pitch)
             v_up = -float((rot_z(psi_d).T @ vel)[2])  # the vehicle's velocity relative to the deck, z down
             if np.isfinite(v_up):
-                a_up = float(np.clip(-BLIND_GAIN_PER_S * v_up, -BLIND_ACCEL_MAX, BLIND_ACCEL_MAX))
+                a_up = float(np.clip(-k * v_up, -BLIND_ACCEL_MAX, BLIND_ACCEL_MAX))
         return DeckReference(t=t, kind="level", accel=np.array([0.0, 0.0, -a_up]))
 
     def _restart(self, t: float) -> None:

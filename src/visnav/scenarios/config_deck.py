@@ -279,6 +279,9 @@ class DeckStartConfig(_M):
     pilot_position_noise_m: float = Field(0.0, ge=0, le=1, description="pilot = truth: white noise on the "
                                           "relative position the safety pilot sees (a sensor, "
                                           "sensors/deck_observer.py); 0: round 1's exact hold")
+    level_damping_per_s: float = Field(2.0, ge=0, le=20, description="pilot = imu: the level hover's vertical "
+                                       "speed (the filter's, while it uses 3 lights) damped with this gain; 0: the "
+                                       "IMU's thrust loop alone (an accelerometer bias runs it off; issue 30)")
     pilot: Literal["truth", "imu"] = Field("imu", description="before hand-over: 'truth' holds the start point "
                                            "(the thesis' safety pilot / motion capture); 'imu' hovers level on the "
                                            "IMU alone (no truth), the hand-over and the first plan then use the "
