@@ -59,7 +59,8 @@ _GRAVITY_NED.flags.writeable = False
 DIVERGED_SIGMA_M, DIVERGED_SIGMA_MPS = 0.5, 0.5  # the restart's least position / velocity sigma per axis
 #: centroid error of the rendered spots alone, found by ``find_blobs`` (measured: 0.0033 deg at f = 420 px)
 RENDER_CENTROID_PX = 0.025
-#: the bias estimate taken off the specific force in the estimate is clipped at this many prior sigmas
+#: the bias estimate the IMU-only holds take off the specific force (``DeckEstimate.accel_bias``) is clipped at
+#: this many prior sigmas
 BIAS_CLIP_SIGMAS = 4.0
 
 
@@ -143,7 +144,7 @@ class DeckNavConfig:
     # widened to at least bias_step_sigma^2 per axis; the test then rests for bias_test_rest_s (the bias converging)
     bias_test_frames: int = 6
     bias_test_alpha: float = 1e-5
-    bias_step_sigma: float = 0.5
+    bias_step_sigma: float = 0.2
     bias_test_rest_s: float = 1.0
 
     @classmethod
@@ -177,7 +178,8 @@ class DeckNavConfig:
         return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,
                    bias_test_frames=6 if f.accel_bias_test_alpha > 0 else 0,
                    bias_test_alpha=f.accel_bias_test_alpha or 1e-5, bias_step_sigma=f.accel_bias_step_mps2,
-                   calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s, accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
+                   calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s,
+                   accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
                    lights=np.asarray(sc.mission.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
