@@ -161,3 +161,36 @@ def test_process_noise_ship_part_closed_form():
     q = dm.process_noise(x, dt, u, np.zeros((6, 6)), np.diag([0.0] * 3 + [s2] * 3))
     np.testing.assert_allclose(q[dm.RATE, dm.RATE], dt * dt * s2 * np.eye(3), atol=1e-15)
     assert np.all(q[dm.POS] == 0) and np.all(q[dm.VEL] == 0)
+
+
+def test_consider_parameters_give_the_bearings_of_the_perturbed_calibration():
+    """With the calibration's consider parameters in the state the predicted bearings are those of the true
+    system (issue 30): lights b_i + db_i, the camera turned by R(dth) (scipy's rotation; the model's small angle
+    within 1e-4 rad at 1 deg), the normalised coordinates (1 + eps) s_xy / s_z + dc, and with a time offset tau
+    the bearing tau earlier: b - tau db/dt; zero parameters give the thesis' model bit for bit."""
+    from scipy.spatial.transform import Rotation
+
+    lights = np.array([[-0.128, 0, 0], [0, -0.102, 0], [0, 0.102, 0], [0.058, 0, 0]])
+    T = dm.camera_rotation(np.radians(43.5), np.radians(-3.4))
+    cam = dm.CameraGeometry(rho=np.array([0.101, 0.008, 0.11]), T_cam=T)
+    k = dm.ConsiderLayout(dm.N_STATE, len(lights))
+    camk = dm.CameraGeometry(rho=cam.rho, T_cam=T, consider=k)
+    rng = np.random.default_rng(5)
+    x = np.r_[1.1, 0.05, 0.9, np.radians([2.0, -3.0, 10.0]), 0.1, -0.05, 0.2, np.radians([1.0, -2.0, 0.5])]
+    db = 0.01 * rng.standard_normal((4, 3))
+    dth = np.radians(1.0) * rng.standard_normal(3)
+    eps, dc, tau = 0.01, np.array([0.004, -0.006]), 0.01
+    gyro = np.array([0.1, -0.2, 0.05])
+    xa = np.r_[x, db.ravel(), dth, eps, dc, tau][None, :]
+    bear, rate = dm.bearings_and_rates(xa, lights, camk, gyro)
+    cam_true = dm.CameraGeometry(rho=cam.rho, T_cam=Rotation.from_rotvec(dth).as_matrix() @ T)
+    b0, r0 = dm.bearings_and_rates(x[None, :], lights + db, cam_true, gyro)
+    s, _, _ = dm.light_vectors(x[None, :], lights + db, cam_true)
+    u = (1 + eps) * s[..., :2] / s[..., 2:3] + dc
+    uz = s[..., :2] / s[..., 2:3]
+    want_rate = (1 + eps) * r0 * (1 + uz * uz) / (1 + u * u)  # d/dt atan(u) through u = (1 + eps) tan(b0) + dc
+    np.testing.assert_allclose(rate, want_rate, atol=2e-4)
+    np.testing.assert_allclose(bear, np.arctan(u) - tau * want_rate, atol=1e-4)
+    assert not np.allclose(bear, b0, atol=1e-3)  # the errors matter: more than a milliradian
+    zero = np.r_[x, np.zeros(k.size)][None, :]
+    np.testing.assert_array_equal(dm.bearings_only(zero, lights, camk), dm.bearings_only(x[None, :], lights, cam))

@@ -130,3 +130,35 @@ def test_sigma_points_are_the_stacked_reference_bits_and_layout():
             got = w.points(x, P, add)
             assert got.strides == ref.strides
             assert np.array_equal(got.view(np.int64), ref.view(np.int64))
+
+
+def test_consider_update_equals_the_schmidt_kalman_filter():
+    """Two states and one consider parameter c (a constant sensor bias) seen through z = x0 + c: the UKF's update
+    with ``consider`` equals the Schmidt-Kalman filter's closed form in the Joseph form with the gain's consider row
+    zero, (I - K H) P (I - K H)^T + K R K^T; c and its variance never change, and the Schmidt filter's state
+    variance stays above the optimal (augmented) filter's, which estimates c."""
+    rng = np.random.default_rng(2)
+    dt = 0.1
+    F = np.array([[1, dt, 0], [0, 1, 0], [0, 0, 1.0]])
+    H = np.array([[1.0, 0, 1.0]])
+    Q = np.diag([1e-4, 1e-2, 0.0])
+    R = np.array([[0.04]])
+    x, P = np.zeros(3), np.diag([1.0, 1.0, 0.09])
+    ukf = UnscentedKalmanFilter(x, P, lambda s, dt: s @ F.T, lambda s: s @ H.T, alpha=0.5)
+    opt = UnscentedKalmanFilter(x, P, lambda s, dt: s @ F.T, lambda s: s @ H.T, alpha=0.5)
+    for _ in range(30):
+        x, P = F @ x, F @ P @ F.T + Q
+        ukf.predict(dt, Q)
+        opt.predict(dt, Q)
+        z = rng.normal(0, 0.3, 1)
+        S = H @ P @ H.T + R
+        K = P @ H.T @ np.linalg.inv(S)
+        K[2] = 0.0
+        IKH = np.eye(3) - K @ H
+        x, P = x + K @ (z - H @ x), IKH @ P @ IKH.T + K @ R @ K.T
+        ukf.update(z, R, consider=slice(2, 3))
+        opt.update(z, R)
+        np.testing.assert_allclose(ukf.x, x, atol=1e-10)
+        np.testing.assert_allclose(ukf.P, P, atol=1e-10)
+    assert ukf.x[2] == pytest.approx(0.0, abs=1e-12) and ukf.P[2, 2] == pytest.approx(0.09, abs=1e-12)
+    assert ukf.P[0, 0] > opt.P[0, 0]

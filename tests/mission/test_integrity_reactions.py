@@ -329,3 +329,23 @@ def test_deck_hover_degraded_for_half_a_second_holds_blind_and_level():
     assert refs[-1].kind == "level" and log.get("integrity_reaction")["action"][-1] == "hold height"
     ref, _ = m.step(t + 0.02, _est(), DeckHealth(converged=True, integrity="ok", hpl_m=HPL_OK))
     assert ref.kind == "follow" and ref.vertical_accel is None
+
+
+def test_the_manual_level_hover_damps_the_vertical_speed_the_filter_sees():
+    """Before the hand-over (``start.pilot = "imu"``) the hover is level; an accelerometer bias makes the IMU-only
+    thrust loop climb or sink (issue 30). While the filter uses 3 lights its vertical speed is damped at 2 /s:
+    the deck receding at 0.3 m/s (the vehicle climbing) commands 0.6 m/s^2 down; with fewer lights nothing."""
+    from visnav.mission.deck import DeckMission
+
+    sc = load_scenario("deck-static")
+    assert sc.mission.start.pilot == "imu"
+    m = DeckMission(sc.mission, _StubNav(), hold_point=[-1.0, 0.0, -1.5], gear_offset=0.17, period_s=0.02,
+                    recorder=FlightLog().record, filter_cfg=sc.navigation)
+    x = np.r_[1.0, 0.0, 1.5, np.zeros(3), 0.0, 0.0, 0.3, np.zeros(3)]  # deck 1.5 m below, receding at 0.3 m/s
+    est = DeckEstimate(t=0.0, state=x, covariance=np.eye(12), gyro=np.zeros(3), accel=np.array([0.0, 0.0, -9.81]),
+                       roll=0.0, pitch=0.0)
+    ref, mode = m.step(0.1, est, DeckHealth(lights_used=4))
+    assert mode == "manual" and ref.kind == "level"
+    np.testing.assert_allclose(ref.accel, [0.0, 0.0, 0.6], atol=1e-12)  # z down: 0.6 m/s^2 down
+    ref, _ = m.step(0.12, est, DeckHealth(lights_used=2))
+    np.testing.assert_allclose(ref.accel, 0.0)

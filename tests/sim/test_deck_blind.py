@@ -33,7 +33,7 @@ def test_blackout_in_the_commit_window_lands_on_the_plate():
 
 def test_static_deck_holds_when_the_navigator_is_unusable_mid_approach():
     """deck-static, IMU drops seed 4 (50 % of the samples lost for 3 s from 9 s): the filter loses the lights at
-    10.2 s with 9 s of the straight approach to go. Before, the static mission acted on no integrity state: the
+    10.2 s (11.9 s since the manual hover's damping, issue 30) with 8-9 s of the straight approach to go. Before, the static mission acted on no integrity state: the
     approach went on blind, then descended on the IMU alone, and the vehicle flew 100 m away (never touching
     down). Now the approach is abandoned for the blind hold on the IMU; it stays within 12 m of the deck."""
     sc = load_ideal_deck("deck-static", ['faults=[{kind = "imu_drop", start_s = 9.0, duration_s = 3.0, '
@@ -43,7 +43,8 @@ def test_static_deck_holds_when_the_navigator_is_unusable_mid_approach():
     assert res.error is None, res.error
     mode = sim.log.get("mode")
     assert list(mode["mode"][:3]) == ["manual", "approach", "hover"]
-    assert "integrity: navigator unusable" in mode["reason"][2] and 10.0 < float(mode["t"][2]) < 11.5
+    # (11.9 s with the manual hover's vertical damping of issue 30: the approach starts from another height)
+    assert "integrity: navigator unusable" in mode["reason"][2] and 10.0 < float(mode["t"][2]) < 12.5
     assert "go-around" in list(sim.log.get("integrity_reaction")["action"])
     tr = sim.log.get("truth")
     assert np.max(np.linalg.norm(tr["position"], axis=1)) < 12.0

@@ -217,7 +217,9 @@ def test_go_around_when_the_trajectory_ends_without_contact():
     """Deck motion 1.3x the preset (the filter tuned for the nominal one), seed 7: the first trajectory ends with
     the gear above the deck. Without a go-around the descend mode holds the matched tilt and touches down 5.7 deg
     off; with it the vehicle climbs back to the start point and lands on the second approach within the targets."""
-    sets = ("mission.deck.motion_scale=1.3",)
+    # (the manual hover on the IMU alone, as when the test was written: with its vertical damping, issue 30, the
+    # first trajectory of this seed touches down)
+    sets = ("mission.deck.motion_scale=1.3", "mission.start.level_damping_per_s=0")
     sim, m = _run("deck-moving", 7, *sets)
     modes = list(sim.log.get("mode")["mode"])
     assert modes == ["manual", "hover", "approach", "hover", "approach", "landed"]

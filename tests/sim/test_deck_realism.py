@@ -93,3 +93,24 @@ def test_filter_calibration_sigma_is_the_specified_errors():
     assert cfg.light_survey_sigma == sc.mission.deck.light_survey_error_m
     off = DeckNavConfig.from_mission(load_scenario("deck-moving", ["navigation.calibration_bearing_deg=0.5"]), 1 / 30)
     assert off.calibration_bearing_sigma == pytest.approx(np.radians(0.5))
+
+
+def test_the_filter_estimates_the_accelerometer_bias_of_the_imu_specification():
+    """The realistic deck filter has the 3 bias states with the IMU's specified prior and random walk (and its NIS
+    test on); the ideal sensors (no bias) keep the thesis' 12 states, so the ideal figures are the old ones."""
+    from visnav.measurements import NavInit
+    from visnav.navigation.deck import DeckNavigator
+
+    sc = load_scenario("deck-static", seed=1)
+    cfg = DeckNavConfig.from_mission(sc, 1 / 30)
+    assert cfg.accel_bias_sigma == sc.sensors.imu.accel_bias_mps2 == 0.05
+    assert cfg.accel_bias_walk == sc.sensors.imu.accel_bias_walk_mps2_sqrt_s and cfg.bias_test_frames == 6
+    nav = DeckNavigator(cfg)
+    nav.initialize(NavInit(t=0.0, source="static"))
+    assert nav.ukf.n == 15 and nav.P[12, 12] == pytest.approx(0.05**2)
+    ideal = DeckNavigator(DeckNavConfig.from_mission(load_scenario("deck-static", list(IDEAL_DECK_SENSORS)), 1 / 30))
+    ideal.initialize(NavInit(t=0.0, source="static"))
+    assert ideal.ukf.n == 12
+    off = DeckNavConfig.from_mission(load_scenario("deck-static", ["navigation.estimate_accel_bias=false",
+                                                                   "navigation.accel_bias_test_alpha=0"]), 1 / 30)
+    assert off.accel_bias_sigma == 0.0 and off.bias_test_frames == 0

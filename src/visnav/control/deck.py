@@ -72,6 +72,8 @@ class DeckController:
         acc_up = -(euler_to_dcm3(float(roll), float(pitch), 0.0) @ est.accel)[2] - G  # (euler_to_dcm's one-vector path)
         tilt_cos = np.cos(roll) * np.cos(pitch)
         if ref.kind == "level":  # (ref.accel: a vertical acceleration to hold, z down; zero by default)
+            # on the IMU alone: the navigator's accelerometer-bias estimate taken off (issue 30)
+            acc_up = -(euler_to_dcm3(float(roll), float(pitch), 0.0) @ (est.accel - est.accel_bias))[2] - G
             thr = self.throttle.command(-float(ref.accel[2]), acc_up, 1.0, tilt_cos, dt)
             self._record(t, position=np.full(3, np.nan), velocity=np.zeros(3), accel=np.zeros(3))
             return AttitudeThrustCommand(t=t, roll=0.0, pitch=0.0, yaw_rate=0.0, throttle=thr)

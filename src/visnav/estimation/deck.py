@@ -11,6 +11,15 @@ State (12), everything in the vehicle (helicopter) body frame h, FRD:
 * ``v``: the derivative of r as seen from the rotating vehicle frame (eq. 2.5-2.6);
 * ``w_d``: the deck's own body rates, deck frame (the [p_d q_d r_d] of eq. 2.14), modelled constant.
 
+Optionally augmented (issue 30, not in the thesis) by ``b_a`` (3): the accelerometer's bias, body frame, a
+random walk; the prediction then takes ``z_acc - b_a`` for the specific force. States 0-11 are the thesis'.
+After them may come the calibration's "consider" parameters (``ConsiderLayout``, Schmidt-Kalman: constant,
+their uncertainty carried and correlated with the states, never corrected): each light's survey error
+``db_i`` (deck frame), the camera's misalignment ``dth`` (a small rotation of its axes, T_cam,true = R(dth) T_cam)
+and its intrinsics' errors (focal factor ``eps``, principal point ``dc`` / f). With them the predicted light is
+
+    s_i = R(dth) T_cam (r + C_d^h (b_i + db_i) - rho),   bearings = atan((1 + eps) s_xy / s_z + dc)
+
 Prediction (eq. 3.1-3.5): zero deck acceleration, vehicle acceleration from the IMU,
 ``a_h = z_acc + T_g g`` (eq. 3.4 with the accelerometer's specific force convention), the angular
 acceleration of the vehicle from the numerical derivative of the gyro rates:
@@ -41,6 +50,8 @@ from visnav.geometry.rotations import cross, euler_rate_matrix, euler_to_dcm, eu
 
 N_STATE = 12
 POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+BIAS = slice(12, 15)  # the accelerometer-bias augmentation (issue 30)
+N_AUGMENTED = 15
 
 # name -> (amplitude [m, m, m, rad, rad, rad], omega [rad/s], sigma_amplitude, sigma_omega)
 SEA_STATES: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {
@@ -119,17 +130,22 @@ class ImuInput:
     gravity_body: np.ndarray
 
 
-def process_model(sig: np.ndarray, dt: float, u: ImuInput) -> np.ndarray:
-    """Discrete eq. 3.1-3.5 for a batch of states (N, 12): one explicit step of length ``dt``, every sigma point
-    in one array expression (row vectors: ``x @ M.T`` is ``M x`` for each row)."""
+def process_model(sig: np.ndarray, dt: float, u: ImuInput, bias: bool | None = None) -> np.ndarray:
+    """Discrete eq. 3.1-3.5 for a batch of states (N, 12) or (N, 15) (with the accelerometer bias b_a, a random
+    walk: kept): one explicit step of length ``dt``, every sigma point in one array expression (row vectors:
+    ``x @ M.T`` is ``M x`` for each row). ``bias``: states 12-14 are the bias (None: when there are 15 states);
+    any further states (consider parameters) are constant."""
     r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
     W, Wdot = skew(u.gyro), skew(u.gyro_dot)
-    a_h = u.accel + u.gravity_body  # the vehicle's inertial acceleration, h components (eq. 3.4)
+    aug = sig.shape[1] == N_AUGMENTED if bias is None else bias
+    # the vehicle's inertial acceleration, h components (eq. 3.4), the bias estimate taken off the reading
+    a_h = (u.accel - sig[:, BIAS] if aug else u.accel) + u.gravity_body
     vdot = -a_h - r @ (Wdot + W @ W).T - 2.0 * v @ W.T  # eq. 3.5: -a_h - wdot x r - w x (w x r) - 2 w x v
     C, E = euler_dcm_batch(e, rate=True)  # C_h^d, E(e)
     w_rel = u.gyro - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
     edot = np.einsum("nij,nj->ni", E, w_rel)  # eq. 3.2
-    return np.concatenate([r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd], axis=1)
+    parts = [r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd]
+    return np.concatenate(parts + [sig[:, N_STATE:]] if sig.shape[1] > N_STATE else parts, axis=1)
 
 
 def ship_acceleration_bound(amplitude, omega, sigma_amplitude=0.0, sigma_omega=0.0) -> np.ndarray:
@@ -169,22 +185,77 @@ def process_noise(x: np.ndarray, dt: float, u: ImuInput, imu_cov: np.ndarray, sh
 
 
 @dataclass(frozen=True)
+class ConsiderLayout:
+    """Where the calibration's consider parameters sit in the state: from ``start``, the survey errors of the
+    ``n_lights`` lights (3 each, deck frame, m), the camera misalignment (3, rad, camera axes), the focal factor's
+    error (1), the principal point's error over the focal length (2) and the camera's time offset (1, s: a frame
+    shows the scene this long before its stamp, its bearings are those of then: b(t - tau) = b(t) - tau db/dt)."""
+
+    start: int
+    n_lights: int
+
+    @property
+    def lights(self) -> slice:
+        return slice(self.start, self.start + 3 * self.n_lights)
+
+    @property
+    def misalignment(self) -> slice:
+        k = self.start + 3 * self.n_lights
+        return slice(k, k + 3)
+
+    @property
+    def focal(self) -> int:
+        return self.start + 3 * self.n_lights + 3
+
+    @property
+    def principal_point(self) -> slice:
+        k = self.start + 3 * self.n_lights + 4
+        return slice(k, k + 2)
+
+    @property
+    def time_offset(self) -> int:
+        return self.start + 3 * self.n_lights + 6
+
+    @property
+    def size(self) -> int:
+        return 3 * self.n_lights + 7
+
+
+@dataclass(frozen=True)
 class CameraGeometry:
-    """Camera pose in the vehicle frame: position ``rho`` (FRD, m) and rotation body -> camera."""
+    """Camera pose in the vehicle frame: position ``rho`` (FRD, m) and rotation body -> camera; with ``consider``
+    the states carry the calibration's errors (the measurement functions take them from each sigma point)."""
 
     rho: np.ndarray
     T_cam: np.ndarray  # 3x3, OpenCV camera axes
+    consider: ConsiderLayout | None = None
 
 
 def light_vectors(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry):
     """s_i (eq. 2.26) in camera axes (N, L, 3), the lights C_d^h b_i (N, L, 3) and C_h^d (N, 3, 3) for
-    every state and light (the rates of eq. 2.28 are formed from these in ``bearings_and_rates``)."""
+    every state and light (the rates of eq. 2.28 are formed from these in ``bearings_and_rates``). With consider
+    parameters: the lights b_i + db_i and s_i turned by the misalignment (small angle: s + dth x s)."""
     r, e = sig[:, POS], sig[:, ATT]
     C = euler_dcm_batch(e)  # C_h^d
-    b_h = np.einsum("nji,lj->nli", C, lights)  # C_d^h b_i
+    k = cam.consider
+    if k is None:
+        b_h = np.einsum("nji,lj->nli", C, lights)  # C_d^h b_i
+    else:
+        b = lights[None, :, :] + sig[:, k.lights].reshape(len(sig), k.n_lights, 3)
+        b_h = np.einsum("nji,nlj->nli", C, b)  # C_d^h (b_i + db_i)
     p = r[:, None, :] + b_h - cam.rho
     s = p @ cam.T_cam.T
+    if k is not None:
+        s = s + cross(sig[:, None, k.misalignment], s)  # R(dth) s
     return s, b_h, C
+
+
+def _intrinsics(sig: np.ndarray, cam: CameraGeometry):
+    """(1 + eps) (N, 1, 1) and dc / f (N, 1, 2) of each sigma point; None without consider parameters."""
+    k = cam.consider
+    if k is None:
+        return None
+    return 1.0 + sig[:, k.focal][:, None, None], sig[:, None, k.principal_point]
 
 
 def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray, vectors=None):
@@ -193,10 +264,19 @@ def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry,
     s, b_h, C = light_vectors(sig, lights, cam) if vectors is None else vectors
     w_rel = gyro - np.einsum("nji,nj->ni", C, sig[:, RATE])  # eq. 2.29: w_h - C_d^h w_d
     sdot = (sig[:, None, VEL] - cross(w_rel[:, None, :], b_h)) @ cam.T_cam.T  # eq. 2.28
+    if cam.consider is not None:
+        sdot = sdot + cross(sig[:, None, cam.consider.misalignment], sdot)  # R(dth) sdot
     s_xy, s_z = s[..., :2], s[..., 2:3]  # (our camera axes: the thesis' s_x is our s_z, see the module notes)
-    bear = np.arctan(s_xy / s_z)  # eq. 2.25
-    rate = (sdot[..., :2] * s_z - s_xy * sdot[..., 2:3]) / (s_xy * s_xy + s_z * s_z)  # eq. 2.27: d/dt atan(s_xy / s_z)
-    return bear, rate
+    intr = _intrinsics(sig, cam)
+    if intr is None:
+        bear = np.arctan(s_xy / s_z)  # eq. 2.25
+        rate = (sdot[..., :2] * s_z - s_xy * sdot[..., 2:3]) / (s_xy * s_xy + s_z * s_z)  # eq. 2.27: d/dt atan(s_xy/s_z)
+        return bear, rate
+    f, dc = intr
+    u = f * s_xy / s_z + dc  # the normalised image coordinate the nominal intrinsics give
+    udot = f * (sdot[..., :2] * s_z - s_xy * sdot[..., 2:3]) / (s_z * s_z)
+    rate = udot / (1.0 + u * u)  # eq. 2.27 through the intrinsics' errors
+    return np.arctan(u) - sig[:, cam.consider.time_offset][:, None, None] * rate, rate  # eq. 2.25 at t - tau
 
 
 def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray,
@@ -210,7 +290,9 @@ def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, 
 def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vectors=None) -> np.ndarray:
     """Bearings of every light (N, 2L), for data association (``vectors`` as ``measurement_model``)."""
     s, _, _ = light_vectors(sig, lights, cam) if vectors is None else vectors
-    return np.arctan(s[..., :2] / s[..., 2:3]).reshape(len(sig), -1)  # eq. 2.25
+    intr = _intrinsics(sig, cam)
+    u = s[..., :2] / s[..., 2:3] if intr is None else intr[0] * s[..., :2] / s[..., 2:3] + intr[1]
+    return np.arctan(u).reshape(len(sig), -1)  # eq. 2.25
 
 
 def wrap_state(sig: np.ndarray) -> np.ndarray:

@@ -137,11 +137,13 @@ class UnscentedKalmanFilter:
         return zp, S, sig, dz
 
     def update(self, z, R, hx: Callable | None = None, max_nis: float | None = None, sigmas: np.ndarray | None = None,
-               **hx_args) -> bool:
+               consider: slice | None = None, **hx_args) -> bool:
         """Correct (x, P) with measurement ``z`` of noise covariance ``R``. With ``max_nis`` an update whose
         normalised innovation squared is above it is not applied (x, P unchanged; ``S``, ``y``, ``nis`` are
         still those of the measurement): returns whether it was applied. ``sigmas``: the sigma points of the
-        current (x, P) when the caller already has them (``sigma_points()``; not recomputed)."""
+        current (x, P) when the caller already has them (``sigma_points()``; not recomputed). ``consider``: states
+        that are Schmidt-Kalman consider parameters: their gain rows are zero (never corrected, their variance
+        kept) and the covariance takes the suboptimal gain's form P - K Pxz^T - Pxz K^T + K S K^T."""
         z = np.asarray(z, dtype=float).ravel()
         if z.size == 0:
             return False
@@ -154,8 +156,14 @@ class UnscentedKalmanFilter:
             self.S, self.y, self.nis = S, y, float(y @ sol[:, -1])
             return False
         K = sol[:, :-1].T  # K = Pxz S^-1 (S symmetric)
+        if consider is not None:
+            K[consider] = 0.0
         self.x = self.state_add(self.x[None, :], (K @ y)[None, :])[0]
-        P = self.P - K @ S @ K.T
+        if consider is None:
+            P = self.P - K @ S @ K.T
+        else:
+            KPzx = K @ Pxz.T
+            P = self.P - KPzx - KPzx.T + K @ S @ K.T
         self.P = 0.5 * (P + P.T)
         self.S, self.y = S, y
         self.nis = float(y @ sol[:, -1])  # normalised innovation squared (chi2 with y.size dof)

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from functools import partial
 from dataclasses import dataclass, field, replace
 from typing import ClassVar
 
@@ -59,6 +60,9 @@ _GRAVITY_NED.flags.writeable = False
 DIVERGED_SIGMA_M, DIVERGED_SIGMA_MPS = 0.5, 0.5  # the restart's least position / velocity sigma per axis
 #: centroid error of the rendered spots alone, found by ``find_blobs`` (measured: 0.0033 deg at f = 420 px)
 RENDER_CENTROID_PX = 0.025
+#: the bias estimate the IMU-only holds take off the specific force (``DeckEstimate.accel_bias``) is clipped at
+#: this many prior sigmas
+BIAS_CLIP_SIGMAS = 4.0
 
 
 @dataclass
@@ -77,6 +81,7 @@ class DeckNavStats:
     blobs_rejected: int = 0
     lights_used_last: int = 0
     reties: int = 0  # gate lock-outs undone (``DeckNavConfig.retie_after_frames``)
+    bias_steps: int = 0  # accelerometer-bias variance widened by the NIS test (``DeckNavigator._bias_test``)
 
 
 @dataclass
@@ -125,6 +130,23 @@ class DeckNavConfig:
     # the calibration's errors are constant, not white: after each update the position and attitude variances are
     # kept at least at what they leave (``DeckNavigator._calibration_floor``)
     calibration_floor: bool = True
+    # how the calibration's constant errors enter: "inflate" (R and the floor above) or "consider" (Schmidt-Kalman
+    # consider parameters: each light's survey error, sigma light_survey_sigma per axis, and the camera's
+    # camera_sigmas = (misalignment [rad], focal factor, principal point / focal length); R then has no share)
+    calibration_model: str = "inflate"
+    camera_sigmas: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    time_offset_sigma: float = 0.0  # [s] the camera/IMU time offset's, a consider parameter too
+    # the accelerometer bias as three more states (issue 30; 0: the thesis' 12 states): its prior sigma per axis
+    # [m/s^2] and its random walk [m/s^2/sqrt(s)], from the IMU's specification
+    accel_bias_sigma: float = 0.0
+    accel_bias_walk: float = 0.0
+    # a bias step (NIS test): the NIS of the last ``bias_test_frames`` frames' whole updates (bearings and rates,
+    # before the update gate) above the chi2 1 - bias_test_alpha quantile of their summed dof -> the bias variance
+    # widened to at least bias_step_sigma^2 per axis; the test then rests for bias_test_rest_s (the bias converging)
+    bias_test_frames: int = 6
+    bias_test_alpha: float = 1e-5
+    bias_step_sigma: float = 0.2
+    bias_test_rest_s: float = 1.0
 
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
@@ -152,7 +174,14 @@ class DeckNavConfig:
                else float(np.hypot(np.hypot(np.radians(c.misalignment_deg), c.principal_point_error_px / c.focal_px),
                                    0.3 * c.focal_error_frac)))
         survey = f.light_survey_sigma_m if f.light_survey_sigma_m is not None else sc.mission.deck.light_survey_error_m
-        return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,lights=np.asarray(sc.mission.deck.lights_m, float),
+        bias = imu.accel_bias_mps2 if f.estimate_accel_bias else 0.0
+        cam_sig = (np.radians(c.misalignment_deg), c.focal_error_frac, c.principal_point_error_px / c.focal_px)
+        return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,
+                   bias_test_frames=6 if f.accel_bias_test_alpha > 0 else 0,
+                   bias_test_alpha=f.accel_bias_test_alpha or 1e-5, bias_step_sigma=f.accel_bias_step_mps2,
+                   calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s,
+                   accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
+                   lights=np.asarray(sc.mission.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,
@@ -171,8 +200,9 @@ class DeckNavConfig:
 @dataclass(frozen=True)
 class DeckEstimate(Estimate):
     """The navigator's estimate at ``t``: the 12 relative states (``estimation/deck``: position 0-2, Euler
-    angles 3-5, velocity 6-8, deck rates 9-11), their (12, 12) covariance, and the newest IMU and autopilot
-    readings the controller flies on (gyro, specific force, roll, pitch)."""
+    angles 3-5, velocity 6-8, deck rates 9-11), their (12, 12) covariance, the newest IMU and autopilot
+    readings the controller flies on (gyro, specific force, roll, pitch) and the filter's accelerometer-bias
+    estimate (``accel_bias``, zero without the bias states) that the IMU-only holds take off the specific force."""
 
     frame: ClassVar[str] = "deck_body"
     position_index: ClassVar[tuple[int, ...]] = (0, 1, 2)
@@ -186,6 +216,7 @@ class DeckEstimate(Estimate):
     roll: float
     pitch: float
     valid: bool = True
+    accel_bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     @property
     def position(self) -> np.ndarray:
@@ -225,6 +256,21 @@ class DeckNavigator(CommandDispatch):
         self.cfg = config
         self.lights = np.asarray(config.lights, float)
         self.cam = config.cam
+        c = config
+        self._bias_on = c.accel_bias_sigma > 0.0
+        # the calibration's consider parameters (Schmidt-Kalman) after the 12 states and the bias
+        cam_sig = np.asarray(c.camera_sigmas, float)
+        self._consider = c.calibration_model == "consider" and (c.light_survey_sigma > 0 or bool(cam_sig.any())
+                                                                or c.time_offset_sigma > 0)
+        var = [np.full(3, c.accel_bias_sigma**2)] if self._bias_on else []
+        self._consider_slice = None
+        if self._consider:
+            k = dm.ConsiderLayout(dm.N_STATE + 3 * self._bias_on, len(self.lights))
+            self.cam = replace(config.cam, consider=k)
+            self._consider_slice = slice(k.start, k.start + k.size)
+            var += [np.full(3 * k.n_lights, c.light_survey_sigma**2), np.full(3, cam_sig[0] ** 2),
+                    [cam_sig[1] ** 2], np.full(2, cam_sig[2] ** 2), [c.time_offset_sigma**2]]
+        self._augmented_var = np.concatenate(var) if var else np.zeros(0)
         self.imu_cov, self.ship_cov = config.imu_cov, config.ship_cov
         self.gate = config.gate
         self.tracker = BearingTracker(config.camera, threshold=config.blob_threshold)
@@ -256,6 +302,8 @@ class DeckNavigator(CommandDispatch):
         self._locked = 0  # frames in a row with >= 3 blobs and every light rejected
         self._retying = False  # fusing a frame again after a re-tie (it cannot re-tie again)
         self._widen_until = -np.inf  # accelerometer noise widened in Q until then (after a re-tie)
+        self._bias_rest_until = -np.inf  # the bias test rests until then (after a widening)
+        self._nis_window: deque = deque(maxlen=max(1, config.bias_test_frames))  # (NIS, dof) of whole updates
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -284,14 +332,19 @@ class DeckNavigator(CommandDispatch):
             return DeckEstimate(t=t, state=np.full(12, np.nan), covariance=np.full((12, 12), np.nan),
                                 gyro=self.last_gyro.copy(), accel=self._accel.copy(), roll=np.nan, pitch=np.nan,
                                 valid=False)
-        x, P = self.ukf.x.copy(), self.covariance()
+        n = dm.N_STATE
+        x, P = self.ukf.x.copy(), self.covariance()[:n, :n]
         dt = t - self._t
         if dt > 1e-9 and self._u is not None:  # propagate the mean with the newest input (zero-order hold)
-            x = dm.process_model(x[None, :], dt, self._u)[0]
+            x = self.ukf.fx(x[None, :], dt, self._u)[0]
             P = P + dm.process_noise(x, dt, self._u, self.imu_cov, self.ship_cov)
         rp = self._rp if self._rp is not None else np.full(2, np.nan)
-        return DeckEstimate(t=t, state=x, covariance=P, gyro=self.last_gyro.copy(), accel=self._accel.copy(),
-                            roll=float(rp[0]), pitch=float(rp[1]))
+        # the bias estimate the IMU-only holds take off the specific force: at most BIAS_CLIP_SIGMAS of its prior (an
+        # unconverged filter's estimate swung the level hover to 3 m/s, deck-static seed 4)
+        lim = BIAS_CLIP_SIGMAS * self.cfg.accel_bias_sigma
+        bias = np.clip(x[dm.BIAS], -lim, lim) if self._bias_on else np.zeros(3)
+        return DeckEstimate(t=t, state=x[:n], covariance=P, gyro=self.last_gyro.copy(), accel=self._accel.copy(),
+                            roll=float(rp[0]), pitch=float(rp[1]), accel_bias=bias)
 
     def health(self, t: float) -> DeckHealth:
         recent = [f for f in self._frames if f[0] > t - 1.0]
@@ -323,8 +376,12 @@ class DeckNavigator(CommandDispatch):
         self._start(t, x0, P0, self.cfg.acquisition_sigmas, f"restart from relative yaw {yaw_deg:.0f} deg")
 
     def _cmd_track(self, t: float) -> None:
-        """Hand-over: the filter has converged; from now on R is the camera's own noise."""
+        """Hand-over: the filter has converged; from now on R is the camera's own noise. The bias test rests for
+        ``bias_test_rest_s`` (its NIS jumps with the smaller R: a widening there set the approach of deck-static
+        seed 5 swinging)."""
         self.bearing_var, self.rate_var = (s**2 for s in self.cfg.tracking_sigmas)
+        self._nis_window.clear()
+        self._bias_rest_until = t + self.cfg.bias_test_rest_s
 
     # --- filter ----------------------------------------------------------------------------
     @property
@@ -335,10 +392,33 @@ class DeckNavigator(CommandDispatch):
     def P(self) -> np.ndarray:
         return self.ukf.P
 
+    def _log_init(self, t: float, x, var, source: str) -> None:
+        """A (re)start in the ``nav_init`` stream: the 12 relative states and their sigmas (the bias states are
+        not part of the stream's order)."""
+        if self.recorder is not None:
+            n = dm.N_STATE
+            self.recorder("nav_init", t, x0=np.array(x[:n], float), sigma=np.sqrt(np.asarray(var, float)[:n]),
+                          source=source)
+
+    def _augment(self, x0, P0):
+        """The 12 relative states and their covariance with the accelerometer bias (zero, its prior sigma
+        ``accel_bias_sigma`` per axis) and the calibration's consider parameters (zero, their specified sigmas)
+        appended, uncorrelated, when the filter has them; unchanged otherwise."""
+        x0, P0 = np.asarray(x0, float), np.asarray(P0, float)
+        var = self._augmented_var
+        if var.size == 0 or x0.size > dm.N_STATE:
+            return x0, P0
+        n, m = dm.N_STATE, dm.N_STATE + var.size
+        P = np.zeros((m, m))
+        P[:n, :n] = P0
+        P[n:, n:] = np.diag(var)
+        return np.r_[x0, np.zeros(var.size)], P
+
     def _start(self, t, x0, P0, sigmas, source) -> None:
+        x0, P0 = self._augment(x0, P0)
         if self.ukf is None:
             c = self.cfg
-            self.ukf = UnscentedKalmanFilter(x0, P0, dm.process_model, alpha=c.alpha, beta=c.beta, kappa=c.kappa,
+            self.ukf = UnscentedKalmanFilter(x0, P0, partial(dm.process_model, bias=self._bias_on), alpha=c.alpha, beta=c.beta, kappa=c.kappa,
                                              residual_x=dm.residual_x, state_add=dm.state_add)
         else:
             self.ukf.x, self.ukf.P = np.array(x0, float), np.array(P0, float)
@@ -349,7 +429,7 @@ class DeckNavigator(CommandDispatch):
         self._hist.clear()
         self._hist.append(_Step(self._t, self.ukf.x.copy(), self.ukf.P.copy(), None))
         if self.recorder is not None:
-            self.recorder("nav_init", t, x0=np.array(x0, float), sigma=np.sqrt(np.diag(P0)), source=source)
+            self._log_init(t, x0, np.diag(P0), source)
 
     def covariance(self) -> np.ndarray:
         """Covariance of the estimate including the gyro's white noise in the velocity (what NEES should use).
@@ -417,6 +497,12 @@ class DeckNavigator(CommandDispatch):
             imu_cov = imu_cov + np.diag([self.cfg.retie_accel_sigma**2] * 3 + [0.0] * 3)
         Q = dm.process_noise(self.ukf.x, dt, u, imu_cov * scale if scale != 1.0 else imu_cov,
                              self.ship_cov * scale if scale != 1.0 else self.ship_cov)
+        if self.ukf.n > dm.N_STATE:  # the bias's random walk; the consider parameters are constant
+            Qa = np.zeros((self.ukf.n, self.ukf.n))
+            Qa[:dm.N_STATE, :dm.N_STATE] = Q
+            if self._bias_on:
+                Qa[dm.BIAS, dm.BIAS] = np.eye(3) * self.cfg.accel_bias_walk**2 * dt
+            Q = Qa
         try:
             self.ukf.predict(dt, Q, u=u)
         except np.linalg.LinAlgError as exc:
@@ -430,20 +516,21 @@ class DeckNavigator(CommandDispatch):
         no correlation: the protection level is then far above any landing's, the mission holds until frames
         have brought it down. Logged in ``nav_init``, counted in ``stats.divergences``."""
         x, P = self.ukf.x.copy(), self.ukf.P
-        d = np.abs(np.diag(P)) if np.all(np.isfinite(P)) else np.zeros(12)
+        n = len(x)
+        d = np.abs(np.diag(P)) if np.all(np.isfinite(P)) else np.zeros(n)
         if not np.all(np.isfinite(x)):
-            x = self._hist[0].x.copy() if self._hist else np.zeros(12)
+            x = self._hist[0].x.copy() if self._hist else np.zeros(n)
         rp = self._rp if self._rp is not None else np.zeros(2)
         var = np.asarray(self.cfg.deck_prior_var, float)
         x[3:5], x[9:12] = rp, 0.0
-        dd = np.maximum(d, np.r_[[DIVERGED_SIGMA_M**2] * 3, np.zeros(3), [DIVERGED_SIGMA_MPS**2] * 3, np.zeros(3)])
+        dd = np.maximum(d, np.r_[[DIVERGED_SIGMA_M**2] * 3, np.zeros(3), [DIVERGED_SIGMA_MPS**2] * 3, np.zeros(n - 9)])
         dd[[3, 4, 9, 10, 11]] = var
         dd[5] = max(dd[5], np.radians(10.0) ** 2)
         self.ukf.x, self.ukf.P = x, np.diag(dd)
         self.stats.divergences += 1
         if self.recorder is not None:
-            self.recorder("nav_init", self._t if self._t is not None else 0.0, x0=x.copy(), sigma=np.sqrt(dd),
-                          source=f"filter restarted where it was: {why}")
+            self._log_init(self._t if self._t is not None else 0.0, x, dd,
+                           f"filter restarted where it was: {why}")
 
     def _frame(self, f: Frame) -> None:
         self.stats.frames += 1
@@ -548,9 +635,9 @@ class DeckNavigator(CommandDispatch):
         self.stats.reacquisitions += 1
         self._t_reacq = t
         if self.recorder is not None:
-            self.recorder("nav_init", t, x0=self.ukf.x.copy(), sigma=np.sqrt(np.diag(self.ukf.P)),
-                          source=f"re-acquisition after {t - self._t_fused:.2f} s without a fused frame: "
-                                 "deck attitude and rates from the sea-state prior")
+            self._log_init(t, self.ukf.x, np.diag(self.ukf.P),
+                           f"re-acquisition after {t - self._t_fused:.2f} s without a fused frame: "
+                           "deck attitude and rates from the sea-state prior")
 
     def _fuse_late(self, t: float, bf):
         """Rewind to the stored step before ``t``, fuse there, replay the IMU inputs since. None: too old."""
@@ -601,7 +688,8 @@ class DeckNavigator(CommandDispatch):
         sig = self.ukf.sigma_points()
         vec = dm.light_vectors(sig, self.lights, self.cam)
         L = len(self.lights)
-        R = np.diag(np.repeat(self.bearing_var + np.broadcast_to(self._calibration_var(vec), (L,)), 2))
+        cal = np.zeros(L) if self._consider else np.broadcast_to(self._calibration_var(vec), (L,))
+        R = np.diag(np.repeat(self.bearing_var + cal, 2))
         zp, S, _, _ = self.ukf.predict_measurement(R, dm.bearings_only, sigmas=sig, lights=self.lights, cam=self.cam,
                                                    vectors=vec)
         j = np.arange(L)
@@ -626,7 +714,8 @@ class DeckNavigator(CommandDispatch):
         (range x sigma_survey / sqrt(S), 7 cm at 1.5 m): with it the protection level stays above the mission's
         commit limits: deck-static seed 1 did not land and deck-moving seed 1 crashed (not analysed further)."""
         c = self.cfg
-        if not c.calibration_floor or (c.calibration_bearing_sigma == 0.0 and c.light_survey_sigma == 0.0):
+        if not c.calibration_floor or self._consider or (c.calibration_bearing_sigma == 0.0
+                                                         and c.light_survey_sigma == 0.0):
             return
         b = self.lights - self.lights.mean(axis=0)
         rng = float(np.linalg.norm(self.ukf.x[dm.POS]))
@@ -687,14 +776,17 @@ class DeckNavigator(CommandDispatch):
         ridx = idx[has_rate]
         z = np.concatenate([b[m].ravel(), r[m][has_rate].ravel()])
         cal = np.broadcast_to(self._calibration_var(vec), (len(self.lights),))[idx]
-        self._calibration_rms = float(np.sqrt(np.mean(cal)))
+        self._calibration_rms = float(np.sqrt(np.mean(cal)))  # (the hand-over check's allowance)
+        if self._consider:  # the consider parameters carry the calibration's share of S
+            cal = np.zeros_like(cal)
         R = np.diag(np.concatenate([np.repeat(self.bearing_var + cal, 2), np.full(2 * ridx.size, self.rate_var)]))
         applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
-                                  lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
+                                  consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
+        nis_whole = (self.ukf.nis, int(z.size))  # the whole frame's, applied or not (the bias test's)
         if not applied and ridx.size:  # the rates (frame-to-frame blob matches) are the fragile part: try without
             nb = 2 * idx.size
             applied = self.ukf.update(z[:nb], R[:nb, :nb], hx=dm.measurement_model, max_nis=self._max_nis(nb),
-                                      sigmas=sig, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
+                                      sigmas=sig, consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
                                       rate_idx=ridx[:0], vectors=vec)
             ridx = ridx[:0]
             z = z[:nb]
@@ -704,10 +796,14 @@ class DeckNavigator(CommandDispatch):
             st.lights_used_last = 0
             st.updates_gated += 1
             if not replay:
+                self._bias_test(*nis_whole)
+            if not replay:
                 self.integrity.record(self._t, "bearing", float("nan"), 0, False)
             return 0, rejected + int(idx.size)
         st.lights_used_last = int(idx.size)
         self._calibration_floor()
+        if not replay:
+            self._bias_test(*nis_whole)
         if not replay:
             self._locked = 0
         if replay:
@@ -723,6 +819,40 @@ class DeckNavigator(CommandDispatch):
             yr = y[nb:]
             self.integrity.record(self._t, "rate", float(yr @ np.linalg.solve(S_all[nb:, nb:], yr)), yr.size, True)
         return int(idx.size), rejected
+
+    def _bias_test(self, nis: float, dof: int) -> None:
+        """Accelerometer-bias step test: the summed NIS of the last ``bias_test_frames`` frames' whole updates
+        (a normalised innovation squared is chi2 with the update's dof; the sum of independent ones with the
+        summed dof) above the ``1 - bias_test_alpha`` quantile -> the bias's variance widened to at least
+        ``bias_step_sigma^2`` per axis, so that the next frames move the bias estimate instead of leaving the
+        prediction to run off on the old one (the random walk alone follows 0.002 m/s^2/sqrt(s), not a step of
+        0.3). The window starts again ``bias_test_rest_s`` after a widening (the bias converging meanwhile: widened
+        every 6 frames, the estimate swung the vehicle about at 2 m/s, deck-static bias seed 3). Needs the bias states (``accel_bias_sigma > 0``)."""
+        if not self._bias_on or self.cfg.bias_test_frames <= 0 or not np.isfinite(nis):
+            return
+        w = self._nis_window
+        if self._t < self._bias_rest_until:
+            return
+        w.append((nis, dof))
+        if len(w) < w.maxlen:
+            return
+        total, k = sum(a for a, _ in w), sum(b for _, b in w)
+        q = self._gates.get(("bias", k))
+        if q is None:
+            q = self._gates[("bias", k)] = float(chi2.isf(self.cfg.bias_test_alpha, k))
+        if total <= q:
+            return
+        w.clear()
+        self._bias_rest_until = self._t + self.cfg.bias_test_rest_s
+        P = self.ukf.P.copy()
+        i = np.arange(dm.BIAS.start, dm.BIAS.stop)
+        P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)  # (only the diagonal grows: P stays positive)
+        self.ukf.P = P
+        self.stats.bias_steps += 1
+        if self.recorder is not None:
+            self._log_init(self._t, self.ukf.x, np.diag(P),
+                           f"accelerometer-bias test: NIS {total:.0f} over {k} dof of the last {w.maxlen} "
+                           f"frames above {q:.0f}: bias variance widened")
 
     def _lockout(self, n_blobs: int, replay: bool) -> bool:
         """A frame with ``n_blobs`` blobs had every light rejected. After ``retie_after_frames`` such frames in
@@ -754,13 +884,16 @@ class DeckNavigator(CommandDispatch):
         P[ii, ii] = np.asarray(self.cfg.deck_prior_var, float)
         P[0:3, 0:3] += np.eye(3) * sp**2
         P[6:9, 6:9] += np.eye(3) * sv**2
+        if self._bias_on:  # the bias states: a lock-out is what an accelerometer-bias step looks like
+            i = np.arange(dm.BIAS.start, dm.BIAS.stop)
+            P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)
         self.ukf.x, self.ukf.P = x, P
         self._widen_until = self._t + self.cfg.retie_hold_s
         self.stats.reties += 1
         if self.recorder is not None:
-            self.recorder("nav_init", self._t, x0=x.copy(), sigma=np.sqrt(np.diag(P)),
-                          source=f"re-tie after {n} frames with every light rejected: position, velocity and "
-                                 "deck attitude widened, accelerometer noise widened")
+            self._log_init(self._t, x, np.diag(P),
+                           f"re-tie after {n} frames with every light rejected: position, velocity and "
+                           "deck attitude widened, accelerometer noise widened")
         return True
 
     def _refuse(self, b, r, n_ok, gyro) -> tuple[int, int]:

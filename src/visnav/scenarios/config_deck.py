@@ -136,6 +136,23 @@ class DeckFilterConfig(_M):
                                     "calibration's constant share (misalignment x range, survey error over the "
                                     "layout) after each update, so that the covariance does not claim what the "
                                     "frames cannot average out")
+    calibration_model: Literal["inflate", "consider"] = Field("inflate", description="how the filter takes the "
+                                                              "calibration's constant errors: 'inflate' (R widened "
+                                                              "and the calibration_floor) or 'consider' (Schmidt-"
+                                                              "Kalman consider parameters for each light's survey "
+                                                              "error, the camera's misalignment, focal, principal "
+                                                              "point and time-offset errors at their specified "
+                                                              "sigmas; experimental: consistent before the hand-over "
+                                                              "but it lost the lights after it, deck-static seed 4)")
+    estimate_accel_bias: bool = Field(True, description="the accelerometer bias as three more filter states "
+                                      "(random walk; prior and walk from sensors.imu's accel_bias_mps2 and "
+                                      "accel_bias_walk_mps2_sqrt_s; none when accel_bias_mps2 = 0; issue 30)")
+    accel_bias_test_alpha: float = Field(1e-5, ge=0, lt=0.5, description="with the bias states: the summed NIS "
+                                         "of the last 6 frames above its chi2 1 - alpha quantile widens the bias "
+                                         "variance to accel_bias_step_mps2^2 (a bias step); 0: no test")
+    accel_bias_step_mps2: float = Field(0.2, gt=0, le=5, description="the bias sigma per axis the NIS test and a "
+                                        "re-tie widen to (0.5 let fault-free approaches swing: deck-static 10 seeds with "
+                                        "imu_accel_bias, 0.5: 7 safe, 0.2: 10 safe)")
     acquisition_bearing_noise_deg: float = Field(2.0, gt=0, le=20, description="bearing sigma while the filter "
                                                  "converges before hand-over (the thesis' R; from a far-off start "
                                                  "a sensor-sized R collapses P before the nonlinear errors are gone)")
@@ -262,6 +279,9 @@ class DeckStartConfig(_M):
     pilot_position_noise_m: float = Field(0.0, ge=0, le=1, description="pilot = truth: white noise on the "
                                           "relative position the safety pilot sees (a sensor, "
                                           "sensors/deck_observer.py); 0: round 1's exact hold")
+    level_damping_per_s: float = Field(2.0, ge=0, le=20, description="pilot = imu: the level hover's vertical "
+                                       "speed (the filter's, while it uses 3 lights) damped with this gain; 0: the "
+                                       "IMU's thrust loop alone (an accelerometer bias runs it off; issue 30)")
     pilot: Literal["truth", "imu"] = Field("imu", description="before hand-over: 'truth' holds the start point "
                                            "(the thesis' safety pilot / motion capture); 'imu' hovers level on the "
                                            "IMU alone (no truth), the hand-over and the first plan then use the "
