@@ -128,7 +128,7 @@ class DeckNavConfig:
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
         """From a deck scenario: ``navigation.*``, the IMU's and camera's specifications (``sensors.imu``,
-        ``sensors.camera``), the light layout (``mission.deck.lights_m``).
+        ``sensors.camera``), the light layout (``world.deck.lights_m``).
 
         ``frame_interval_s`` is the interval between the frames the camera delivers (the bearing-rate
         sigma is a two-frame difference). The deck's true motion (``deck.motion``, ``deck.motion_scale``)
@@ -150,8 +150,8 @@ class DeckNavConfig:
         cal = (np.radians(f.calibration_bearing_deg) if f.calibration_bearing_deg is not None
                else float(np.hypot(np.hypot(np.radians(c.misalignment_deg), c.principal_point_error_px / c.focal_px),
                                    0.3 * c.focal_error_frac)))
-        survey = f.light_survey_sigma_m if f.light_survey_sigma_m is not None else sc.mission.deck.light_survey_error_m
-        return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,lights=np.asarray(sc.mission.deck.lights_m, float),
+        survey = f.light_survey_sigma_m if f.light_survey_sigma_m is not None else sc.world.deck.light_survey_error_m
+        return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,lights=np.asarray(sc.world.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,
