@@ -266,7 +266,7 @@ def test_condor_falls_back_to_the_gps_loiter_and_returns_after_ok():
 
     sc = load_scenario("condor-orbit")
     cfg = sc.mission
-    o = cfg.control.orbit
+    o = cfg.orbit
     log = FlightLog()
     nav = _StubNav()
     m = CondorMission(cfg, sc.control.condor.orbit, nav, airspeed_mps=sc.vehicle.airspeed_mps, recorder=log.record)

@@ -77,7 +77,7 @@ def test_one_light_leaving_the_view():
 
 def test_layout_with_fewer_than_three_lights_is_refused():
     with pytest.raises(ScenarioError, match="at least 3"):
-        load_ideal_deck("deck-static", ["mission.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
+        load_ideal_deck("deck-static", ["world.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
     for key in ("navigation.gate", "mission.filter.gate"):  # the old layout's key: the error names the new one
         with pytest.raises(ScenarioError, match=r"invalid value for 'navigation\.gate': -1"):
             load_ideal_deck("deck-static", [f"{key}=-1"])
@@ -217,7 +217,7 @@ def test_go_around_when_the_trajectory_ends_without_contact():
     """Deck motion 1.3x the preset (the filter tuned for the nominal one), seed 7: the first trajectory ends with
     the gear above the deck. Without a go-around the descend mode holds the matched tilt and touches down 5.7 deg
     off; with it the vehicle climbs back to the start point and lands on the second approach within the targets."""
-    sets = ("mission.deck.motion_scale=1.3",)
+    sets = ("world.deck.motion_scale=1.3",)
     sim, m = _run("deck-moving", 7, *sets)
     modes = list(sim.log.get("mode")["mode"])
     assert modes == ["manual", "hover", "approach", "hover", "approach", "landed"]

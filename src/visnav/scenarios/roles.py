@@ -326,7 +326,8 @@ def moved_key(key: str, mission_type: str) -> str | None:
 
 def move(data: dict, say=None) -> dict:
     """``data`` with the keys of ``MOVED`` at their new place; ``say(line)`` gets one line per old key (once per
-    process): "mission.deck.motion is now world.deck.motion". A key given in both places: the new one wins."""
+    process): "mission.deck.motion is now world.deck.motion". A key given in both places takes the old key's value
+    (``--set mission.deck.motion=moving`` on a file in the new layout sets it)."""
     mtype = mission_type_of(data)
     if mtype not in MOVED or not isinstance(data.get("mission"), dict):
         return data
@@ -343,8 +344,5 @@ def move(data: dict, say=None) -> dict:
                 _SAID.add(line)
                 say(line)
     for path, value in moved:
-        node = out
-        for p in path[:-1]:
-            node = node.setdefault(p, {})
-        node.setdefault(path[-1], value)
+        _set(out, list(path), value)
     return out

@@ -605,6 +605,8 @@ def _format_error(err: ValidationError, data: dict) -> str:
                 return f"{key} does not apply to mission.type {kinds['mission']!r} {what}"
             return f"unknown scenario key '{key}' {what}"
         return f"unknown scenario key '{key}'; allowed keys here: {allowed}"
+    if not loc:  # a check across sections (the deck landing point on world.deck's plate)
+        return str(e["msg"]).removeprefix("Value error, ")
     value = e.get("input")
     desc = _describe_field(loc, kinds)
     msg = f"invalid value for '{key}': {value!r} ({e['msg']})"
