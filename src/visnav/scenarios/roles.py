@@ -119,8 +119,7 @@ def fill_suite(data: dict) -> dict:
             given = given.model_dump(exclude_none=True)
         if not isinstance(given, dict):
             continue  # a model (already filled) or a bad value the schema reports
-        known = {"world": ("deck", "witas_map", "pad", "tent", "geo_map", "truck"),
-                 "control": ("deck", "condor", "mav", "pfcm")}[section]
+        known = {n for names in (WORLD if section == "world" else CONTROL).values() for n in names}
         extra = [n for n in given if n in known and n not in have and given[n] is not None]
         if extra:
             raise ScenarioError(f"{section}.{extra[0]} does not apply to mission.type {mtype!r} (its {section} "
