@@ -97,3 +97,11 @@ def test_another_systems_section_is_one_line(name, key, message):
     with pytest.raises(ScenarioError) as e:
         load_scenario(name, [key])
     assert message in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_system_without_sections_of_its_own_writes_none():
+    """The R-MAX's PALACE missions have no [world.<thing>] or [control.<system>]: their resolved scenario.toml (and
+    so scenario_hash, the resume key of a campaign) is what it was before the sections existed."""
+    text = to_toml(load_scenario("palace-landing"))
+    assert "[control" not in text and "[world." not in text and "[world]" in text
+    assert "[control.pfcm]" in to_toml(load_scenario("pfcm-spiral"))

@@ -708,9 +708,10 @@ def load_scenario(name_or_path: str, overrides: list[str] | None = None, seed: i
 def to_toml(sc: Scenario) -> str:
     import tomli_w
 
-    def clean(x):  # None and empty sections (a system without [control.<system>]) are left out
+    def clean(x):  # None and sections left empty (a system without [control.<system>]) are left out
         if isinstance(x, dict):
-            return {k: clean(v) for k, v in x.items() if v is not None and v != {}}
+            out = {k: clean(v) for k, v in x.items() if v is not None}
+            return {k: v for k, v in out.items() if v != {}}
         return x
 
     return tomli_w.dumps(clean(sc.model_dump()))
