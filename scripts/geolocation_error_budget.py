@@ -25,7 +25,7 @@ def budget(run_dir: Path) -> dict:
     from visnav.scenarios.schema import load_scenario
     from visnav.sensors.gimbal import PitchRollGimbal
     from visnav.app.geoloc_parts import mav_camera
-    from visnav.sim.log import FlightLog
+    from visnav.flightlog import FlightLog
     from visnav.vision.geolocation_registration import map_based_target, nadir_dcm
 
     log = FlightLog.from_hdf5(run_dir / "log.h5")

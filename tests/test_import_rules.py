@@ -95,8 +95,8 @@ KNOWN_MUTUAL: set[tuple[str, str]] = set()
 
 #: the order among the packages that handle a run (docs/architecture.md): ``app`` (assemble and run: the navigator
 #: registry, the mission builders and their parts, the loop, record / replay / SIL / bridge sessions, campaigns) over
-#: ``analysis`` (metrics, reports; it reads ``io``'s files and ``sim``'s FlightLog) over ``io`` and ``sim``, which
-#: import neither each other nor anything above them. package -> the packages it must not import.
+#: ``analysis`` (metrics, reports; it reads ``io``'s files and the run's ``FlightLog``, the leaf ``visnav/flightlog.py``
+#: every layer may import) over ``io`` and ``sim``, which import neither each other nor anything above them. package -> the packages it must not import.
 FORBIDDEN_PACKAGES = {
     "io": {"sim", "analysis", "app", "cli"},
     "sim": {"io", "analysis", "app", "cli"},

@@ -687,7 +687,7 @@ def bridge(
     from visnav.io.mavlink_messages import mavlink
     from visnav.app.navigators import NAVIGATORS
     from visnav.scenarios.schema import ScenarioError
-    from visnav.sim.log import FlightLog
+    from visnav.flightlog import FlightLog
 
     fail = _fail
     navlog = FlightLog()  # what the navigator records (its own streams), in the bridge's monotonic clock
@@ -952,6 +952,7 @@ def replay_(
     except OSError as exc:
         err.print(f"[red]error:[/red] cannot write {escape(str(out))}: {escape(exc.strerror or str(exc))}")
         raise typer.Exit(2)
+    console.print(escape(res.verdict), style="bold", soft_wrap=True)  # the verdict first, as a run's (#32)
     table = _metrics_table(f"replay of {escape(recording)} on {navigator}", res.metrics, ">value")
     for k, v in res.metrics.items():
         table.add_row(k, _fmt(v))

@@ -2,7 +2,7 @@
 components record through a recorder callback (navigators, mission managers, controllers, sensors).
 
 A leaf module (it imports nothing of visnav), so that any layer may document the streams it records
-without importing the simulation; ``sim/log.py`` writes these as HDF5 attributes (``docs/log-format.md``).
+without importing the simulation; ``flightlog.py`` writes these as HDF5 attributes (``docs/log-format.md``).
 """
 
 from __future__ import annotations

@@ -12,6 +12,7 @@ it when the log says it arrived.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -109,8 +110,61 @@ def read_only(obj):
     return obj
 
 
+#: the frames an estimate's position and velocity are given in (``Estimate.frame``): name -> what it is (the TUM
+#: header of a replay, ``app/navigators.NavigatorSpec.frame``)
+FRAMES = {
+    "ned": "NED world, body FRD",
+    "deck_body": "deck-relative: deck origin relative to the vehicle in body FRD, deck -> body Euler",
+    "target_ned": "target position: NED world, on the ground (down 0)",
+}
+
+
+class Estimate:
+    """The typed base of every navigator's ``estimate(t)`` (issue #31 item 5): what any reader of any
+    navigator may rely on.
+
+    * ``t`` - the instant it describes [s];
+    * ``position``, ``velocity`` - (n,) arrays, n = 3 (or 2 for a horizontal-only estimate), in ``frame``;
+      velocity components the estimator does not estimate are NaN;
+    * ``covariance`` - the estimate type's own covariance (its layout documented on the type);
+      ``pv_covariance`` is the (2n, 2n) block of position then velocity taken from it (rows and columns of
+      what is not estimated NaN), ``position_covariance`` its (n, n) position block;
+    * ``valid`` - a bool: the position (and its covariance) can be flown on;
+    * ``frame`` - a name of ``FRAMES``.
+
+    Subclasses are frozen dataclasses that have these as fields or properties and say where position and
+    velocity sit in their covariance (``position_index``, ``velocity_index``: None where not estimated).
+    """
+
+    t: float
+    position: np.ndarray
+    velocity: np.ndarray
+    covariance: np.ndarray
+    valid: bool
+    frame: ClassVar[str] = "ned"
+    position_index: ClassVar[tuple[int, ...]] = (0, 1, 2)
+    velocity_index: ClassVar[tuple[int, ...] | None] = (3, 4, 5)
+
+    @property
+    def position_covariance(self) -> np.ndarray:
+        i = self.position_index
+        return np.asarray(self.covariance, float)[np.ix_(i, i)]
+
+    @property
+    def pv_covariance(self) -> np.ndarray:
+        n = len(self.position_index)
+        if self.velocity_index is None:
+            C = np.full((2 * n, 2 * n), np.nan)
+            C[:n, :n] = self.position_covariance
+            return C
+        i = self.position_index + self.velocity_index
+        return np.asarray(self.covariance, float)[np.ix_(i, i)]
+
+
 @dataclass(frozen=True)
-class NavEstimate:
+class NavEstimate(Estimate):
+    """A vehicle's state in NED: covariance (6, 6) of (position, velocity)."""
+
     t: float
     position: np.ndarray
     velocity: np.ndarray
@@ -269,8 +323,13 @@ class OperatorClick:
 
 
 @dataclass(frozen=True)
-class TargetEstimate:
-    """A navigator's estimate of a ground target's horizontal position."""
+class TargetEstimate(Estimate):
+    """A navigator's estimate of a ground target's horizontal position (a still target: no velocity
+    estimated, ``velocity`` NaN); covariance (2, 2) of the position."""
+
+    frame: ClassVar[str] = "target_ned"
+    position_index: ClassVar[tuple[int, ...]] = (0, 1)
+    velocity_index: ClassVar[tuple[int, ...] | None] = None
 
     t: float
     position: np.ndarray  # (north, east) [m]
@@ -278,6 +337,10 @@ class TargetEstimate:
     samples: int
     valid: bool
     method: str = "registration"  # registration | map_based
+
+    @property
+    def velocity(self) -> np.ndarray:
+        return np.full(2, np.nan)
 
 
 @dataclass

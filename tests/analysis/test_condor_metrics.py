@@ -6,7 +6,7 @@ import pytest
 
 from visnav.analysis.condor_metrics import condor_metrics
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.app.missions import make_simulation
 
 

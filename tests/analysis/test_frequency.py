@@ -8,7 +8,7 @@ from scipy import signal
 from visnav.analysis.frequency import broken_loop_response, frequency_response, margins_from_frd
 from visnav.control.rmax import loop_margins, position_loop
 from visnav.mission.hover import log_chirp
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 
 
 # ------------------------------------------------------------------ spectra of known systems

@@ -10,7 +10,7 @@ import pytest
 from visnav.app.fault_campaign import FAULT_SETS, fault_row, faults_for
 from visnav.analysis.integrity_metrics import integrity_metrics
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.sim.streams import RMAX_STREAMS
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 
 from visnav.analysis.metrics import mpe_drift
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 
 
 def _log(fixes, inits):

@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from visnav.analysis.run_metrics import METRICS, RunDirError, compute_metrics, from_run_dir, metrics_function
 from visnav.cli import app
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.app.missions import REGISTRY, make_simulation
 
 #: short runs that reach each mission's metrics (the pad landing from 5 m lands; pfcm-segment completes)

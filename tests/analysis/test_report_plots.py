@@ -14,7 +14,7 @@ from matplotlib.colors import to_rgba  # noqa: E402
 
 from visnav.analysis import report  # noqa: E402
 from visnav.scenarios.schema import load_scenario  # noqa: E402
-from visnav.sim.log import FlightLog  # noqa: E402
+from visnav.flightlog import FlightLog  # noqa: E402
 from visnav.app.missions import make_simulation  # noqa: E402
 
 

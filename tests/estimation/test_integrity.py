@@ -68,7 +68,8 @@ def test_largest_eigenvalue_closed_form_and_isotropic_hpl_is_the_rayleigh_quanti
     for _ in range(50):
         A = rng.normal(size=(2, 2))
         P = A @ A.T
-        lam = np.linalg.eigvalsh(P)[-1]
+        a, b, d = P[0, 0], P[0, 1], P[1, 1]
+        lam = (a + d) / 2 + math.sqrt(((a - d) / 2) ** 2 + b * b)  # the 2x2 largest eigenvalue in closed form
         assert horizontal_protection_level(P, 0.99) == pytest.approx(math.sqrt(lam * chi2.ppf(0.99, 2)), rel=1e-9)
     s = 1.7
     assert horizontal_protection_level(np.eye(2) * s * s, 0.999) == pytest.approx(rayleigh.ppf(0.999, scale=s),
@@ -168,3 +169,10 @@ def test_per_stream_memo_equals_the_windows_recomputed_bit_for_bit(only):
             m.clear()
         m.assess(0.01 * k, P)
         assert repr(m._windows()) == repr(_windows_reference(m))  # repr: floats to the bit, NaN equal to NaN
+
+
+def test_hpl_of_an_unbounded_or_unknown_covariance():
+    """A variance of +inf (no bound: visual odometry alone) gives an infinite HPL, a NaN (not modelled) a NaN one
+    (and ``assess`` then no alert from it)."""
+    assert horizontal_protection_level(np.diag([np.inf, np.inf])) == math.inf
+    assert math.isnan(horizontal_protection_level(np.array([[np.nan, 0.0], [0.0, 1.0]])))

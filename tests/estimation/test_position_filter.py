@@ -56,27 +56,41 @@ def test_accel_ned_hover_is_zero():
     np.testing.assert_allclose(accel_ned(np.eye(3), np.array([0.0, 0.0, -9.81])), 0.0, atol=1e-12)
 
 
-def test_predict_equals_the_constant_acceleration_model_in_array_form():
-    """The per-axis scalar predict against the model written with arrays (x = F x + B a, P = F P F^T + Q
-    for F = [[1, dt], [0, 1]], B = [dt^2/2, dt], Q of white acceleration): equal to the last bit."""
+def test_predictions_compose_to_the_one_over_their_sum():
+    """The white-acceleration model is discretised exactly: predicting over 200 random steps gives the state and
+    covariance of one step over their sum, x(T) = (p0 + v0 T + a T^2 / 2, v0 + a T) and
+    P(T) = F(T) P0 F(T)^T + q [[T^3/3, T^2/2], [T^2/2, T]] (closed form, constant acceleration a)."""
     rng = np.random.default_rng(4)
-    f = PositionFilter(accel_noise=0.3, position=rng.normal(size=3), velocity=rng.normal(size=3))
-    f.predict(0.0, np.zeros(3))
-    p, v = f.p.copy(), f.v.copy()
-    P00, P01, P11, q = f.P00.copy(), f.P01.copy(), f.P11.copy(), f.q
-    t = 0.0
+    p0, v0, a, q = rng.normal(size=3), rng.normal(size=3), rng.normal(0.0, 2.0, 3), 0.3**2
+    f = PositionFilter(accel_noise=0.3, position=p0, velocity=v0, sigma_p=0.7, sigma_v=0.2)
+    f.predict(0.0, a)
+    T = 0.0
     for _ in range(200):
-        t_new = t + float(rng.uniform(0.005, 0.02))
-        dt, t = t_new - t, t_new  # the filter's own interval
-        a = rng.normal(0.0, 2.0, 3)
-        f.predict(t, a)
-        p = p + (v * dt + 0.5 * a * dt * dt)
-        v = v + a * dt
-        P00, P01, P11 = (P00 + (2 * dt * P01 + dt * dt * P11 + q * dt**3 / 3), P01 + (dt * P11 + q * dt * dt / 2),
-                         P11 + q * dt)
-        np.testing.assert_array_equal(f.p, p)
-        np.testing.assert_array_equal(f.v, v)
-        np.testing.assert_array_equal(np.stack([f.P00, f.P01, f.P11]), np.stack([P00, P01, P11]))
+        T += float(rng.uniform(0.005, 0.02))
+        f.predict(T, a)
+    np.testing.assert_allclose(f.p, p0 + v0 * T + 0.5 * a * T * T, rtol=1e-12)
+    np.testing.assert_allclose(f.v, v0 + a * T, rtol=1e-12)
+    F = np.array([[1.0, T], [0.0, 1.0]])
+    P = F @ np.diag([0.49, 0.04]) @ F.T + q * np.array([[T**3 / 3, T**2 / 2], [T**2 / 2, T]])
+    for i in range(3):
+        np.testing.assert_allclose(f.axis_covariance(i), P, rtol=1e-12)
+    np.testing.assert_allclose(f.covariance()[np.ix_([i, i + 3], [i, i + 3])], P, rtol=1e-12)
+
+
+def test_steady_state_gain_is_the_riccati_solution():
+    """10 Hz position fixes, 100 Hz predictions: the filter's gain converges to the one of the discrete
+    algebraic Riccati equation of the 0.1 s model (scipy.linalg.solve_discrete_are)."""
+    from scipy.linalg import solve_discrete_are
+
+    from visnav.analysis.loop_model import _filter_gains
+
+    q, s, T = 0.3**2, 0.02, 0.1
+    F = np.array([[1.0, T], [0.0, 1.0]])
+    Q = q * np.array([[T**3 / 3, T**2 / 2], [T**2 / 2, T]])  # 10 steps of 0.01 s compose to one of 0.1 s
+    H = np.array([[1.0, 0.0]])
+    P = solve_discrete_are(F.T, H.T, Q, np.array([[s * s]]))  # the predicted covariance in steady state
+    K = P @ H.T / (H @ P @ H.T + s * s)
+    np.testing.assert_allclose(_filter_gains(0.3, s, 100.0, 10.0), K.ravel(), rtol=1e-9)
 
 
 def test_last_nis_is_the_normalised_innovation_of_the_update():

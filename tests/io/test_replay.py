@@ -101,6 +101,12 @@ def test_cli_replay_writes_the_run_directory(palace_rec, tmp_path):
     assert (out / "log.h5").is_file()
     page = (out / "report.html").read_text()
     assert "<h2>Error</h2><img" in page and "<td>ate_rmse_m</td>" in page
+    # the verdict opens the console summary and the report (issue #32: a replay report had none)
+    first = r.output.strip().splitlines()[0]
+    assert first.startswith("replay on palace: ") and f"ATE RMSE {m['ate_rmse_m']:.3f} m" in first
+    assert f"{100 * m['estimate_valid_share']:.0f} % of the output steps" in first
+    assert 0.5 < m["estimate_valid_share"] <= 1.0
+    assert f'<p class="verdict">{first}</p>' in page
     again = ["replay", str(d), "--navigator", "palace", "--out", str(out)]
     r = CliRunner().invoke(app, again)
     assert r.exit_code == 2 and "not empty" in r.output
@@ -190,6 +196,7 @@ def test_gps_withheld_after_a_time_and_used_as_the_reference(palace_rec, tmp_pat
     m = res.metrics
     assert m["gps_withheld"] == int(np.sum(r.streams["gps"]["t_s"] > 5.0)) > 0
     assert m["reference"] == "gps.csv" and m["ate_rmse_m"] > 0
+    assert f"final error {m['final_error_m']:.2f} m" in res.verdict and "against gps.csv" in res.verdict
     full = replay(Recording.open(copy), "palace")
     assert full.metrics["reference"] == "gps.csv" and full.metrics.get("gps_withheld") is None
 
@@ -208,3 +215,4 @@ def test_an_error_inside_the_replay_keeps_what_it_has(palace_rec, tmp_path):
     assert "ValueError at t=5.050 s" in res.metrics["error"] and "bogus" in res.metrics["error"]
     est = res.log.get("estimate")
     assert est["t"][-1] == pytest.approx(5.0) and len(est["t"]) == 51  # 0.0 .. 5.0 s at 10 Hz, kept
+    assert "stopped early: ValueError at t=5.050 s" in res.verdict

@@ -114,7 +114,7 @@ def test_denied_metrics_closed_form():
     """An estimate 3 m east of a reference that flies 100 m north after the cut, the error growing 0 -> 6 m:
     final 6 m over 100 m = 6 %, RMS over the denied samples by hand."""
     from visnav.app.replay import denied_metrics
-    from visnav.sim.log import FlightLog
+    from visnav.flightlog import FlightLog
 
     log = FlightLog()
     t = np.arange(0.0, 21.0)

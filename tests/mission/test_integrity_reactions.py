@@ -9,7 +9,7 @@ import pytest
 from visnav.measurements import Health, NavCommand
 from visnav.navigation.deck import DeckEstimate, DeckHealth
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 
 
 class _StubNav:

@@ -14,7 +14,7 @@ import pytest
 
 from visnav.navigation.base import Navigator
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.app.missions import BuildContext, build
 
 

@@ -16,7 +16,7 @@ from visnav.geometry.mounts import FixedMount
 from visnav.measurements import AttitudeSample, GpsSample, Health, ImuSample, NavEstimate
 from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import NavigationConfig
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 
 
 def _palace(gps_offset=lambda t: 0.0, t_end=6.0, gps_until=math.inf, seed=0):

@@ -73,7 +73,7 @@ def test_a_builders_nav_init_is_logged_and_sent(monkeypatch):
 
     def with_init(ctx):
         parts = orig(ctx)
-        parts.nav_init = NavInit(0.0, "survey", position=np.asarray(parts.start_position, float) + [0.5, 0, 0],
+        parts.nav_init = NavInit(0.0, "survey", position=parts.vehicle.state.position + [0.5, 0, 0],
                                  velocity=np.zeros(3))
         return parts
 

@@ -123,6 +123,6 @@ def test_a_gust_reaches_the_vehicle_environment(scenario):
     assert isinstance(faulted.world.wind, GustyWind)
     k = int(round(2.0 / clean.dt))  # mid-window: the gust's peak, from the east (blowing west)
     for k_, expect in ((0, 0.0), (k, 3.0)):
-        e0 = clean.parts.environment(k_, k_ * clean.dt).wind_ned
-        e1 = faulted.parts.environment(k_, k_ * clean.dt).wind_ned
+        e0 = clean.parts.hooks.environment(k_, k_ * clean.dt).wind_ned
+        e1 = faulted.parts.hooks.environment(k_, k_ * clean.dt).wind_ned
         np.testing.assert_allclose(np.asarray(e1) - np.asarray(e0), [0.0, -expect, 0.0], atol=1e-9)

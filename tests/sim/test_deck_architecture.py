@@ -8,7 +8,7 @@ from visnav.analysis.deck_metrics import deck_metrics
 from visnav.analysis.run_metrics import compute_metrics, metrics_function
 from visnav.measurements import DeckReference, NavCommand
 from visnav.navigation.deck import DeckHealth, DeckNavConfig, DeckNavigator
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.app.missions import make_simulation
 
 from tests.deck_ideal import load_ideal_deck
@@ -61,7 +61,7 @@ def test_navigator_from_a_list_of_measurements_gives_the_closed_loop_estimate(na
     assert {k for k, _ in calls} == {"initialize", "update", "command", "estimate", "health"}
     assert any(k == "command" and c.name == "track" for k, c in calls)
     # a fresh navigator fed the same messages (no simulation object anywhere)
-    nav = DeckNavigator(DeckNavConfig.from_mission(sc, sim.info["frame_steps"] * sc.run.dt_s))
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc, sim.extras.frame_steps * sc.run.dt_s))
     n_est = 0
     for kind, item in calls:
         if kind in ("update", "initialize", "command"):

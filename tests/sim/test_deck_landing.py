@@ -165,10 +165,10 @@ def test_thesis_camera_loses_every_light_over_the_deck_origin():
     does not pull the near lights into the image the way the earlier double distortion did.
     """
     sim = make_simulation(load_ideal_deck("deck-static", seed=1))
-    cam, lights, go = sim.camera, sim.world.lights, sim.info["params"].gear_offset
+    cam, lights, go = sim.camera, sim.world.lights, sim.extras.params.gear_offset
     assert np.max(lights[:, 0]) < sim.sc.sensors.camera.position_m[0]
-    np.testing.assert_array_equal(sim.info["landing_point"], 0.0)
-    land = make_simulation(load_ideal_deck("deck-moving", seed=1)).info["landing_point"]
+    np.testing.assert_array_equal(sim.extras.landing_point, 0.0)
+    land = make_simulation(load_ideal_deck("deck-moving", seed=1)).extras.landing_point
     np.testing.assert_allclose(land, [-0.2, 0.0, 0.0])
     for gear_h in (0.05, 0.1, 0.2, 0.3, 0.5, 0.8):  # level, deck frame = NED at the deck origin
         _, over = cam.project(lights, np.array([0.0, 0.0, -(gear_h + go)]), np.eye(3))

@@ -10,6 +10,7 @@ from visnav.navigation.palace import PalaceNavigator
 from visnav.scenarios.schema import load_scenario
 from visnav.sensors.camera import CameraRenderer
 from visnav.app.loop import Simulation
+from visnav.app.schedule import SensorSchedule
 
 SHORT = ["mission.start_height_m=14", "mission.settle_s=1"]
 
@@ -32,13 +33,13 @@ def _run(sets, defer: bool, monkeypatch=None):
     sim.defer_deliveries = defer
     waited = []
     if monkeypatch is not None:
-        drain = Simulation._drain
+        drain = SensorSchedule._drain
 
         def counting(self, wait):
             waited.append(len(self._backlog))
             return drain(self, wait)
 
-        monkeypatch.setattr(Simulation, "_drain", counting)
+        monkeypatch.setattr(SensorSchedule, "_drain", counting)
     return sim.run(), waited
 
 
@@ -69,7 +70,7 @@ def _backlog_at_sampling(sim, monkeypatch) -> list[int]:
     sample_async = Camera.sample_async
 
     def spy(self, *a, **k):
-        seen.append(sum(isinstance(m, PendingFrame) for _, m in sim._backlog))
+        seen.append(sum(isinstance(m, PendingFrame) for _, m in sim.schedule._backlog))
         return sample_async(self, *a, **k)
 
     monkeypatch.setattr(Camera, "sample_async", spy)
@@ -99,7 +100,7 @@ def test_a_gate_that_reads_the_navigator_is_asked_after_the_backlog_is_delivered
     """A gate not marked ``mode_gate`` may read what the deliveries change: the loop delivers first."""
     sim = Simulation(load_scenario("palace-landing", SHORT + ["run.duration_s=3"], seed=2))
     mission = sim.mission
-    sim.parts.gates["camera"] = lambda t: mission.camera_wanted(t)  # (an unmarked gate)
+    sim.parts.routing.gates["camera"] = lambda t: mission.camera_wanted(t)  # (an unmarked gate)
     seen = _backlog_at_sampling(sim, monkeypatch)
     assert sim.run().error is None
     assert len(seen) >= 20 and not any(seen)
@@ -126,7 +127,7 @@ def test_the_switch_interval_is_short_while_frames_render_and_restored_after(mon
     within ``RENDER_SWITCH_INTERVAL_S``; after the run (or an error) the process has its own setting back."""
     import sys
 
-    from visnav.app import loop
+    from visnav.app import schedule
 
     seen = []
     execute = CameraRenderer.execute  # (the worker's part of a frame)
@@ -138,7 +139,7 @@ def test_the_switch_interval_is_short_while_frames_render_and_restored_after(mon
     monkeypatch.setattr(CameraRenderer, "execute", spy)
     before = sys.getswitchinterval()
     res, _ = _run(["run.duration_s=1"], True)
-    assert res.error is None and seen and max(seen) <= loop.RENDER_SWITCH_INTERVAL_S < before
+    assert res.error is None and seen and max(seen) <= schedule.RENDER_SWITCH_INTERVAL_S < before
     assert sys.getswitchinterval() == before
 
 
@@ -178,3 +179,33 @@ def test_frames_rendered_on_the_loops_thread_give_the_same_run(scenario, sets, m
             assert same, f"{s}.{k}"
     frames_used = {"palace-landing": "tracker", "witas-homing": "odometry"}[scenario]
     assert len(a.log.get(frames_used)["t"]) >= 20  # frames were rendered and used
+
+
+def test_a_sensor_whose_latency_changes_is_read_after_each_sample():
+    """A sensor whose clock jumped (``sensors/faults``: stamp + jump, latency - jump) arrives when its unjumped
+    sample would: the schedule reads ``latency_s`` after each sample, not once at set-up."""
+    from visnav.measurements import RangeSample
+
+    class Jumpy:
+        rate_hz, phase_s = 10.0, 0.0
+
+        def __init__(self):
+            self.latency_s = 0.05
+
+        def sample(self, t, truth=None, world=None):
+            jump = 0.2 if 0.25 < t < 0.55 else 0.0
+            self.latency_s = 0.05 - jump
+            return RangeSample(t=t + jump, range=1.0, sensor="laser", beam_offset=0.0)
+
+    sched = SensorSchedule(0.01)
+    sched.open({"laser": Jumpy()}, {}, None, None, None, on_grid=False, render_thread=False, defer=False)
+    got = []
+    for k in range(80):
+        t = k * 0.01
+        sched.sample(k, t)
+        while sched.due(t):
+            got.append((round(t, 6), sched.pop().t))
+    sent = [(0.1 * k, 0.1 * k + (0.2 if 0.25 < 0.1 * k < 0.55 else 0.0)) for k in range(8)]
+    assert [stamp for _, stamp in got] == pytest.approx([stamp for _, stamp in sent])  # in order, stamps jumped
+    for (arrived, _), (taken, _) in zip(got, sent):  # each when the unjumped one would arrive (the next step)
+        assert taken + 0.05 - 1e-9 <= arrived <= taken + 0.05 + 0.01 + 1e-9

@@ -40,7 +40,7 @@ def test_truth_only_in_sensors_and_log(short_run):
     samples = r.log.get("sample")
     assert len(samples["t"]) == len(sim.nav.samples)
     # the navigator's samples never hold the truth: each registration sample differs from it
-    assert np.all(np.linalg.norm(samples["reg"][samples["ok"].astype(bool)] - sim.info["target"], axis=1) > 1e-6)
+    assert np.all(np.linalg.norm(samples["reg"][samples["ok"].astype(bool)] - sim.extras.target, axis=1) > 1e-6)
 
 
 def test_the_vehicle_flies_the_figure_eight(short_run):
@@ -64,7 +64,7 @@ def test_the_pingwing_flies_its_figure_eight():
     c, tr = r.log.get("control")["cross_track"], r.log.get("truth")
     ok = np.isfinite(c)
     assert np.median(c[ok]) < 8.0  # 2.6-4.0 m over seeds 1-3
-    near = ok & (np.linalg.norm(tr["position"][:, :2] - sim.info["target"], axis=1) < 30.0) & (tr["t"] > 5.0)
+    near = ok & (np.linalg.norm(tr["position"][:, :2] - sim.extras.target, axis=1) < 30.0) & (tr["t"] > 5.0)
     assert near.sum() > 10 and np.median(c[near]) < 5.0
     assert np.degrees(np.abs(tr["euler"][near, 0])).max() < 15.0
     assert np.degrees(np.abs(tr["euler"][:, 0])).max() < 37.0  # the 35 deg bank limit holds

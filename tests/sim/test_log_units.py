@@ -10,7 +10,7 @@ import pytest
 
 from visnav.scenarios.schema import builtin_names, load_scenario
 from visnav.sim import streams
-from visnav.sim.log import STREAMS, FlightLog
+from visnav.flightlog import STREAMS, FlightLog
 from visnav.app.missions import make_simulation
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -23,7 +23,7 @@ def test_a_vehicle_of_its_own_is_a_part_not_a_loop():
     assert type(sim) is Simulation
     from visnav.vehicles.multirotor import Multirotor
 
-    assert isinstance(sim.vehicle, Multirotor) and sim.parts.contact is not None
+    assert isinstance(sim.vehicle, Multirotor) and sim.parts.hooks.contact is not None
     r = sim.run()
     assert r.error is None and len(r.log.get("vehicle")["t"]) == 51  # every step, the end included
 

@@ -12,7 +12,7 @@ import pytest
 from visnav.io.logs import open_recording
 from visnav.app.replay import replay
 from visnav.scenarios.schema import load_scenario
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 from visnav.app.sil import SilError, run_sil
 
 pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)

@@ -100,11 +100,11 @@ def test_sil_camera_streams_while_the_mission_needs_no_frames():
     from visnav.app.sil import sil_simulation
 
     sc = load_scenario("palace-landing")
-    gate = make_simulation(sc).parts.gates["camera"]  # the in-process economy this test is about
+    gate = make_simulation(sc).parts.routing.gates["camera"]  # the in-process economy this test is about
     gate.__self__.mode = "final"
     assert gate(60.0) is False
     sim = sil_simulation(sc)
     try:
-        assert "camera" not in sim.parts.gates and "camera" in sim.sensors
+        assert "camera" not in sim.parts.routing.gates and "camera" in sim.sensors
     finally:
         sim.sil_link.close()

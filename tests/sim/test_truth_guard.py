@@ -43,7 +43,6 @@ class GuardedState(VehicleState):
 
 def _guard(monkeypatch):
     import visnav.sensors.base as sb
-    import visnav.app.loop as loop
     import visnav.sim.parts as parts
     import visnav.app.rmax_parts as rp
     import visnav.vehicles.rmax as vr
@@ -59,7 +58,7 @@ def _guard(monkeypatch):
     monkeypatch.setattr(sb, "VehicleState", GuardedState)  # what the truth history interpolates
     monkeypatch.setattr(vr, "VehicleState", GuardedState)  # the vehicle model's state
     monkeypatch.setattr(rp, "VehicleState", GuardedState)  # the start state
-    monkeypatch.setattr(loop, "VehicleTruth", GuardedHistory)  # the loop's truth history of the R-MAX
+    monkeypatch.setattr(rp, "VehicleTruth", GuardedHistory)  # the R-MAX's truth history (app/rmax_parts.rmax_parts)
 
 
 def test_the_guard_sees_a_read_from_elsewhere(monkeypatch):

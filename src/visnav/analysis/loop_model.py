@@ -29,8 +29,8 @@ def _filter_gains(accel_noise: float = 0.3, sigma_m: float = 0.02, imu_rate_hz: 
     for i in range(400):
         for j in range(n):
             f.predict((i * n + j + 1) / imu_rate_hz, np.zeros(3))
-        s = f.P00[0] + sigma_m**2
-        k = (f.P00[0] / s, f.P01[0] / s)
+        P = f.axis_covariance(0)  # the north axis' (p, v) covariance before the update: K = P H^T / (H P H^T + r), H = (1, 0)
+        k = (P[0, 0] / (P[0, 0] + sigma_m**2), P[1, 0] / (P[0, 0] + sigma_m**2))
         f.update_position(np.zeros(3), sigma_m)
     return k
 

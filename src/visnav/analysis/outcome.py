@@ -90,6 +90,32 @@ def verdict_line(metrics: dict) -> str:
     return line
 
 
+def replay_verdict(metrics: dict, navigator: str) -> str:
+    """The first line of a replay's summary and report (a replay flies nothing, so it has no outcome): how much
+    of the recording the navigator estimated, and its accuracy against the recording's reference, the
+    GPS-denied part's first where ``--gps-until`` withheld the GPS; or why it stopped."""
+    dur = metrics.get("flight_duration_s", float("nan"))
+    head = f"replay on {navigator}: {dur:.1f} s"
+    if metrics.get("error"):
+        return f"{head}, stopped early: {metrics['error']} (what it had is kept)"
+    if metrics.get("interrupted"):
+        return f"{head}, interrupted (Ctrl-C): the run directory holds the replay up to there"
+    share = metrics.get("estimate_valid_share")
+    line = head + (f", a valid estimate at {100 * share:.0f} % of the output steps" if isinstance(share, float) else "")
+    ref = metrics.get("reference")
+    if not ref:
+        return line + "; the recording has no reference to score it against"
+    if "final_error_m" in metrics:
+        line += (f"; GPS-denied {metrics['denied_s']:.0f} s over {metrics['distance_denied_m']:.0f} m: final error "
+                 f"{metrics['final_error_m']:.2f} m ({metrics['final_error_pct_of_distance']:.2f} % of the distance), "
+                 f"RMS {metrics['ate_rmse_denied_m']:.2f} m against {ref}")
+    elif "ate_rmse_m" in metrics:
+        line += f"; against {ref}: ATE RMSE {metrics['ate_rmse_m']:.3f} m, max {metrics['ate_max_m']:.3f} m"
+    else:
+        line += f"; not scored against {ref}: {metrics.get('ate_note', 'no overlap with the estimate')}"
+    return line
+
+
 def outcome_text(counts: dict[str, int]) -> str:
     """'outcomes: 18 safe, 2 aborted; 3 runs over the HPL while ok' ('' when no run has an outcome)."""
     hpl = counts.get("hpl_violated_while_ok", 0)

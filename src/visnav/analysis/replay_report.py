@@ -58,7 +58,7 @@ def _figures(log, frame: str = "") -> list[tuple[str, str]]:
     return out
 
 
-def write_replay_report(result, path: Path, title: str) -> None:
+def write_replay_report(result, path: Path, title: str, verdict: str = "") -> None:
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v:.4g}</td></tr>" if isinstance(v, float) else
                    f"<tr><td>{html.escape(k)}</td><td>{html.escape(str(v))}</td></tr>"
                    for k, v in result.metrics.items())
@@ -66,5 +66,6 @@ def write_replay_report(result, path: Path, title: str) -> None:
     figs = "".join(f"<h2>{html.escape(t)}</h2>{img}" for t, img in _figures(result.log, getattr(result, "frame", "") or ""))
     Path(path).write_text(f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto}} td{{padding:2px 10px;border-bottom:1px solid #ddd}}
-img{{max-width:100%}}</style></head><body><h1>{html.escape(title)}</h1><p>frame: {html.escape(result.frame)}</p>
+img{{max-width:100%}} .verdict{{font-size:1.15em;font-weight:bold}}</style></head><body><h1>{html.escape(title)}</h1>
+{f'<p class="verdict">{html.escape(verdict)}</p>' if verdict else ''}<p>frame: {html.escape(result.frame)}</p>
 <h2>Metrics</h2><table>{rows}</table>{'<h2>Notes</h2><ul>' + notes + '</ul>' if notes else ''}{figs}</body></html>""")

@@ -15,7 +15,7 @@ import math
 from pathlib import Path
 from typing import Callable
 from visnav.io.tum import trajectory_rmse, tum_frame
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 
 MetricsFn = Callable[..., dict]
 

@@ -30,7 +30,7 @@ from visnav.sensors.gimbal import CameraAhrs, Gimbal, PanPotentiometer
 from visnav.sensors.gps import Gps
 from visnav.sensors.link import Link
 from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
-from visnav.sim.parts import CurrentTruth, IntegrityStatus, MissionParts
+from visnav.sim.parts import CurrentTruth, GroundTest, Hooks, IntegrityStatus, MissionParts, Routing, Timing
 from visnav.app.rmax_parts import WindEnvironment
 from visnav.sim.streams import CONDOR_GROUND_STREAMS, CONDOR_STREAMS
 from visnav.vehicles.fixedwing import FixedWingParams, trim
@@ -131,7 +131,7 @@ def floor(vehicle, min_agl_m: float):
     return check
 
 
-def build(ctx) -> MissionParts:
+def build(ctx) -> MissionParts | GroundTest:
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
     rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(14)]
@@ -144,8 +144,7 @@ def build(ctx) -> MissionParts:
             run_ground_test(sc, rng[6], ctx.record)
             mission.finish(0.0)
 
-        return MissionParts(world=None, sensors={}, navigator=None, mission=mission, controller=None,
-                            metrics=condor_metrics, evaluate=evaluate, streams=CONDOR_GROUND_STREAMS)
+        return GroundTest(mission=mission, metrics=condor_metrics, evaluate=evaluate, streams=CONDOR_GROUND_STREAMS)
     dt = sc.run.dt_s
     sn = sc.sensors
     s = sc.vehicle.mass_kg / 13.5  # Aerosonde inertias scaled with the mass (vehicles/fixedwing.py)
@@ -194,12 +193,11 @@ def build(ctx) -> MissionParts:
     environment = WindEnvironment(lambda: world.wind, dt, lambda: max(-vehicle.x[2], 1.0),
                                   lambda: max(vehicle.air["Va"], 1.0), initial=wind.velocity_ned(0.0, 0.0))
     return MissionParts(
-        world=world, sensors=sensors, navigator=nav, mission=mission, controller=autopilot, metrics=condor_metrics,
-        vehicle=vehicle, truth=truth, sensor_grid=True, mission_hz=autopilot.rate_hz, log_hz=10.0,
-        initial_command=trim_level.controls, environment=environment,
-        logger=CondorLogger(vehicle, mission, autopilot, nav, record), after_step=floor(vehicle, 5.0),
-        world_step=gimbal.step, uplink=link, on_delivered=operator.after, start=operator.start,
-        nav_init=NavInit(0.0, "survey", position=target.copy()), streams=CONDOR_STREAMS, camera_model=camera,
-        extra_metrics=(integrity_metrics,),
-        info={"target": target, "gimbal": gimbal, "renderer": renderer, "trim": trim_level, "params": params,
-              "link": link})
+        world=world, sensors=sensors, navigator=nav, mission=mission, controller=autopilot, vehicle=vehicle,
+        truth=truth, logger=CondorLogger(vehicle, mission, autopilot, nav, record), metrics=condor_metrics,
+        streams=CONDOR_STREAMS, timing=Timing(mission_hz=autopilot.rate_hz, sensor_grid=True, log_hz=10.0),
+        hooks=Hooks(environment=environment, world_step=gimbal.step, after_step=floor(vehicle, 5.0),
+                    start=operator.start),
+        routing=Routing(uplink=link, on_delivered=operator.after),
+        nav_init=NavInit(0.0, "survey", position=target.copy()), camera_model=camera,
+        extra_metrics=(integrity_metrics,))

@@ -25,14 +25,14 @@ from visnav.control.deck import DeckController
 from visnav.estimation import deck as dm
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.rotations import euler_to_dcm
-from visnav.measurements import AttitudeThrustCommand, NavInit, RelativeStateSample, VehicleState
+from visnav.measurements import NavInit, RelativeStateSample, VehicleState
 from visnav.mission.deck import DeckMission
 from visnav.navigation.deck import DeckNavConfig, DeckNavigator
 from visnav.sensors.deck_observer import RelativeStateSensor
 from visnav.sensors.imu import AccelGyro, RollPitchAhrs
 from visnav.sensors.led_camera import LedCamera
 from visnav.sim.clock import rate_divisor
-from visnav.sim.parts import IntegrityStatus, MissionParts, VehicleTruth
+from visnav.sim.parts import Hooks, IntegrityStatus, MissionParts, Routing, Timing, VehicleTruth
 from visnav.sim.streams import DECK_STREAMS
 from visnav.vehicles.base import Environment
 from visnav.vehicles.multirotor import Multirotor, MultirotorParams
@@ -74,6 +74,15 @@ class TrueCalibration:
         T_cam = Rotation.from_rotvec(np.radians(c.misalignment_deg) * n[1]).as_matrix() @ c.rotation()
         return cls(lights, camera, T_cam, imu.accel_bias_mps2 * n[2], np.radians(imu.gyro_bias_deg_s) * n[3],
                    np.random.default_rng([int(sc.run.seed), 3004]))
+
+
+@dataclass(frozen=True)
+class DeckExtras:
+    """What tests read of a deck run besides its parts."""
+
+    landing_point: np.ndarray  # where the gear should touch, deck frame [m]
+    frame_steps: int  # dynamics steps per camera frame
+    params: MultirotorParams
 
 
 class MultirotorTruth(VehicleTruth):
@@ -226,9 +235,9 @@ def build(ctx) -> MissionParts:
                                 rate_hz=1.0 / (d_ctrl * dt), recorder=record)
     deck = DeckContact(vehicle, world, truth, mission, nav, params, cfg, record)
     return MissionParts(
-        world=world, sensors=sensors, navigator=nav, mission=mission, controller=controller, metrics=deck_metrics,
-        vehicle=vehicle, truth=truth, sensor_grid=True, end_inclusive=True, mission_hz=1.0 / (d_ctrl * dt), log_hz=1.0 / dt,
-        initial_command=AttitudeThrustCommand(0.0, 0.0, 0.0, 0.0, hov), environment=deck.environment,
-        logger=deck.log, contact=deck.contact, observers={RelativeStateSample: mission.observe}, streams=DECK_STREAMS,
-        extra_metrics=(integrity_metrics,),
-        info={"landing_point": deck.landing_point, "frame_steps": frame_steps, "params": params, "calibration": true})
+        world=world, sensors=sensors, navigator=nav, mission=mission, controller=controller, vehicle=vehicle,
+        truth=truth, logger=deck.log, metrics=deck_metrics, streams=DECK_STREAMS,
+        timing=Timing(mission_hz=1.0 / (d_ctrl * dt), sensor_grid=True, log_hz=1.0 / dt, end_inclusive=True),
+        hooks=Hooks(environment=deck.environment, contact=deck.contact),
+        routing=Routing(observers={RelativeStateSample: mission.observe}),
+        extra_metrics=(integrity_metrics,), extras=DeckExtras(deck.landing_point, frame_steps, params))

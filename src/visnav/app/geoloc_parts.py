@@ -14,6 +14,7 @@ telemetry), the operator's click and the log only.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -31,7 +32,7 @@ from visnav.sensors.gimbal import PitchRollGimbal
 from visnav.sensors.telemetry import AutopilotTelemetry
 from visnav.sim.fixedwing_common import AircraftAir, scenario_wind, trimmed_aircraft
 from visnav.app.condor_parts import floor
-from visnav.sim.parts import MissionParts, VehicleTruth
+from visnav.sim.parts import Hooks, MissionParts, Routing, Timing, VehicleTruth
 from visnav.app.rmax_parts import WindEnvironment
 from visnav.sim.streams import GEOLOC_STREAMS
 from visnav.vehicles.fixedwing import MICRO_REFERENCE_AIRSPEED_MPS, MICRO_REFERENCE_SPAN_M, micro_params, trim
@@ -222,6 +223,13 @@ class GeolocLogger:
                rejected=h.rejected_samples, reinits=h.reinitializations, frames_tracked=nav.frames_tracked)
 
 
+@dataclass(frozen=True)
+class GeolocExtras:
+    """What tests read of a geo-location flight besides its parts."""
+
+    target: np.ndarray  # the truck's position, north and east [m]
+
+
 def build(ctx) -> MissionParts:
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
@@ -284,11 +292,11 @@ def build(ctx) -> MissionParts:
     environment = WindEnvironment(lambda: wind, dt, lambda: max(-vehicle.x[2], 1.0),
                                   lambda: max(vehicle.air["Va"], 1.0), initial=wind.velocity_ned(0.0, 0.0))
     return MissionParts(
-        world=GeolocWorld(vehicle, scene), sensors=sensors, navigator=nav, flight_navigator=ap_nav, mission=station,
-        controller=autopilot, metrics=geolocation_metrics, vehicle=vehicle, truth=truth, sensor_grid=True, mission_hz=autopilot.rate_hz, log_hz=10.0,
-        initial_command=autopilot.trim, environment=environment, logger=logger, after_step=floor(vehicle, 10.0),
-        world_step=lambda dt: gimbal.step(dt, vehicle.x[6:9]),
-        observers={OperatorClick: nav.update, Frame: nav.update}, on_delivered=station.delivered,
-        start=station.start, finish=logger.finish, streams=GEOLOC_STREAMS, camera_model=camera,
-        info={"target": target, "reference": reference, "path": path, "geo_mission": mission, "gimbal": gimbal})
-    return parts
+        world=GeolocWorld(vehicle, scene), sensors=sensors, navigator=nav, mission=station, controller=autopilot,
+        vehicle=vehicle, truth=truth, logger=logger, metrics=geolocation_metrics, streams=GEOLOC_STREAMS,
+        timing=Timing(mission_hz=autopilot.rate_hz, sensor_grid=True, log_hz=10.0),
+        hooks=Hooks(environment=environment, world_step=lambda dt: gimbal.step(dt, vehicle.x[6:9]),
+                    after_step=floor(vehicle, 10.0), start=station.start, finish=logger.finish),
+        routing=Routing(observers={OperatorClick: nav.update, Frame: nav.update}, on_delivered=station.delivered,
+                        flight_navigator=ap_nav),
+        camera_model=camera, extras=GeolocExtras(target))

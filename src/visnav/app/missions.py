@@ -1,30 +1,29 @@
 """What a scenario's ``mission.type`` flies with: the parts of the one loop (``app/loop.py``).
 
 A builder takes a ``BuildContext`` (the scenario, the log's recorder, the run's random generators) and
-returns the ``MissionParts``: world, sensors, navigator, mission, controller, metrics, start pose,
-and, where the mission has them, an actuator injection and an explicit navigator initialisation. The
-simulation builds nothing else: a builder asks for the textured world (``ctx.textured_world()``) or the
-standard R-MAX sensors (``ctx.rmax_sensors()``) only when its mission uses them. A new mission registers
-its builder here with ``@register("name")`` (and its pydantic config in ``scenarios/schema.py``); a mission
-that flies another vehicle gives its vehicle, truth, environment, logger and contact parts too
-(``app/deck_parts.py``, ``app/condor_parts.py``, ``app/geoloc_parts.py``); left out, they are the R-MAX's
-(``app/rmax_parts.py``).
+returns the ``MissionParts`` (``sim/parts.py``): every part of its system, stated. The simulation builds
+nothing else: a builder asks for the textured world (``ctx.textured_world()``) or the standard R-MAX sensors
+(``ctx.rmax_sensors()``) only when its mission uses them. A new mission registers its builder here with
+``@register("name")`` (and its pydantic config in ``scenarios/schema.py``). The R-MAX's missions take the
+helicopter's parts from ``app/rmax_parts.rmax_parts``; the other systems build theirs in
+``app/deck_parts.py``, ``app/condor_parts.py``, ``app/geoloc_parts.py``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
 import numpy as np
 
-from visnav.sim.parts import MissionParts  # noqa: F401  (re-exported)
+from visnav.sim.parts import GroundTest, MissionParts, Step
 from visnav.analysis.metrics import palace_metrics, hover_metrics
 from visnav.analysis.path_metrics import pfcm_metrics
 from visnav.app.navigators import rmax_camera, make_navigator
+from visnav.app.rmax_parts import rmax_parts
 
-Builder = Callable[["BuildContext"], "MissionParts"]
+Builder = Callable[["BuildContext"], "MissionParts | GroundTest"]
 REGISTRY: dict[str, Builder] = {}
 
 #: the missions the R-MAX flies (the others fly their own vehicle, from their own parts)
@@ -50,11 +49,15 @@ def make_simulation(scenario, navigator_wrapper=None):
 
 @dataclass
 class BuildContext:
-    """What a builder gets: the scenario, the log's recorder and the run's random generators."""
+    """What a builder gets: the scenario, the log's recorder and the run's random generators; for a part that
+    logs a step of its own (the R-MAX's touchdown), the loop's ``step`` (``sim/parts.Step``, filled at each
+    log step) and ``settle()`` (everything due delivered to the navigator before the part reads it)."""
 
     scenario: object
     record: Callable
     navigator_wrapper: Callable | None = None  # wraps the navigator (visnav record's proxy) before a mission gets it
+    step: Step = field(default_factory=lambda: Step(0.0, None, None, None, None, None, ""))
+    settle: Callable[[], None] = lambda: None
 
     @cached_property
     def rng(self) -> list[np.random.Generator]:
@@ -126,7 +129,7 @@ def register(name: str) -> Callable[[Builder], Builder]:
     return deco
 
 
-def build(ctx: BuildContext) -> MissionParts:
+def build(ctx: BuildContext) -> MissionParts | GroundTest:
     kind = ctx.scenario.mission.type
     if kind not in REGISTRY:
         raise ValueError(f"mission.type {kind!r} has no builder; known: {', '.join(sorted(REGISTRY))}")
@@ -144,9 +147,9 @@ def _palace(ctx: BuildContext) -> MissionParts:
     nav = ctx.navigator("palace")
     c = sc.sensors.camera
     mission = PalaceMission(sc.mission, nav, yaw=ctx.yaw, image_size=(c.width, c.height), recorder=ctx.record)
-    return MissionParts(world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
-                        controller=RmaxPositionController(), metrics=palace_metrics,
-                        start_position=mission.start_position(), start_yaw=ctx.yaw, camera_model=model, mount=mount)
+    return rmax_parts(ctx, world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
+                      controller=RmaxPositionController(), metrics=palace_metrics,
+                      start_position=mission.start_position(), start_yaw=ctx.yaw, camera_model=model, mount=mount)
 
 
 @register("hover")
@@ -158,10 +161,10 @@ def _hover(ctx: BuildContext) -> MissionParts:
     model, mount = ctx.camera_geometry()
     nav = ctx.navigator("palace")
     mission = HoverMission(ctx.scenario.mission, nav, yaw=ctx.yaw, recorder=ctx.record)
-    return MissionParts(world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
-                        controller=RmaxPositionController(), metrics=hover_metrics,
-                        start_position=mission.start_position(), start_yaw=ctx.yaw, camera_model=model, mount=mount,
-                        actuator_injection=mission.actuator_injection)
+    return rmax_parts(ctx, world=world, sensors=ctx.rmax_sensors(), navigator=nav, mission=mission,
+                      controller=RmaxPositionController(), metrics=hover_metrics,
+                      start_position=mission.start_position(), start_yaw=ctx.yaw, camera_model=model, mount=mount,
+                      injection=mission.actuator_injection)
 
 
 @register("pfcm")
@@ -176,10 +179,10 @@ def _pfcm(ctx: BuildContext) -> MissionParts:
     mission = PfcmMission(cfg, recorder=ctx.record, iterations=ctl.iterations)
     controller = PathFollowingController(path_loop_gains(cfg, ctl), recorder=ctx.record)
     # PFCM flies on the PALACE navigator's GPS solution: no camera
-    return MissionParts(world=world, sensors=ctx.rmax_sensors(camera=False), navigator=ctx.navigator("palace"),
-                        mission=mission, controller=controller, metrics=pfcm_metrics,
-                        start_position=mission.start_position(), start_yaw=mission.start_yaw, camera_model=model,
-                        mount=mount)
+    return rmax_parts(ctx, world=world, sensors=ctx.rmax_sensors(camera=False), navigator=ctx.navigator("palace"),
+                      mission=mission, controller=controller, metrics=pfcm_metrics,
+                      start_position=mission.start_position(), start_yaw=mission.start_yaw, camera_model=model,
+                      mount=mount)
 
 
 @register("witas-homing")
@@ -204,7 +207,7 @@ def _deck(ctx: BuildContext) -> MissionParts:
 
 
 @register("condor")
-def _condor(ctx: BuildContext) -> MissionParts:
+def _condor(ctx: BuildContext) -> MissionParts | GroundTest:
     from visnav.app.condor_parts import build as build_condor
 
     return build_condor(ctx)

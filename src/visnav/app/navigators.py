@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from visnav.measurements import FRAMES
 from visnav.sim.clock import rate_divisor
 
 
@@ -25,7 +26,7 @@ class NavigatorSpec:
     camera: Callable  # camera(sc) -> (PinholeCamera, mount) of the scenario
     camera_hz: Callable  # camera_hz(sc) -> frames per second it consumes
     build: Callable  # build(sc, recorder, camera, mount, **parts) -> navigator
-    frame: str = "NED world, body FRD"  # the frame of its estimate (the TUM header of a replay)
+    frame: str = FRAMES["ned"]  # the frame of its estimate (``Estimate.frame``'s text: the TUM header of a replay)
     estimate_row: Callable | None = None  # estimate -> dict(position, velocity, euler, source, valid); None: NavEstimate
     color_frames: bool = False  # it takes RGB frames (else 8-bit gray)
     finish: Callable | None = None  # finish(nav, log): what the navigator logs at the end of a run (replay)
@@ -198,7 +199,7 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
                          lambda sc: float(sc.sensors.camera.rate_hz), _pad),
     "deck": NavigatorSpec("deck-moving", ("deck",), ("imu", "attitude", "frames"), _deck_camera,
                           lambda sc: 1.0 / _deck_frame_interval(sc), _deck,
-                          frame="deck-relative: deck origin relative to the vehicle in body FRD, deck -> body Euler",
+                          frame=FRAMES["deck_body"],
                           estimate_row=_deck_row, streams="visnav.sim.streams:DECK_STREAMS"),
     "condor": NavigatorSpec("condor-orbit", ("condor",), ("imu", "attitude", "gps", "baro", "magnetometer", "airspeed",
                                                           "camera_attitude", "pan", "frames", "click"),
@@ -206,7 +207,7 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
                             streams="visnav.sim.streams:CONDOR_STREAMS", log_first_estimate=True),
     "geolocation": NavigatorSpec("mav-geolocation", ("mav-geolocation",), ("telemetry", "frames", "click"),
                                  _geolocation_camera, lambda sc: float(sc.sensors.camera.frame_hz), _geolocation,
-                                 frame="target position: NED world, on the ground (down 0)", estimate_row=_target_row,
+                                 frame=FRAMES["target_ned"], estimate_row=_target_row,
                                  finish=_geolocation_finish, truth=_target_truth,
                                  streams="visnav.sim.streams:GEOLOC_STREAMS"),
     "vo": NavigatorSpec("witas-homing", (), ("frames", "gps"), rmax_camera, lambda sc: 0.2, _vo),

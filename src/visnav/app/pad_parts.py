@@ -10,14 +10,15 @@ import math
 
 import numpy as np
 
+from visnav.geometry.pad import PadLayout
 from visnav.mission.pad import PadLandingMission
 from visnav.analysis.pad_report import pad_metrics
-from visnav.sim.parts import MissionParts
+from visnav.app.rmax_parts import rmax_parts
+
 
 def build(ctx):
     from visnav.control.rmax import RmaxPositionController
     from visnav.geometry.camera import PinholeCamera
-    from visnav.geometry.pad import PadLayout
     from visnav.sensors.imu import Imu
     from visnav.sensors.pad_camera import PadCamera
     from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
@@ -50,7 +51,6 @@ def build(ctx):
     nav = ctx.navigator("pad", camera=cam, ptu=ptu, layout=layout)
     mission = PadLandingMission(cfg, recorder=record)
     # GPS-free: the split-rate IMU (with the attitude solution) and the pan-tilt camera only
-    return MissionParts(world=world, sensors={"imu": SplitRateImu(imu, fc.accel_hz), "camera": camera}, navigator=nav,
-                        mission=mission, controller=RmaxPositionController(), metrics=pad_metrics,
-                        start_position=mission.start_position(), start_yaw=0.0, camera_model=cam,
-                        info={"pad_layout": layout})
+    return rmax_parts(ctx, world=world, sensors={"imu": SplitRateImu(imu, fc.accel_hz), "camera": camera}, navigator=nav,
+                      mission=mission, controller=RmaxPositionController(), metrics=pad_metrics,
+                      start_position=mission.start_position(), start_yaw=0.0, camera_model=cam)

@@ -17,7 +17,8 @@ import numpy as np
 
 from visnav.io.recording import STREAM_NAMES, STREAMS, Recording, RecordingError
 from visnav.measurements import NavCommand, NavInit
-from visnav.sim.log import FlightLog, register_stream
+from visnav.flightlog import FlightLog, register_stream
+from visnav.analysis.outcome import replay_verdict
 from visnav.analysis.check import camera_imu
 from visnav.analysis.trajectory_eval import Trajectory, TrajectoryError, evaluate
 from visnav.analysis.trajectory_export import write_tum_file
@@ -45,6 +46,12 @@ class ReplayResult:
     scenario: object
     notes: list[str]
     frame: str = "NED world, body FRD"
+    navigator: str = ""
+
+    @property
+    def verdict(self) -> str:
+        """The summary's and the report's first line (``analysis/outcome.replay_verdict``)."""
+        return replay_verdict(self.metrics, self.navigator)
 
 
 def scenario_of(rec: Recording, default: str, overrides=()):
@@ -169,6 +176,9 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     metrics |= {"frames_used": counts["frames"], "frames_dropped": int(rec.skipped.get("frames", 0)),
                 "frames_in_recording": rec.count("frames"), "imu_samples": counts["imu"],
                 "samples_rejected": int(getattr(h, "rejected_samples", 0))}
+    est_valid = log.get("estimate").get("valid", []) if log.get("estimate") else []
+    if len(est_valid):
+        metrics["estimate_valid_share"] = float(np.mean(np.asarray(est_valid, bool)))
     if opts.gps_until_s is not None:
         metrics["gps_withheld"] = counts["gps_withheld"]
     if counts["fixes"]:  # a navigator with a ground-station half (CONDOR): its fixes over the link
@@ -195,7 +205,7 @@ def replay(rec: Recording, navigator: str, opts: ReplayOptions | None = None, pr
     notes += rec.notes
     if rec.skipped:
         notes.append(f"skipped during the replay: {', '.join(f'{v} {k}' for k, v in rec.skipped.items())}")
-    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes, frame=nspec.frame)
+    return ReplayResult(log=log, metrics=metrics, scenario=sc, notes=notes, frame=nspec.frame, navigator=navigator)
 
 
 def _feed(rec, nav, navigator, log, notes, events, opts, progress) -> tuple[dict, str | None]:
@@ -409,5 +419,5 @@ def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title
     if report:
         from visnav.analysis.replay_report import write_replay_report
 
-        write_replay_report(result, out_dir / "report.html", title)
+        write_replay_report(result, out_dir / "report.html", title, result.verdict)
     return out_dir

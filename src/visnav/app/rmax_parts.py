@@ -1,6 +1,7 @@
 """The R-MAX's parts of the one loop (``app/loop.py``), which its builders (``app/missions.py``, ``witas_parts``,
-``pad_parts``) leave to their defaults: the helicopter model started at the builder's pose, its wind, the
-trim held while no position solution is in, the actuator sweep, the touchdown and the streams it logs."""
+``pad_parts``) take from ``rmax_parts``: the helicopter model started at the builder's pose and its truth
+history, its wind, the trim held while no position solution is in, the actuator sweep, the touchdown, the
+streams it logs, its rates and the camera gate."""
 
 from __future__ import annotations
 
@@ -10,14 +11,22 @@ from visnav.analysis.integrity_metrics import integrity_metrics
 from visnav.measurements import VehicleState, YacsCommand
 from visnav.navigation.integrity import STATE_CODES
 from visnav.sim.clock import rate_divisor
+from visnav.sim.parts import Hooks, MissionParts, Routing, Step, Timing, VehicleTruth
+from visnav.sim.streams import RMAX_STREAMS
 from visnav.vehicles.base import Environment
 from visnav.vehicles.rmax import RmaxModel
 
 
-def rmax_vehicle(parts, dt: float) -> RmaxModel:
+#: the R-MAX's truth history [s]: the sensors' delays and the navigators' look-ups reach that far back
+TRUTH_HORIZON_S = 2.5
+#: the R-MAX's mission manager (and position loop, its own rate_hz) and log [Hz]
+MISSION_HZ = 10.0
+
+
+def rmax_vehicle(start_position, start_yaw: float, dt: float) -> RmaxModel:
     """The R-MAX at the builder's start pose, at rest."""
-    init = VehicleState(t=0.0, position=np.asarray(parts.start_position, float), velocity=np.zeros(3),
-                        euler=np.array([0.0, 0.0, parts.start_yaw]), body_rates=np.zeros(3),
+    init = VehicleState(t=0.0, position=np.asarray(start_position, float), velocity=np.zeros(3),
+                        euler=np.array([0.0, 0.0, start_yaw]), body_rates=np.zeros(3),
                         specific_force=np.array([0.0, 0.0, -9.81]))
     return RmaxModel(dt=dt, initial=init)
 
@@ -99,40 +108,44 @@ class Touchdown:
 
     settles_itself = True
 
-    def __init__(self, sim) -> None:
-        self.sim = sim
+    def __init__(self, vehicle, mission, nav, logger, record, step: Step, settle) -> None:
+        self.vehicle, self.mission, self.nav, self.logger, self.record = vehicle, mission, nav, logger, record
+        self.step, self.settle = step, settle  # the loop's step (what it logged last) and its settle()
 
     def __call__(self, t: float, t_prev: float) -> bool:
-        sim = self.sim
-        s = sim.vehicle.state
+        s = self.vehicle.state
         if not (s.on_ground and t_prev > 1.0):
             return False
-        sim.settle()
-        sim.mission.on_touchdown(t)
-        sim.log.record("touchdown", t, position=s.position, speed=float(getattr(sim.vehicle, "touchdown_speed", np.nan)))
-        st = sim.step_state
-        sim.logger(type(st)(t, s, sim.nav.estimate(t), sim.nav.health(t), st.reference, st.command, "landed"))
+        self.settle()
+        self.mission.on_touchdown(t)
+        self.record("touchdown", t, position=s.position, speed=float(getattr(self.vehicle, "touchdown_speed", np.nan)))
+        st = self.step
+        self.logger(Step(t, s, self.nav.estimate(t), self.nav.health(t), st.reference, st.command, "landed"))
         return True
 
 
-def fill_rmax_defaults(parts, sim) -> None:
-    """The R-MAX's parts where the builder left them out."""
-    dt = sim.dt
-    if parts.vehicle is None:
-        parts.vehicle = rmax_vehicle(parts, dt)
-        parts.controller = HoldTrim(parts.controller)
-        if parts.initial_command is None:
-            parts.initial_command = YacsCommand(t=0.0)
-        if parts.environment is None:
-            parts.environment = WindEnvironment(
-                lambda: sim.world.wind, dt, lambda: max(sim.truth.latest.height_agl, 0.5),
-                lambda: float(np.linalg.norm(sim.truth.latest.velocity - sim.world.wind.steady.ned)))
-        if parts.actuator_injection is not None:
-            parts.actuator = Injection(parts.actuator_injection, sim.log.record)
-        parts.extra_metrics = (*parts.extra_metrics, integrity_metrics)  # from the log (issue #18)
-        if parts.after_step is None:
-            parts.after_step = Touchdown(sim)
-        if "camera" in parts.sensors and "camera" not in parts.gates and hasattr(parts.mission, "camera_wanted"):
-            parts.gates["camera"] = parts.mission.camera_wanted
-    if parts.logger is None:
-        parts.logger = RmaxLogger(sim.log.record)
+def rmax_parts(ctx, *, world, sensors: dict, navigator, mission, controller, metrics, start_position, start_yaw: float,
+               camera_model=None, mount=None, injection=None, notes=()) -> MissionParts:
+    """A mission flown by the R-MAX: the builder's world, sensors, navigator, mission, position controller and
+    metrics with the helicopter at ``start_position`` / ``start_yaw`` (at rest), its truth history, the wind at
+    the rotor (``WindEnvironment``), the trim until the first position solution (``HoldTrim``), the touchdown,
+    the R-MAX streams at 10 Hz, each sensor at its own instants, the camera gated by ``mission.camera_wanted``
+    where both exist; ``injection(t)``: YACS increments added at the actuator (a sweep, ``Injection``)."""
+    dt, record = ctx.scenario.run.dt_s, ctx.record
+    vehicle = rmax_vehicle(start_position, start_yaw, dt)
+    truth = VehicleTruth(vehicle, dt, horizon_s=TRUTH_HORIZON_S)
+    truth.advance(0.0)
+    logger = RmaxLogger(record)
+    # the world's wind at the rotor (read on use: a wind_gust fault wraps world.wind after the build)
+    environment = WindEnvironment(lambda: world.wind, dt, lambda: max(truth.latest.height_agl, 0.5),
+                                  lambda: float(np.linalg.norm(truth.latest.velocity - world.wind.steady.ned)))
+    gates = {"camera": mission.camera_wanted} if "camera" in sensors and hasattr(mission, "camera_wanted") else {}
+    return MissionParts(
+        world=world, sensors=sensors, navigator=navigator, mission=mission, controller=HoldTrim(controller),
+        vehicle=vehicle, truth=truth, logger=logger, metrics=metrics, streams=RMAX_STREAMS,
+        timing=Timing(mission_hz=MISSION_HZ, sensor_grid=False),
+        hooks=Hooks(environment=environment, actuator=None if injection is None else Injection(injection, record),
+                    after_step=Touchdown(vehicle, mission, navigator, logger, record, ctx.step, ctx.settle)),
+        routing=Routing(gates=gates), camera_model=camera_model, mount=mount,
+        extra_metrics=(integrity_metrics,),  # from the log (issue #18)
+        notes=list(notes))

@@ -61,7 +61,7 @@ from visnav.navigation.base import propagate
 from visnav.analysis.integrity_metrics import integrity_metrics
 from visnav.app.missions import make_simulation
 from visnav.app.navigators import navigator_for
-from visnav.sim.log import FlightLog
+from visnav.flightlog import FlightLog
 
 P0_HPA = 1013.25  # pressure at the NED origin's height
 ORIGIN = (58.395, 15.575, 0.0)  # the simulation's NED origin as the autopilot reports it
@@ -385,7 +385,7 @@ def sil_simulation(sc):
     # the camera is the companion computer's and streams all the time: in-process the mission's gate skips
     # rendering the frames its navigator will not use (PALACE below 1 m), behind the bridge that gap would
     # be a camera stall (no estimate out for ``BridgeConfig.stall_s``, then quality capped)
-    sim.parts.gates.pop("camera", None)
+    sim.parts.routing.gates.pop("camera", None)
     sim.sil_link = link
     return sim
 

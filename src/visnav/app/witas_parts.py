@@ -14,7 +14,7 @@ from visnav.mission.witas import loop_waypoints
 from visnav.world.witas_map import make_ground, mission_rngs, reference_map  # noqa: F401  (re-exported)
 from visnav.analysis.witas_metrics import witas_metrics
 from visnav.app.navigators import NAVIGATORS
-from visnav.sim.parts import MissionParts
+from visnav.app.rmax_parts import rmax_parts
 
 register_stream("note", message=("text", "", "how the scenario was set up (e.g. the loop shrunk to fit the map)"))
 register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),
@@ -75,7 +75,6 @@ def build(ctx):
                            hold_s=cfg.hold_s, end_tolerance_m=1.0)
     mission = PfcmMission(pf, recorder=record, path=path)
     controller = PathFollowingController(path_loop_gains(pf, PfcmControlConfig(roll_compensator=False)), recorder=record)
-    return MissionParts(world=world, sensors=sensors, navigator=nav, mission=mission, controller=controller,
-                        metrics=witas_metrics, start_position=mission.start_position(), start_yaw=mission.start_yaw,
-                        camera_model=model, mount=mount,
-                        info={"witas_reference": reference, "witas_path": path, "notes": notes})
+    return rmax_parts(ctx, world=world, sensors=sensors, navigator=nav, mission=mission, controller=controller,
+                      metrics=witas_metrics, start_position=mission.start_position(), start_yaw=mission.start_yaw,
+                      camera_model=model, mount=mount, notes=notes)

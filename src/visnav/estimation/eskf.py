@@ -246,7 +246,7 @@ class ErrorStateKF:
         ``rejected_samples``); returns whether it was used."""
         a = np.asarray(imu.accel, dtype=float)
         w = np.asarray(imu.gyro, dtype=float)
-        if a.shape != (3,) or w.shape != (3,) or not (all(map(math.isfinite, a.tolist() + w.tolist()))
+        if a.shape != (3,) or w.shape != (3,) or not (np.isfinite(a).all() and np.isfinite(w).all()
                                                       and math.isfinite(imu.t)):
             self.rejected_samples += 1
             return False
@@ -283,7 +283,7 @@ class ErrorStateKF:
         y = np.atleast_1d(np.asarray(y, dtype=float))
         R = np.atleast_2d(np.asarray(R, dtype=float))
         st = self.stats.setdefault(kind, _Stats())
-        if not (all(map(math.isfinite, y.tolist())) and all(map(math.isfinite, R.ravel().tolist()))):
+        if not (np.isfinite(y).all() and np.isfinite(R).all()):
             st.rejected += 1
             self.rejections.append((self.x.t, kind, math.nan))
             return UpdateResult(kind, False, math.nan, y, math.nan)

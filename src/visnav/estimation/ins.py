@@ -229,7 +229,7 @@ class NavState:
 
 def _check_finite(x, what: str) -> np.ndarray:
     a = np.asarray(x, dtype=float)
-    if a.shape != (3,) or not all(map(math.isfinite, a.tolist())):
+    if a.shape != (3,) or not np.isfinite(a).all():
         raise ValueError(f"{what} must be 3 finite numbers, got {x!r}")
     return a
 

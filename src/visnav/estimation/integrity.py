@@ -39,10 +39,16 @@ def horizontal_protection_level(P_h: np.ndarray, probability: float = 0.999, inf
     scaled by ``inflation`` = k^2)."""
     if not 0.0 < probability < 1.0:
         raise ValueError(f"probability must be in (0, 1), got {probability}")
-    P = np.asarray(P_h, float)
-    a, b, d = P[0, 0], 0.5 * (P[0, 1] + P[1, 0]), P[1, 1]
-    lam = 0.5 * (a + d) + math.sqrt(max(0.25 * (a - d) ** 2 + b * b, 0.0))  # largest eigenvalue, closed form
-    return math.sqrt(max(inflation, 0.0) * -2.0 * math.log1p(-probability) * max(lam, 0.0))
+    P = np.asarray(P_h, float)[:2, :2]
+    if not np.all(np.isfinite(P)):
+        return math.nan if np.any(np.isnan(P)) else math.inf
+    lam = float(np.linalg.eigvalsh(0.5 * (P + P.T))[-1])  # lambda_max of the symmetric part
+    return math.sqrt(max(inflation, 0.0) * chi2_2_quantile(probability) * max(lam, 0.0))
+
+
+def chi2_2_quantile(probability: float) -> float:
+    """chi2.ppf(p, 2) = -2 ln(1 - p): chi-square with 2 degrees of freedom is exponential with mean 2."""
+    return -2.0 * math.log1p(-probability)
 
 
 @dataclass

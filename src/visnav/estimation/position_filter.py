@@ -1,18 +1,31 @@
 """Position/velocity Kalman filter driven by the IMU (the flight computer's position filter).
 
-State per NED axis: (position, velocity). Prediction integrates the IMU specific force rotated to
-NED with the attitude solution (a = C_bn f + g e_z); updates take a position source (GPS or MPE),
-GPS velocity, and the sonar height. The three axes are independent given the attitude, so the
-filter keeps one 2x2 covariance per axis as three arrays (no 6x6 algebra on the 100 Hz path).
+The PALACE flight computer runs a position filter beside its attitude filter (seed 000 §2.1.2-2.1.3,
+Fig. 2.3); the thesis gives no equations for it, so it is written as the discrete Kalman filter of seed 002
+App. A (the model eq. A.5-A.6, the KF recursion printed after eq. A.7) for the constant-acceleration model
+below.
 
-With ``accel_bias_noise > 0`` (issue #30) each axis carries a third state, the accelerometer bias ``b``
-in NED (constant between updates, a random walk of ``accel_bias_noise`` m/s^2/sqrt(s)): the integrated
-acceleration is ``a - b`` and the position / velocity updates estimate ``b``, so the dead-reckoning
-after the last fix (PALACE's final metre) runs on a corrected acceleration, and the bias's uncertainty
-is in the position covariance the protection level is built from. Per axis
-``F = [[1, dt, -dt^2/2], [0, 1, -dt], [0, 0, 1]]``; the covariance is kept as the six arrays
-``P00 P01 P02 P11 P12 P22``. Without it (the default) ``P02 = P12 = P22 = 0`` and ``b = 0`` stay so,
-and the filter is the two-state one exactly.
+State per NED axis ``i``: ``x_i = (p, v)``, or with ``accel_bias_noise > 0`` (issue #30) ``x_i = (p, v, b)``
+with ``b`` the accelerometer bias in NED (constant between updates, a random walk of ``accel_bias_noise``
+m/s^2/sqrt(s)). The input is the IMU specific force rotated to NED with the attitude solution,
+``a = C_bn f + g e_z`` (``accel_ned``); the integrated acceleration is ``a - b``:
+
+    x_i <- F x_i + B a_i,     P_i <- F P_i F^T + Q                         (App. A prediction; eq. A.5: x = Phi x + w)
+    F = [[1, dt, -dt^2/2], [0, 1, -dt], [0, 0, 1]],  B = (dt^2/2, dt, 0)
+    Q = q [[dt^3/3, dt^2/2, 0], [dt^2/2, dt, 0], [0, 0, 0]] + diag(0, 0, q_b dt)     (white acceleration, q = sigma_a^2)
+
+(without the bias the upper-left 2x2 blocks). Updates measure one state ``m`` of an axis (position: GPS, MPE,
+sonar height; velocity: GPS), ``H = e_m^T``:
+
+    S = H P_i H^T + r,  K = P_i H^T / S,  x_i <- x_i + K (z - H x_i),  P_i <- P_i - K H P_i    (App. A update, eq. A.6)
+
+The three axes share the model: the filter's state is the stacked ``x = (p_NED, v_NED[, b_NED])`` of
+3n values with ``F (x) I_3``, ``B (x) I_3``, ``Q (x) I_3`` (Kronecker products) and one (3n, 3n) covariance
+``P``; an update of several axes is one vector update (``H`` = the rows of ``I_3n`` measured; ``S`` is
+diagonal, the axes being independent given the attitude, so ``last_nis`` per axis is ``y_i^2 / S_ii``).
+With the bias state the position / velocity updates estimate ``b``, so the dead reckoning after the last fix
+(PALACE's final metre) runs on a corrected acceleration, and the bias's uncertainty is in the position
+covariance the protection level is built from.
 """
 
 from __future__ import annotations
@@ -20,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 G = 9.81
+_VELOCITY_ROWS = np.arange(3, 6)
 
 
 class PositionFilter:
@@ -27,42 +41,53 @@ class PositionFilter:
                  sigma_v: float = 0.5, accel_bias_noise: float = 0.0, sigma_b: float = 0.0):
         self.q = float(accel_noise) ** 2
         self.qb = float(accel_bias_noise) ** 2  # bias random walk [m^2/s^5]; 0: no bias state
-        self.sigma_b = float(sigma_b) if self.qb > 0 else 0.0  # the bias's 1 sigma at a (re)start [m/s^2]
-        self.b = np.zeros(3)
-        self.P02 = np.zeros(3)
-        self.P12 = np.zeros(3)
-        self.P22 = np.full(3, self.sigma_b**2)
-        self.p = np.zeros(3) if position is None else np.asarray(position, float).copy()
-        self.v = np.zeros(3) if velocity is None else np.asarray(velocity, float).copy()
-        self.P00 = np.full(3, sigma_p**2)
-        self.P01 = np.zeros(3)
-        self.P11 = np.full(3, sigma_v**2)
+        n = 3 if self.qb > 0 else 2  # states per axis: (p, v, b) or (p, v)
+        self.x = np.zeros(3 * n)  # (p_NED, v_NED[, b_NED])
+        if position is not None:
+            self.x[0:3] = np.asarray(position, float)
+        if velocity is not None:
+            self.x[3:6] = np.asarray(velocity, float)
+        self.P = np.diag(np.repeat([sigma_p**2, sigma_v**2, float(sigma_b) ** 2][:n], 3))  # sigma_b: at a (re)start
+        self._I = np.eye(3 * n)
         self.t: float | None = None
-        self.accel = np.zeros(3)  # the last kinematic acceleration the filter integrated (NED)
+        self.accel = np.zeros(3)  # the last kinematic acceleration the filter integrated, a - b (NED)
         self.initialized = position is not None
         # the last update's per-axis normalised innovation squared y^2 / S (the axes it used) and whether
         # its gate accepted it: the navigators' integrity monitors read them
         self.last_nis = np.zeros(0)
         self.last_accepted = True
+        self._step_model: tuple = (None,)
 
-    def reset(self, t: float, position, velocity, sigma_p: float = 0.05, sigma_v: float = 0.05) -> None:
-        self.t = t
-        self.p = np.asarray(position, float).copy()
-        self.v = np.asarray(velocity, float).copy()
-        self.P00[:] = sigma_p**2
-        self.P01[:] = 0.0
-        self.P11[:] = sigma_v**2
-        # the bias estimate carries over a re-start (the IMU did not change); its covariance with the
-        # new position / velocity is zero
-        self.P02[:] = 0.0
-        self.P12[:] = 0.0
-        self.initialized = True
+    @property
+    def p(self) -> np.ndarray:
+        return self.x[0:3]
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.x[3:6]
+
+    @property
+    def b(self) -> np.ndarray:
+        """The accelerometer bias estimate in NED (zero without the bias state)."""
+        return self.x[6:9] if self.has_bias else np.zeros(3)
 
     @property
     def has_bias(self) -> bool:
         return self.qb > 0
 
+    def reset(self, t: float, position, velocity, sigma_p: float = 0.05, sigma_v: float = 0.05) -> None:
+        """A re-start at a known position and velocity. The bias estimate and its variance carry over (the IMU
+        did not change); its covariance with the new position and velocity is zero."""
+        self.t = t
+        self.x = self.x.copy()  # (what a caller holds of the old state stays as it was)
+        self.x[0:3], self.x[3:6] = np.asarray(position, float), np.asarray(velocity, float)
+        self.P[:6, :] = 0.0
+        self.P[:, :6] = 0.0
+        self.P[0:6, 0:6] = np.diag(np.repeat([sigma_p**2, sigma_v**2], 3))
+        self.initialized = True
+
     def predict(self, t: float, accel_ned: np.ndarray) -> None:
+        """The prediction over ``dt = t - self.t`` with the NED acceleration ``accel_ned`` held over it."""
         if self.t is None:
             self.t = t
             return
@@ -70,113 +95,59 @@ class PositionFilter:
         if dt <= 0:
             return
         self.t = t
-        if self.qb > 0:
-            self._predict_biased(dt, accel_ned)
-            return
-        self.accel = accel_ned
-        # the 100 Hz path, per axis in scalar math (the same operations as the array form:
-        # p += v dt + a dt^2 / 2, v += a dt, P += F P F^T - P + Q of the constant-acceleration model)
-        a, p, v = accel_ned.tolist(), self.p, self.v
-        q, dt2 = self.q, dt * dt
-        q0, q1, q2 = q * dt**3 / 3, q * dt * dt / 2, q * dt
-        P00, P01, P11 = self.P00, self.P01, self.P11
-        for i in range(3):
-            vi, pi01, pi11 = float(v[i]), float(P01[i]), float(P11[i])
-            p[i] += vi * dt + 0.5 * a[i] * dt * dt
-            v[i] = vi + a[i] * dt
-            P00[i] += 2 * dt * pi01 + dt2 * pi11 + q0
-            P01[i] = pi01 + (dt * pi11 + q1)
-            P11[i] = pi11 + q2
+        F, B, Q = self._model(dt)
+        a = np.asarray(accel_ned, float)
+        self.accel = a - self.x[6:9] if self.has_bias else a
+        self.x = F @ self.x + B @ a
+        self.P = F @ self.P @ F.T + Q
 
-    def _predict_biased(self, dt: float, accel_ned: np.ndarray) -> None:
-        """The three-state step per axis: a = accel - b; P <- F P F^T + Q (F in the module docstring)."""
-        self.accel = accel_ned - self.b
-        a, p, v = self.accel.tolist(), self.p, self.v
-        q, h = self.q, 0.5 * dt * dt
-        q0, q1, q2, qb = q * dt**3 / 3, q * dt * dt / 2, q * dt, self.qb * dt
-        P00, P01, P02, P11, P12, P22 = self.P00, self.P01, self.P02, self.P11, self.P12, self.P22
-        for i in range(3):
-            p00, p01, p02 = float(P00[i]), float(P01[i]), float(P02[i])
-            p11, p12, p22 = float(P11[i]), float(P12[i]), float(P22[i])
-            p[i] += float(v[i]) * dt + a[i] * h
-            v[i] += a[i] * dt
-            # rows of F P: r0 = (P0. + dt P1. - h P2.), r1 = (P1. - dt P2.), r2 = P2.
-            r00, r01, r02 = p00 + dt * p01 - h * p02, p01 + dt * p11 - h * p12, p02 + dt * p12 - h * p22
-            r11, r12 = p11 - dt * p12, p12 - dt * p22
-            P00[i] = r00 + dt * r01 - h * r02 + q0
-            P01[i] = r01 - dt * r02 + q1
-            P02[i] = r02
-            P11[i] = r11 - dt * r12 + q2
-            P12[i] = r12
-            P22[i] = p22 + qb
+    def _model(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """F, B, Q of the module docstring (Kronecker products with I_3) for a step ``dt``, kept for the next
+        step of the same ``dt`` (the IMU's)."""
+        if self._step_model[0] != dt:
+            n, q, h = self.x.size // 3, self.q, 0.5 * dt * dt
+            F = np.array([[1.0, dt, -h], [0.0, 1.0, -dt], [0.0, 0.0, 1.0]])[:n, :n]
+            B = np.array([[h], [dt], [0.0]])[:n]
+            Q = np.array([[q * dt**3 / 3, q * h, 0.0], [q * h, q * dt, 0.0], [0.0, 0.0, self.qb * dt]])[:n, :n]
+            I3 = np.eye(3)
+            self._step_model = (dt, np.kron(F, I3), np.kron(B, I3), np.kron(Q, I3))
+        return self._step_model[1:]
 
-    def _gain_update(self, ax, y, S, row) -> None:
-        """x += K y, P -= K row on ``ax``: ``row`` = (P0m, P1m, P2m), the measured state m's row of P
-        (H = e_m, K = row / S)."""
-        r0, r1, r2 = row
-        K0, K1, K2 = r0 / S, r1 / S, r2 / S
-        self.p[ax] += K0 * y
-        self.v[ax] += K1 * y
-        if self.qb > 0:
-            self.b[ax] += K2 * y
-            self.P22[ax] -= K2 * r2
-            self.P12[ax] -= K1 * r2
-            self.P02[ax] -= K0 * r2
-        self.P11[ax] -= K1 * r1
-        self.P01[ax] -= K0 * r1
-        self.P00[ax] -= K0 * r0
-
-    def update_position(self, z, sigma, axes=(0, 1, 2), gate: float | None = None) -> bool:
-        """Update the given axes with a position measurement; returns False if gated out."""
-        ax = np.asarray(axes)
-        z = np.asarray(z, float)[ax] if np.size(z) == 3 else np.asarray(z, float)
-        r = np.broadcast_to(np.asarray(sigma, float) ** 2, ax.shape)
-        S = self.P00[ax] + r
-        y = z - self.p[ax]
-        self.last_nis = y * y / S
+    def _update(self, rows: np.ndarray, z: np.ndarray, r, gate: float | None = None) -> bool:
+        """The update: ``z`` measures the states ``rows`` of ``x`` (``H`` = those rows of the identity) with variances
+        ``r``; nothing changes when an axis' ``y_i^2 / S_ii`` is above ``gate^2``."""
+        H = self._I[rows]
+        PHt = self.P @ H.T
+        s = np.diag(H @ PHt) + r  # S = H P H^T + R is diagonal: the axes are independent
+        y = z - H @ self.x
+        self.last_nis = y * y / s
         self.last_accepted = not (gate is not None and np.any(self.last_nis > gate * gate))
         if not self.last_accepted:
             return False
-        if self.qb == 0:  # the two-state filter's own operations (its numbers unchanged)
-            K0 = self.P00[ax] / S
-            K1 = self.P01[ax] / S
-            self.p[ax] += K0 * y
-            self.v[ax] += K1 * y
-            P01 = self.P01[ax].copy()
-            self.P11[ax] -= K1 * P01
-            self.P01[ax] = (1 - K0) * P01
-            self.P00[ax] = (1 - K0) * self.P00[ax]
-            return True
-        row = (self.P00[ax].copy(), self.P01[ax].copy(), self.P02[ax].copy())  # H = (1, 0, 0): P's row 0
-        self._gain_update(ax, y, S, row)
+        K = PHt / s  # P H^T S^-1
+        self.x = self.x + K @ y
+        self.P = self.P - K @ PHt.T  # K H P
         return True
 
+    def update_position(self, z, sigma, axes=(0, 1, 2), gate: float | None = None) -> bool:
+        """Update the given axes with a position measurement (``z``: 3 values or one per axis, 1 sigma ``sigma``);
+        returns False (and changes nothing) if an axis' innovation is beyond ``gate`` sigmas."""
+        ax = np.asarray(axes)
+        z = np.asarray(z, float)
+        return self._update(ax, z[ax] if z.size == 3 else z, np.asarray(sigma, float) ** 2, gate)
+
     def update_velocity(self, z, sigma) -> None:
-        r = float(sigma) ** 2
-        S = self.P11 + r
-        y = np.asarray(z, float) - self.v
-        self.last_nis, self.last_accepted = y * y / S, True
-        if self.qb > 0:
-            row = (self.P01.copy(), self.P11.copy(), self.P12.copy())  # H = (0, 1, 0): P's row 1
-            self._gain_update(slice(None), y, S, row)
-            return
-        K0 = self.P01 / S
-        K1 = self.P11 / S
-        self.p += K0 * y
-        self.v += K1 * y
-        P11 = self.P11.copy()
-        self.P00 -= K0 * self.P01
-        self.P01 = self.P01 * (1 - K1)
-        self.P11 = P11 * (1 - K1)
+        """Update all three axes with a velocity measurement of 1 sigma ``sigma`` (never gated)."""
+        self._update(_VELOCITY_ROWS, np.asarray(z, float), float(sigma) ** 2)
+
+    def axis_covariance(self, i: int) -> np.ndarray:
+        """(n, n) covariance of axis ``i``'s (p, v[, b])."""
+        k = np.arange(i, self.x.size, 3)
+        return self.P[np.ix_(k, k)]
 
     def covariance(self) -> np.ndarray:
-        C = np.zeros((6, 6))
-        d = C.reshape(-1)  # the diagonals as strided views: (i, i), (i, i + 3), (i + 3, i), (i + 3, i + 3)
-        d[0:15:7] = self.P00
-        d[3:18:7] = self.P01
-        d[18:33:7] = self.P01
-        d[21:36:7] = self.P11
-        return C
+        """(6, 6) covariance of (position, velocity)."""
+        return self.P[:6, :6].copy()
 
 
 def accel_ned(C_bn: np.ndarray, specific_force: np.ndarray) -> np.ndarray:

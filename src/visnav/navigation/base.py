@@ -7,7 +7,8 @@ A navigator takes only typed, time-stamped messages from ``measurements.py`` and
 * ``initialize(init: NavInit)`` - an explicit start (surveyed pose, operator reset); the caller logs it;
 * ``command(request: NavCommand)`` - what the mission manager asks for (start tracking, switch source,
   restart the filter, ...); unknown names raise ``ValueError``;
-* ``estimate(t)`` - the navigator's estimate propagated to ``t`` (the same meaning for every navigator);
+* ``estimate(t)`` - the navigator's estimate propagated to ``t`` (the same meaning for every navigator), an
+  ``Estimate`` (``measurements.py``: t, position, velocity, covariance, valid, frame);
 * ``health(t)`` - ``Health``: source, tracking, counters, notes and integrity.
 
 ``Navigator`` is a ``typing.Protocol``: a class conforms by offering the methods, no inheritance needed;
@@ -20,7 +21,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from visnav.measurements import Health, NavCommand, NavInit
+from visnav.measurements import Estimate, Health, NavCommand, NavInit
 
 
 @runtime_checkable
@@ -31,7 +32,7 @@ class Navigator(Protocol):
 
     def command(self, request: NavCommand) -> None: ...
 
-    def estimate(self, t: float) -> Any: ...
+    def estimate(self, t: float) -> Estimate: ...
 
     def health(self, t: float) -> Health: ...
 

@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field, replace
+from typing import ClassVar
 
 import numpy as np
 from scipy.stats import chi2
@@ -48,7 +49,7 @@ from visnav.estimation.association import associate
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor
 from visnav.estimation.ukf import UnscentedKalmanFilter
 from visnav.geometry.rotations import euler_to_dcm3
-from visnav.measurements import AttitudeSample, Frame, Health, ImuSample, NavInit
+from visnav.measurements import AttitudeSample, Estimate, Frame, Health, ImuSample, NavInit
 from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
 
@@ -168,9 +169,14 @@ class DeckNavConfig:
 
 
 @dataclass(frozen=True)
-class DeckEstimate:
-    """The navigator's estimate at ``t``: the 12 relative states, their covariance, and the newest IMU and
-    autopilot readings the controller flies on (gyro, specific force, roll, pitch)."""
+class DeckEstimate(Estimate):
+    """The navigator's estimate at ``t``: the 12 relative states (``estimation/deck``: position 0-2, Euler
+    angles 3-5, velocity 6-8, deck rates 9-11), their (12, 12) covariance, and the newest IMU and autopilot
+    readings the controller flies on (gyro, specific force, roll, pitch)."""
+
+    frame: ClassVar[str] = "deck_body"
+    position_index: ClassVar[tuple[int, ...]] = (0, 1, 2)
+    velocity_index: ClassVar[tuple[int, ...] | None] = (6, 7, 8)
 
     t: float
     state: np.ndarray

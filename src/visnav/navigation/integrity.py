@@ -18,7 +18,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from visnav.estimation.integrity import IntegrityMonitor
-from visnav.estimation.ins import quat_conj, quat_mult, quat_to_dcm, rotvec_from_dcm
+from visnav.estimation.ins import quat_conj, quat_from_rotvec, quat_mult, quat_to_dcm, rotvec_from_dcm
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.log_schema import register_stream
 from visnav.measurements import Health
@@ -258,7 +258,7 @@ class GyroAttitudeCheck:
         self.window_s = float(window_s)
         self.sigma2 = 2 * att_sigma_rad**2 + gyro_noise**2 * dt * window_s + (gyro_bias * window_s) ** 2
         self.att_bias = float(att_bias_rad)
-        self._R = (1.0, 0.0, 0.0, 0.0)
+        self._R = np.array([1.0, 0.0, 0.0, 0.0])
         self._q: deque = deque()  # (t, cumulative gyro rotation at t: a quaternion)
         self.last_stat = 0.0
         self.detected_t: float | None = None
@@ -268,15 +268,8 @@ class GyroAttitudeCheck:
 
     def gyro(self, t: float, w, dt: float) -> None:
         """One propagation step of the filter: body rates ``w`` [rad/s] held over ``dt`` ending at ``t``."""
-        # the cumulative rotation as a quaternion (w, x, y, z) of floats: q <- q (x) exp(w dt / 2), in
-        # scalar math (this runs at the IMU rate; the exponential is estimation/ins.quat_from_rotvec's)
-        x, y, z = (float(c) * dt for c in w)
-        a = math.sqrt(x * x + y * y + z * z)
-        k = 0.5 - a * a / 48.0 if a < 1e-8 else math.sin(0.5 * a) / a
-        qw, qx, qy, qz = math.cos(0.5 * a), x * k, y * k, z * k
-        pw, px, py, pz = self._R
-        self._R = (pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
-                   pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw)
+        # the cumulative rotation as a quaternion (w, x, y, z): R <- R (x) exp(w dt) (body rates: right product)
+        self._R = quat_mult(self._R, quat_from_rotvec(np.asarray(w, float) * dt))
         self._q.append((float(t), self._R))
         while len(self._q) > 2 and self._q[1][0] <= t - 2.0 * self.window_s:
             self._q.popleft()

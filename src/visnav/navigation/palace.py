@@ -320,7 +320,7 @@ class PalaceNavigator(CommandDispatch):
                 nis = float(np.sum(self.filter.last_nis[:2]))
             else:  # the jump check is this navigator's gate: the fix is counted as rejected
                 sig2 = np.broadcast_to(np.asarray(sigma, float) ** 2, (3,))[:2]
-                nis = float(np.sum((z[:2] - self.filter.p[:2]) ** 2 / (self.filter.P00[:2] + sig2)))
+                nis = float(np.sum((z[:2] - self.filter.p[:2]) ** 2 / (np.diag(self.filter.P)[:2] + sig2)))
             self.integrity.record(f.t, "mpe", nis, 2, not jump)
 
     def _fix_sigma(self, fix, range_m: float):

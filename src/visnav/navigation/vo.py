@@ -42,6 +42,14 @@ register_stream("vo_photo", registered=("bool", "", "registered to an earlier ph
                 refs=("count", "", "earlier photos it was registered to"), inliers=("count", "", "homography inliers"),
                 height=("chain units", "", "height above the ground in the first photo's heights"))
 
+def _horizontal_covariance(var_h: float) -> np.ndarray:
+    """(6, 6) covariance of (position, velocity) with ``var_h`` on north and east, NaN elsewhere."""
+    C = np.full((6, 6), np.nan)
+    C[:2, :2] = 0.0
+    C[0, 0] = C[1, 1] = var_h
+    return C
+
+
 E3 = np.array([0.0, 0.0, 1.0])
 #: the first photo's camera in the chain frame: nadir, image top = chain x (camera x -> y, camera y -> -x)
 R_CHAIN0 = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
@@ -297,18 +305,22 @@ class VONavigator(CommandDispatch):
         return s * R2 @ (self.photos[b].C[:2] - self.photos[a].C[:2])
 
     def estimate(self, t: float) -> NavEstimate:
+        """The newest placed photo carried at the chain's velocity (the GPS before any photo is placed).
+        Covariance: only the horizontal position has one, the last fix's sigma^2 while GPS ties the chain and
+        +inf (no bound: the chain has no error model) after; height and velocity NaN (not modelled)."""
         placed = [p for p in self.photos if p.P is not None]
+        g = self.gps[-1] if self.gps else None
         if not placed:
-            g = self.gps[-1] if self.gps else None
             if g is None:
                 return NavEstimate(t, np.full(3, np.nan), np.full(3, np.nan), np.zeros(3), valid=False, source="vo")
             return NavEstimate(t, g.position + g.velocity * (t - g.t), np.asarray(g.velocity, float), np.zeros(3),
-                               source="gps")
+                               _horizontal_covariance(g.sigma**2), source="gps")
         b = placed[-1]
         a = placed[-2] if len(placed) > 1 else None
         v = (b.P - a.P) / (b.t - a.t) if a is not None and b.t > a.t else np.zeros(3)
-        src = "gps" if b.gps is not None else "vo"
-        return NavEstimate(t, b.P + v * min(t - b.t, self.cfg.max_predict_s), v, self._world_attitude(b), source=src)
+        src = "gps" if b.gps is not None else "vo"  # (a photo tied to a fix: self.gps holds it)
+        return NavEstimate(t, b.P + v * min(t - b.t, self.cfg.max_predict_s), v, self._world_attitude(b),
+                           _horizontal_covariance(g.sigma**2 if src == "gps" else np.inf), source=src)
 
     def health(self, t: float) -> Health:
         h = Health(source="vo" if self.photos and self.photos[-1].gps is None else "gps",

@@ -235,7 +235,7 @@ class WitasNavigator(CommandDispatch):
         if isinstance(m, ImuSample):
             self._on_imu(m)
         elif isinstance(m, AttitudeSample):
-            if all(map(math.isfinite, np.asarray(m.euler, float).ravel().tolist())):
+            if np.isfinite(np.asarray(m.euler, float)).all():
                 self.att.push(m.t, m.euler)
             else:
                 self.h.rejected_samples += 1
@@ -290,8 +290,7 @@ class WitasNavigator(CommandDispatch):
         return self.att.newest()
 
     def _on_imu(self, m: ImuSample) -> None:
-        if not all(map(math.isfinite, [*np.asarray(m.accel, float).ravel().tolist(),
-                                       *np.asarray(m.gyro, float).ravel().tolist()])) or (
+        if not (np.isfinite(np.asarray(m.accel, float)).all() and np.isfinite(np.asarray(m.gyro, float)).all()) or (
                 self._last_imu is not None and m.t <= self._last_imu.t):
             self.h.rejected_samples += 1
             return

@@ -1,5 +1,8 @@
-"""What a mission builder returns (``app/missions.py`` ``@register``): the parts ``app/loop.Simulation`` drives.
-A leaf module, so that the builders in ``app/*_parts.py`` import it without importing the registry."""
+"""What a mission builder returns (``app/missions.py`` ``@register``): the parts ``app/loop.Simulation`` drives,
+a core every flying system states in full (``MissionParts``) with its rates (``Timing``), what it does at fixed
+points of a step (``Hooks``) and where measurements go (``Routing``); or a run in which nothing flies
+(``GroundTest``). A leaf module, so that the builders in ``app/*_parts.py`` import it without importing the
+registry."""
 
 from __future__ import annotations
 
@@ -12,71 +15,90 @@ from visnav.sensors.base import TruthHistory
 
 
 @dataclass
+class Timing:
+    """The loop's rates besides the controller's own ``rate_hz`` (every one a whole number of dynamics steps,
+    ``sim/clock.rate_divisor``)."""
+
+    mission_hz: float  # the mission manager (the R-MAX's 10 Hz, the deck's and the autopilots' 50 Hz)
+    sensor_grid: bool  # True: every sensor on the dynamics grid; False: each at its own instants j / rate_hz
+    log_hz: float | None = None  # the logger; None: with the mission
+    end_inclusive: bool = False  # the last step at t = duration too (the deck landing's loop)
+
+
+@dataclass
+class Hooks:
+    """What a system does at fixed points of a step besides the core blocks (None: nothing there)."""
+
+    environment: Callable | None = None  # environment(k, t) -> vehicles/base.Environment; None: still air
+    actuator: Callable | None = None  # actuator(t, command) -> the command the vehicle gets (a sweep added)
+    contact: Callable | None = None  # contact(t): after the log, before the vehicle steps; True ends the run
+    world_step: Callable | None = None  # world_step(dt): what moves besides the vehicle (a gimbal)
+    after_step: Callable | None = None  # after_step(t, t_prev): after the vehicle stepped to t; True ends the run
+    start: Callable | None = None  # start(t): before the first step, after the nav_init (an operator's first click)
+    finish: Callable | None = None  # finish(t, completed): after the loop, before the metrics
+
+
+@dataclass
+class Routing:
+    """Where measurements go besides the navigator, and what the mission and controller fly on."""
+
+    gates: dict = field(default_factory=dict)  # sensor name -> wanted(t): it samples only while wanted (a camera)
+    observers: dict = field(default_factory=dict)  # measurement type -> who takes it instead of the navigator
+    on_delivered: Callable | None = None  # on_delivered(t, m): after the navigator took m (an operator)
+    uplink: object = None  # a sensors/link.Link the navigator's ground-station outputs (pop_uplink()) cross
+    flight_navigator: object = None  # what the mission and controller fly on, if not the navigator (an autopilot's)
+
+
+@dataclass
 class MissionParts:
-    """Everything the loop drives; the loop builds nothing else.
+    """Everything the loop drives (``app/loop.Simulation``); the loop builds nothing. Every system states all of
+    its core parts (its vehicle, truth, logger, streams and rates: none is another system's by default).
 
-    ``sensors``: name -> sensor (``rate_hz``, ``latency_s``, ``sample(t, truth_at, world)`` -> a
-    measurement, a tuple of them or None), sampled in this order, each at its own instants
-    (``sensor_grid=False``: ``j / rate_hz``, interpolated between dynamics steps) or on the dynamics grid
-    (``sensor_grid=True``: every ``rate_divisor(rate_hz, dt)`` steps), from its ``phase_s`` on; ``gates``: name -> ``wanted(t)``
-    (a camera renders only while its mission wants frames). ``nav_init``: an explicit start of the
-    navigator (a surveyed pose), sent before the first step and logged in the ``nav_init`` stream.
-    ``actuator_injection(t)``: YACS increments added to the controller's output (a sweep), or None.
-
-    The other vehicles' parts: ``vehicle`` (``state``, ``step(command, dt, environment)``; None: the R-MAX
-    started at ``start_position`` / ``start_yaw``), ``truth`` (what the sensors read as ``truth_at``:
-    ``advance(t)`` each step, ``latest``; None: a ``TruthHistory`` of ``truth_horizon_s`` fed with
-    ``vehicle.state``), ``environment(k, t)`` (the ``vehicles/base.Environment`` of step ``k``),
-    ``logger(step)`` (the run's streams at ``log_hz``; None: the R-MAX streams), ``contact(t)`` (after the
-    log, before the vehicle steps: True ends the run), ``after_step(t)`` (after the vehicle stepped to
-    ``t``: True ends the run), ``world_step(dt)`` (what moves besides the vehicle: a gimbal),
-    ``flight_navigator`` (what the mission and the controller fly on and the sensors' messages go to when it
-    is not the navigator: the autopilot's own), ``observers`` (measurement type -> who takes it instead:
-    a mission's motion-capture view, the payload navigator's frames), ``uplink`` (a ``sensors/link.Link`` the navigator's ground-station outputs cross, from its
-    ``pop_uplink()``), ``on_delivered(t, m)`` (what happens after the navigator took ``m``: an operator),
-    ``start(t)`` (before the first step, after the ``nav_init``: an operator's first click), ``finish(t)``
-    (after the loop, before the metrics), ``streams`` (the log's own schema); ``evaluate(progress)``: a run in
-    which nothing flies (the CONDOR ground test), in the same run scaffold.
+    ``sensors``: name -> sensor (``rate_hz``, ``latency_s``, ``sample(t, truth_at, world)`` -> a measurement, a
+    tuple of them or None, optional ``phase_s``), sampled in this order. ``truth``: what the sensors read as
+    ``truth_at`` (``advance(t)`` each step, ``latest``; ``VehicleTruth``, ``CurrentTruth``), advanced to t = 0
+    by the builder. ``logger(step)``: the run's streams at ``timing.log_hz``, documented in ``streams`` (the
+    log's own schema, ``sim/streams.py``). ``nav_init``: an explicit start of the navigator (a surveyed pose),
+    sent before the first step and logged in ``nav_init``. ``camera_model`` / ``mount``: the navigator's camera
+    (recordings write them to camera.yaml). ``extra_metrics``: more ``metrics(log, scenario) -> dict`` merged
+    into the run's (integrity). ``notes``: how the scenario was set up (the command line prints them).
+    ``extras``: what is particular to the system, typed by it, for tests (``DeckExtras``, ``GeolocExtras`` in
+    ``app/*_parts.py``).
     """
 
-    world: object  # world/scene.World: ground (rendered by the cameras) and wind; DeckWorld; CondorWorld
+    world: object  # world/scene.World: ground (rendered by the cameras) and wind; DeckWorld; CondorWorld; ...
     sensors: dict
     navigator: object  # navigation/base.Navigator
     mission: object  # .step(t, estimate, health) -> (reference, mode); .mode; .done; .on_touchdown(t)
     controller: object  # .rate_hz; .command(t, estimate, reference) -> command
+    vehicle: object  # .state; .step(command, dt, environment)
+    truth: object
+    logger: Callable  # logger(step: Step)
     metrics: Callable  # metrics(log, scenario, *, wall_time_s, error) -> dict (from the log only)
-    start_position: np.ndarray | None = None
-    start_yaw: float = 0.0
-    camera_model: object = None  # geometry of the navigator's camera (recordings write it to camera.yaml)
-    mount: object = None
+    streams: dict  # stream -> field -> (units, frame, description)
+    timing: Timing
+    hooks: Hooks = field(default_factory=Hooks)
+    routing: Routing = field(default_factory=Routing)
     nav_init: object = None  # measurements.NavInit | None
-    actuator_injection: Callable | None = None
-    actuator: Callable | None = None  # actuator(t, command) -> the command the vehicle gets (a sweep added)
-    info: dict = field(default_factory=dict)  # what reports and tests read (reference map, path, pad layout, notes)
-    # --- the parts of the other vehicles (defaults: the R-MAX) ---
-    vehicle: object = None
-    flight_navigator: object = None  # what the mission and controller fly on, if not the navigator (an autopilot's)
-    truth: object = None
-    truth_horizon_s: float = 2.5
-    sensor_grid: bool = False
-    end_inclusive: bool = False  # the last step at t = duration too (the deck landing's loop)
-    gates: dict = field(default_factory=dict)
-    mission_hz: float = 10.0
-    log_hz: float | None = None  # None: with the mission
-    initial_command: object = None  # the command before the controller's first (None: the R-MAX trim)
-    environment: Callable | None = None
-    logger: Callable | None = None
-    contact: Callable | None = None
-    after_step: Callable | None = None
-    world_step: Callable | None = None
-    observers: dict = field(default_factory=dict)
-    uplink: object = None
-    on_delivered: Callable | None = None
-    start: Callable | None = None  # start(t): the mission's first words (before the first step)
-    finish: Callable | None = None
-    evaluate: Callable | None = None  # evaluate(progress): a run where nothing flies (the CONDOR ground test)
-    streams: dict | None = None
-    extra_metrics: tuple = ()  # more metrics(log, scenario) -> dict merged into the run's (integrity)
+    camera_model: object = None
+    mount: object = None
+    extra_metrics: tuple = ()
+    notes: list = field(default_factory=list)
+    extras: object = None
+
+
+@dataclass
+class GroundTest:
+    """A run in which nothing flies (the CONDOR ground test), in the loop's run scaffold: ``evaluate(progress)``
+    records its streams (documented in ``streams``), the metrics come from the log."""
+
+    mission: object  # .finish(t) once evaluated; .mode
+    metrics: Callable
+    evaluate: Callable
+    streams: dict
+    extra_metrics: tuple = ()
+    notes: list = field(default_factory=list)
+    extras: object = None
 
 
 @dataclass

@@ -1,5 +1,9 @@
 """FlightLog: every stream of a run (truth, measurements, estimates, commands, modes), one HDF5 group each.
 
+A leaf beside ``log_schema.py`` (it imports nothing of visnav but the stream documentation): the loop
+(``app/loop.py``) writes it, ``analysis`` scores it, ``app/replay.py`` and the command line read it back, and
+a test feeds any component's recorder with one, without importing the simulation.
+
 Every field of a stream is documented by a ``Field(unit, frame, description)``, written as the ``units``,
 ``frame`` and ``description`` attributes of its HDF5 dataset (layout: ``docs/log-format.md``). A
 simulation passes the streams it records itself as ``FlightLog(schema=...)`` (the same stream name can
@@ -15,7 +19,6 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
-
 
 from visnav.log_schema import STREAMS, T_FIELD, UNDOCUMENTED, Field, register_stream  # noqa: F401  (re-exported)
 
