@@ -118,7 +118,7 @@ def fill_suite(data: dict) -> dict:
         if hasattr(given, "model_dump"):  # a WorldConfig / ControlConfig object: checked and filled the same way
             given = given.model_dump(exclude_none=True)
         if not isinstance(given, dict):
-            continue  # a model (already filled) or a bad value the schema reports
+            continue  # a bad value: the schema reports it
         known = {n for names in (WORLD if section == "world" else CONTROL).values() for n in names}
         extra = [n for n in given if n in known and n not in have and given[n] is not None]
         if extra:
