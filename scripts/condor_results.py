@@ -29,7 +29,7 @@ def main(n: int = 5) -> None:
     print(f"\n## condor-orbit, 8 kt wind, seeds {seeds[0]}-{seeds[-1]}: mean (min-max)\n")
     print("| controller | " + " | ".join(keys) + " |\n|---|" + "---:|" * len(keys))
     for logic in ("original", "modified", "coordinated"):
-        ov = [f"mission.control.orbit.logic={logic}"]
+        ov = [f"control.condor.orbit.logic={logic}"]
         ms = [make_simulation(load_scenario("condor-orbit", ov, seed=s)).run().metrics for s in seeds]
         cells = []
         for k in keys:

@@ -8,7 +8,7 @@ is built from it by hand.
         [--set KEY=VALUE ...]
 
 ``--set`` applies to every flight, e.g. the airframe of rounds 1-4: ``--set vehicle.span_m=1.1 --set
-vehicle.airspeed_mps=13 --set mission.control.half_length_m=80 --set mission.control.l1_m=30``.
+vehicle.airspeed_mps=13 --set mission.half_length_m=80 --set control.mav.l1_m=30``.
 
 Target placement (documented in docs/geolocation.md): the real maps are small (199 x 519 m and
 596 x 173 m) against a 70 x 56 m footprint at 70 m, so the figure-eight (half length 160 m) runs along
@@ -30,10 +30,10 @@ if not DATA.is_dir() and os.environ.get("VISNAV_SHARED_DATA"):
     DATA = Path(os.environ["VISNAV_SHARED_DATA"])
 MAPS = {
     "rural": [],
-    "column": [f"mission.map.file={DATA / 'satellite_column.png'}", "mission.target.north_m=-45",
-               "mission.target.east_m=30", "mission.target.heading_deg=45"],
-    "strip": [f"mission.map.file={DATA / 'satellite_strip.png'}", "mission.target.north_m=-5",
-              "mission.target.east_m=100"],
+    "column": [f"world.geo_map.file={DATA / 'satellite_column.png'}", "world.truck.north_m=-45",
+               "world.truck.east_m=30", "world.truck.heading_deg=45"],
+    "strip": [f"world.geo_map.file={DATA / 'satellite_strip.png'}", "world.truck.north_m=-5",
+              "world.truck.east_m=100"],
 }
 KEYS = ("target_error_m", "map_based_error_m", "samples", "false_match_rate", "samples_to_3m",
         "single_frame_error_median_m", "map_based_sample_error_median_m", "hough_applied_rate",

@@ -140,22 +140,25 @@ def test_every_command_has_a_help_page():
 
 #: dotted names in the docs that are code, not scenario keys: an object's attribute (where it says so)
 NOT_KEYS = {"vehicle.state": "a vehicle model's state (docs/architecture.md, the truth history)",
-            "world.wind": "the world object's wind (docs/integrity.md, the gust fault)"}
+            "world.wind": "the world object's wind (docs/integrity.md, the gust fault)",
+            "control.frd": "python-control's frequency response data (docs/analysis.md)",
+            "control.stability_margins": "python-control's margins (docs/analysis.md)"}
 
 
 def _key_claims() -> list[tuple[str, str]]:
-    pat = r"`((?:run|world|vehicle|navigation|sensors|mission)\.[a-z0-9_.]+)(?:\s*=\s*[^`]*)?`"
+    pat = r"`((?:run|world|vehicle|navigation|sensors|control|mission)\.[a-z0-9_.]+)(?:\s*=\s*[^`]*)?`"
     return [(p.relative_to(ROOT).as_posix(), k) for p in DOCS for k in re.findall(pat, p.read_text())]
 
 
 @lru_cache(maxsize=None)
 def _known_keys() -> frozenset:
     from visnav.scenarios.keys import settable_keys
-    from visnav.scenarios.roles import LEGACY
+    from visnav.scenarios.roles import LEGACY, MOVED
     from visnav.scenarios.schema import builtin_names, load_scenario
 
     keys = {r["key"] for n in builtin_names() for r in settable_keys(load_scenario(n))}
     keys |= {old for pairs in LEGACY.values() for old, _ in pairs}  # the old layout the docs explain
+    keys |= {old for pairs in MOVED.values() for old, _ in pairs}  # ... and the [mission] keys before issue #31
     return frozenset(keys)
 
 

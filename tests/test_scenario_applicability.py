@@ -9,6 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from visnav.cli import app
+from visnav.scenarios import roles
 from visnav.scenarios.keys import settable_keys
 from visnav.scenarios.schema import (NOT_APPLICABLE, ScenarioError, builtin_names, load_scenario, not_applicable,
                                      to_toml, validate)
@@ -79,15 +80,19 @@ def test_builtins_and_their_resolved_scenario_toml_still_load(name):
     kind = sc.mission.type
     keys = [r["key"] for r in settable_keys(sc)]
     assert all(not_applicable(k, kind) is None for k in keys)
-    assert keys and all(k.split(".")[0] in ("run", "mission", "world", "vehicle", "sensors", "navigation",
+    assert keys and all(k.split(".")[0] in ("run", "mission", "world", "vehicle", "sensors", "navigation", "control",
                                                         "faults") for k in keys)
+    # the world of a system: its own [world.<thing>] sections (roles.WORLD), and the shared keys it reads
+    own = {k.split(".")[1] for k in keys if k.startswith("world.") and k.count(".") > 1}
+    assert own == set(roles.WORLD.get(kind, ()))
+    assert {k.split(".")[1] for k in keys if k.startswith("control.")} == set(roles.CONTROL.get(kind, ()))
+    shared = [k for k in keys if k.startswith("world.") and k.count(".") == 1]
     if kind == "deck":
-        assert not any(k.startswith("world.") for k in keys)
+        assert not shared and "world.deck.motion" in keys and "control.deck.k_rho" in keys
         assert "sensors.imu.gyro_noise_rad_s" in keys and "sensors.imu.delay_s" not in keys
         assert "navigation.gate" in keys and "vehicle.mass_kg" in keys
     if kind in ("condor", "mav-geolocation"):
-        assert [k for k in keys if k.startswith("world.")] == ["world.wind_speed_mps", "world.wind_from_deg",
-                                                               "world.turbulence"]
+        assert shared == ["world.wind_speed_mps", "world.wind_from_deg", "world.turbulence"]
     if kind == "palace":
         assert "sensors.imu.delay_s" in keys and "navigation.mpe.rate_hz" in keys
 

@@ -151,7 +151,8 @@ def run(
     try:
         sc = load_scenario(scenario, set_, seed)
         if map_:  # the mission's own map if it has one (witas-homing fits its loop inside), else the world's
-            key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
+            key = {"witas-homing": "world.witas_map.file", "mav-geolocation": "world.geo_map.file"}.get(
+                sc.mission.type, "world.map_file")
             sc = load_scenario(scenario, list(set_) + [f"{key}={json.dumps(str(Path(map_).resolve()))}"], seed)
         if sil or sil_external:
             from visnav.app.sil import sil_simulation

@@ -25,7 +25,7 @@ def _same(a: dict, b: dict) -> None:
 
 
 @pytest.mark.parametrize("overrides", [
-    ["run.duration_s=75", "mission.control.orbit.switch_time_s=10", "mission.control.orbit.transition_s=20"],
+    ["run.duration_s=75", "mission.orbit.switch_time_s=10", "mission.orbit.transition_s=20"],
     None,
 ], ids=["orbit", "ground_test"])
 def test_metrics_from_log_h5(tmp_path, overrides):

@@ -23,7 +23,7 @@ SHORT = {
     "palace-hover-drift": ["run.duration_s=25"],
     "pfcm-segment": [],
     "witas-homing": ["run.duration_s=11", "mission.gps_loss_s=3", "mission.settle_s=1"],
-    "mav-geolocation": ["mission.map.rural_size_m=260", "mission.max_samples=10", "run.duration_s=60"],
+    "mav-geolocation": ["world.geo_map.rural_size_m=260", "mission.max_samples=10", "run.duration_s=60"],
     "pad-landing": ["mission.start_height_m=5.0", "mission.start_ne_m=[1.0, -0.8]", "mission.settle_s=1.0",
                     "mission.slow_height_m=3.0", "world.field_size_m=30.0", "run.duration_s=30.0"],
 }

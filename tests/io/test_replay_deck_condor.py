@@ -23,7 +23,7 @@ from visnav.scenarios.schema import load_scenario
 from visnav.app.record import record
 
 DECK = ["run.duration_s=3"]
-CONDOR = ["run.duration_s=10", "mission.control.orbit.switch_time_s=4"]
+CONDOR = ["run.duration_s=10", "mission.orbit.switch_time_s=4"]
 
 
 @pytest.fixture(scope="module")

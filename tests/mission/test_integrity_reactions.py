@@ -42,7 +42,7 @@ def _deck_in_approach():
     cfg = sc.mission
     log = FlightLog()
     m = DeckMission(cfg, _StubNav(), hold_point=[-1.0, 0.0, -1.5], gear_offset=0.17, period_s=0.02,
-                    recorder=log.record, filter_cfg=sc.navigation)
+                    recorder=log.record, filter_cfg=sc.navigation, deck=sc.world.deck, gains=sc.control.deck)
     g = cfg.guidance
     t = cfg.start.manual_s
     m.step(t, _est(), DeckHealth(converged=True, integrity="ok", hpl_m=HPL_OK))
@@ -266,10 +266,10 @@ def test_condor_falls_back_to_the_gps_loiter_and_returns_after_ok():
 
     sc = load_scenario("condor-orbit")
     cfg = sc.mission
-    o = cfg.control.orbit
+    o = cfg.orbit
     log = FlightLog()
     nav = _StubNav()
-    m = CondorMission(cfg, nav, airspeed_mps=sc.vehicle.airspeed_mps, recorder=log.record)
+    m = CondorMission(cfg, sc.control.condor.orbit, nav, airspeed_mps=sc.vehicle.airspeed_mps, recorder=log.record)
     t = o.switch_time_s
     h = lambda s: Health(source="vision", tracking=True, integrity=s, integrity_reason=f"test {s}")
     m.step(t, _fw(), h("ok"))

@@ -83,7 +83,7 @@ def test_mission_reference_sinks_over_the_pad():
 
 def test_bad_pad_config_is_one_line():
     with pytest.raises(ScenarioError, match="overlaps"):
-        load_scenario("pad-landing", ["mission.pad.legs_m=[4.4, 3.0, 1.1, 0.55]"])
+        load_scenario("pad-landing", ["world.pad.legs_m=[4.4, 3.0, 1.1, 0.55]"])
 
 
 def test_gate_holds_until_centred():

@@ -117,12 +117,12 @@ SHORT_SPIRAL = ["mission.spiral.turns=0.75", "mission.spiral.end_height_m=25", "
 
 
 def _pair(name, overrides, seed):
-    return [Simulation(load_scenario(name, overrides + [f"mission.roll_compensator={on}"], seed=seed)).run().metrics
+    return [Simulation(load_scenario(name, overrides + [f"control.pfcm.roll_compensator={on}"], seed=seed)).run().metrics
             for on in ("false", "true")]
 
 
 def test_roll_compensator_is_the_default_and_lowers_the_spiral_error():
-    assert load_scenario("pfcm-spiral").mission.roll_compensator is True
+    assert load_scenario("pfcm-spiral").control.pfcm.roll_compensator is True
     # in the 3 m/s steady wind without gusts: the comparison does not hang on one gust realisation (with light
     # turbulence the ratio on/off ranged 0.59-0.82 over 6 realisations, seeds 1-3 of two gust streams)
     off, on = _pair("pfcm-spiral", SHORT_SPIRAL + ["world.turbulence=none"], 1)  # 10 m/s into a 30 m radius helix

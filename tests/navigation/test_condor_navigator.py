@@ -53,7 +53,7 @@ def _same(a, b):
 
 
 def test_plain_list_gives_the_closed_loop_estimate():
-    sc = load_scenario("condor-orbit", ["run.duration_s=30", "mission.control.orbit.switch_time_s=10"])
+    sc = load_scenario("condor-orbit", ["run.duration_s=30", "mission.orbit.switch_time_s=10"])
     recs: list[_Recorder] = []
     sim = Simulation(sc, navigator_wrapper=lambda nav: recs.append(_Recorder(nav)) or recs[0])
     rec = recs[0]

@@ -127,14 +127,14 @@ def test_filter_tuning_comes_from_the_filter_config_not_the_world():
 
     nominal = ship()
     for ms in ("1.3", "1.5"):
-        np.testing.assert_array_equal(ship(f"mission.deck.motion_scale={ms}"), nominal)
+        np.testing.assert_array_equal(ship(f"world.deck.motion_scale={ms}"), nominal)
     # eq. 3.7 closed form of the stewart preset, 1.5x amplitudes: (1.5 A + 3 1.5 sA) (w + 3 sW)^2, over w dt
     A, W, sA, sW = dm.SEA_STATES["stewart"]
     bound = (1.5 * A + 4.5 * sA) * (W + 3 * sW) ** 2
     np.testing.assert_allclose(np.diag(ship("navigation.motion_scale=1.5")), bound**2 / W / 0.01, rtol=1e-12)
     # the default is the sea state the scenario names; a static deck is tuned for calm (the 1e-4 floor)
     assert load_ideal_deck("deck-moving").navigation.sea_state == "stewart"
-    assert load_ideal_deck("deck-moving", ["mission.deck.sea_state=ship_ss4"]).navigation.sea_state == "ship_ss4"
+    assert load_ideal_deck("deck-moving", ["world.deck.sea_state=ship_ss4"]).navigation.sea_state == "ship_ss4"
     sc = load_ideal_deck("deck-static")
     assert sc.navigation.sea_state == "calm"
     np.testing.assert_array_equal(np.diag(DeckNavConfig.from_mission(sc, 0.03).ship_cov), 1e-4)

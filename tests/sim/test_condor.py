@@ -37,8 +37,8 @@ def test_ground_test_ours_is_exact_without_noise():
 
 
 def test_short_vision_orbit_coordinated():
-    sc = load_scenario("condor-orbit", ["run.duration_s=150", "mission.control.orbit.switch_time_s=20",
-                                        "mission.control.orbit.transition_s=40"])
+    sc = load_scenario("condor-orbit", ["run.duration_s=150", "mission.orbit.switch_time_s=20",
+                                        "mission.orbit.transition_s=40"])
     sim = make_simulation(sc)
     r = sim.run()
     m = r.metrics
@@ -66,7 +66,7 @@ def test_short_vision_orbit_coordinated():
 @pytest.mark.slow
 @pytest.mark.parametrize("logic", ["original", "modified", "coordinated"])
 def test_full_orbit_three_controllers(logic):
-    m = make_simulation(load_scenario("condor-orbit", [f"mission.control.orbit.logic={logic}"])).run().metrics
+    m = make_simulation(load_scenario("condor-orbit", [f"control.condor.orbit.logic={logic}"])).run().metrics
     if logic == "original":  # the drift of §7.2.1: orbit pushed off the tent, radius wandering
         assert m["orbit_centre_offset_m"] > 20.0 and m["orbit_radius_error_rms_m"] > 15.0
     else:
@@ -77,15 +77,15 @@ def test_full_orbit_three_controllers(logic):
 
 def test_bad_config_is_one_line():
     with pytest.raises(ScenarioError, match="logic"):
-        load_scenario("condor-orbit", ["mission.control.orbit.logic=fancy"])
+        load_scenario("condor-orbit", ["control.condor.orbit.logic=fancy"])
     with pytest.raises(ScenarioError, match="airspeed_mps"):
         load_scenario("condor-orbit", ["mission.airframe.airspeed_mps=40"])
 
 
 def test_run_keeps_what_it_has_on_failure():
     # started 5.2 m up, nose down: the aircraft sinks below 5 m and the run stops, keeping its log
-    sc = load_scenario("condor-orbit", ["run.duration_s=20", "mission.control.altitude_m=20",
-                                        "mission.control.orbit.switch_time_s=0"])
+    sc = load_scenario("condor-orbit", ["run.duration_s=20", "mission.altitude_m=20",
+                                        "mission.orbit.switch_time_s=0"])
     sim = make_simulation(sc)
     sim.vehicle.x[2] = -5.2
     sim.vehicle.x[7] = -0.6  # nose down

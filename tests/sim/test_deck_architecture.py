@@ -133,7 +133,7 @@ def test_mission_hands_over_or_restarts_from_health_alone():
     log = FlightLog()
     nav = _StubNav()
     m = DeckMission(cfg, nav, hold_point=[-1.0, 0.0, -1.0], gear_offset=0.17, period_s=0.02, recorder=log.record,
-                    filter_cfg=f)
+                    filter_cfg=f, deck=sc.world.deck, gains=sc.control.deck)
     ref, mode = m.step(0.0, _est(x), DeckHealth())
     assert (ref.kind, mode) == ("level", "manual")  # the IMU pilot before the hand-over
     t = cfg.start.manual_s
@@ -146,6 +146,7 @@ def test_mission_hands_over_or_restarts_from_health_alone():
     assert list(log.get("mode")["mode"]) == ["manual", "manual", "approach"]
     # every hypothesis spent: the run stops with one line
     m2 = DeckMission(cfg, _StubNav(), hold_point=[-1.0, 0.0, -1.0], gear_offset=0.17, period_s=0.02,
-                     filter_cfg=f.model_copy(update={"yaw_hypotheses_deg": []}))
+                     filter_cfg=f.model_copy(update={"yaw_hypotheses_deg": []}), deck=sc.world.deck,
+                     gains=sc.control.deck)
     with pytest.raises(RuntimeError, match="did not converge"):
         m2.step(t, _est(x), DeckHealth(converged=False))

@@ -77,7 +77,7 @@ def test_one_light_leaving_the_view():
 
 def test_layout_with_fewer_than_three_lights_is_refused():
     with pytest.raises(ScenarioError, match="at least 3"):
-        load_ideal_deck("deck-static", ["mission.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
+        load_ideal_deck("deck-static", ["world.deck.lights_m=[[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]"])
     for key in ("navigation.gate", "mission.filter.gate"):  # the old layout's key: the error names the new one
         with pytest.raises(ScenarioError, match=r"invalid value for 'navigation\.gate': -1"):
             load_ideal_deck("deck-static", [f"{key}=-1"])
@@ -219,7 +219,7 @@ def test_go_around_when_the_trajectory_ends_without_contact():
     off; with it the vehicle climbs back to the start point and lands on the second approach within the targets."""
     # (the manual hover on the IMU alone, as when the test was written: with its vertical damping, issue 30, the
     # first trajectory of this seed touches down)
-    sets = ("mission.deck.motion_scale=1.3", "mission.start.level_damping_per_s=0")
+    sets = ("world.deck.motion_scale=1.3", "mission.start.level_damping_per_s=0")
     sim, m = _run("deck-moving", 7, *sets)
     modes = list(sim.log.get("mode")["mode"])
     assert modes == ["manual", "hover", "approach", "hover", "approach", "landed"]

@@ -18,7 +18,7 @@ def test_ideal_sets_give_the_nominal_calibration():
     sc = load_scenario("deck-static", list(IDEAL_DECK_SENSORS), seed=4)
     t = TrueCalibration.draw(sc)
     c = sc.sensors.camera
-    np.testing.assert_array_equal(t.lights, np.asarray(sc.mission.deck.lights_m))
+    np.testing.assert_array_equal(t.lights, np.asarray(sc.world.deck.lights_m))
     np.testing.assert_array_equal(t.T_cam, c.rotation())
     assert t.camera == c.pinhole()
     assert not t.accel_bias.any() and not t.gyro_bias.any()
@@ -30,7 +30,7 @@ def test_default_errors_have_their_configured_spread():
     """Over 150 seeds: survey offsets of 1 cm per axis, a misalignment of 1 deg per axis, focal length 1 %, principal
     point 4 px, accelerometer bias 0.05 m/s^2 and gyro bias 0.1 deg/s (sample sigmas within 15 %)."""
     sc = load_scenario("deck-static", seed=1)
-    lights0, T0, cam0 = np.asarray(sc.mission.deck.lights_m), sc.sensors.camera.rotation(), sc.sensors.camera.pinhole()
+    lights0, T0, cam0 = np.asarray(sc.world.deck.lights_m), sc.sensors.camera.rotation(), sc.sensors.camera.pinhole()
     ts = _draws(150)
     survey = np.concatenate([t.lights - lights0 for t in ts]).ravel()
     # the misalignment: the rotation vector of T_true T0^T
@@ -90,7 +90,7 @@ def test_filter_calibration_sigma_is_the_specified_errors():
     want = np.sqrt(np.radians(c.misalignment_deg) ** 2 + (c.principal_point_error_px / c.focal_px) ** 2
                    + (0.3 * c.focal_error_frac) ** 2)
     assert cfg.calibration_bearing_sigma == pytest.approx(want, rel=1e-12)
-    assert cfg.light_survey_sigma == sc.mission.deck.light_survey_error_m
+    assert cfg.light_survey_sigma == sc.world.deck.light_survey_error_m
     off = DeckNavConfig.from_mission(load_scenario("deck-moving", ["navigation.calibration_bearing_deg=0.5"]), 1 / 30)
     assert off.calibration_bearing_sigma == pytest.approx(np.radians(0.5))
 

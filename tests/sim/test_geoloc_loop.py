@@ -8,7 +8,7 @@ import pytest
 from visnav.scenarios.schema import load_scenario
 from visnav.app.missions import make_simulation
 
-FAST = ["mission.map.rural_size_m=260", "mission.max_samples=10", "run.duration_s=60"]
+FAST = ["world.geo_map.rural_size_m=260", "mission.max_samples=10", "run.duration_s=60"]
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +74,7 @@ def test_the_pingwing_flies_its_figure_eight():
 
 
 def test_single_frame_case():
-    sim = make_simulation(load_scenario("mav-geolocation-single", ["mission.map.rural_size_m=260"], seed=2))
+    sim = make_simulation(load_scenario("mav-geolocation-single", ["world.geo_map.rural_size_m=260"], seed=2))
     r = sim.run()
     assert r.error is None and sim.mission.done
     assert r.metrics["samples"] == 1
@@ -85,4 +85,4 @@ def test_target_off_the_map_is_one_clear_error():
     from visnav.scenarios.schema import load_scenario as ls
 
     with pytest.raises(ValueError, match="off the map"):
-        make_simulation(ls("mav-geolocation", ["mission.map.rural_size_m=200", "mission.target.north_m=500"]))
+        make_simulation(ls("mav-geolocation", ["world.geo_map.rural_size_m=200", "world.truck.north_m=500"]))

@@ -16,7 +16,7 @@ from visnav.app.missions import make_simulation
 ROOT = Path(__file__).resolve().parents[2]
 #: short runs that still reach each scenario's vision streams
 SHORT = {"witas-homing": ["run.duration_s=11", "mission.gps_loss_s=3", "mission.settle_s=1"],
-         "condor-orbit": ["run.duration_s=2.5", "mission.control.orbit.switch_time_s=1"],
+         "condor-orbit": ["run.duration_s=2.5", "mission.orbit.switch_time_s=1"],
          "condor-ground-test": [], "palace-landing": ["run.duration_s=4"]}
 
 

@@ -71,7 +71,7 @@ def test_the_guard_catches_a_read_from_elsewhere(monkeypatch):
 @pytest.mark.parametrize("name, loop, keys", [
     ("deck-static", "visnav.app.deck_parts", ["run.duration_s=8"]),  # manual start, hand-over, approach
     ("deck-moving", "visnav.app.deck_parts", ["run.duration_s=6"]),
-    ("condor-orbit", "visnav.app.condor_parts", ["run.duration_s=30", "mission.control.orbit.switch_time_s=20"]),  # GPS, then vision
+    ("condor-orbit", "visnav.app.condor_parts", ["run.duration_s=30", "mission.orbit.switch_time_s=20"]),  # GPS, then vision
     ("mav-geolocation", "visnav.app.geoloc_parts", ["run.duration_s=25"]),
 ])
 def test_no_truth_outside_the_sensors_models_and_the_loop(monkeypatch, name, loop, keys):

@@ -58,7 +58,7 @@ def test_real_map(name):
     d = _data()
     if d is None:
         pytest.skip(missing_reason(shared_data_dir() / "satellite_column.png"))
-    sim, res = _fly(f"mission.map.file={d / f'satellite_{name}.png'}", "mission.path.size_north_m=140",
+    sim, res = _fly(f"world.witas_map.file={d / f'satellite_{name}.png'}", "mission.path.size_north_m=140",
                     "mission.path.size_east_m=140", "run.duration_s=120")
     m = res.metrics
     assert res.error is None and m["returned_home"]

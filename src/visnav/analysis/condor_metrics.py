@@ -40,7 +40,7 @@ def condor_metrics(log, scenario, *, wall_time_s: float, error: str | None = Non
     """Metrics of a CONDOR run from its flight log (the same data as ``log.h5``) and the resolved scenario."""
     cfg = scenario.mission
     out: dict = {k: math.nan for k in KEYS}
-    out["controller"] = "none (static camera)" if cfg.experiment == "ground_test" else cfg.control.orbit.logic
+    out["controller"] = "none (static camera)" if cfg.experiment == "ground_test" else scenario.control.condor.orbit.logic
     sim_time = 0.0
     if cfg.experiment == "ground_test":
         g = log.get("ground_test")
@@ -69,12 +69,12 @@ def condor_metrics(log, scenario, *, wall_time_s: float, error: str | None = Non
         out["tracking_lost_s"] = float(np.count_nonzero(~vis["tracked"].astype(bool)) * frame_dt)
         out["vision_valid_fraction"] = float(np.mean(vis["valid"].astype(bool)))
     if tr and t0 is not None:
-        sel = tr["t"] >= t0 + cfg.control.orbit.transition_s
+        sel = tr["t"] >= t0 + cfg.orbit.transition_s
         if sel.any():
             p = tr["position"][sel]
-            target = np.array([cfg.target.north_m, cfg.target.east_m])
+            target = np.array([scenario.world.tent.north_m, scenario.world.tent.east_m])
             r = np.hypot(p[:, 0] - target[0], p[:, 1] - target[1])
-            e = r - cfg.control.orbit.radius_m
+            e = r - cfg.orbit.radius_m
             out["orbit_radius_error_rms_m"] = float(np.sqrt(np.mean(e**2)))
             out["orbit_radius_error_max_m"] = float(np.abs(e).max())
             out["orbit_radius_mean_m"] = float(r.mean())
@@ -83,7 +83,7 @@ def condor_metrics(log, scenario, *, wall_time_s: float, error: str | None = Non
             c = np.linalg.lstsq(A, p[:, 0] ** 2 + p[:, 1] ** 2, rcond=None)[0]
             out["orbit_centre_offset_m"] = float(np.hypot(c[0] - target[0], c[1] - target[1]))
             out["max_bank_deg"] = float(np.degrees(np.abs(tr["euler"][sel, 0]).max()))
-            out["altitude_error_rms_m"] = float(np.sqrt(np.mean((-p[:, 2] - cfg.control.altitude_m) ** 2)))
+            out["altitude_error_rms_m"] = float(np.sqrt(np.mean((-p[:, 2] - cfg.altitude_m) ** 2)))
     es = log.get("estimate")
     if es and tr and t0 is not None:
         ok = es["valid"].astype(bool) & (es["t"] >= t0)

@@ -50,7 +50,7 @@ def bank_oscillation(log, cfg) -> dict:
         return {}
     t0 = float(modes["t"][list(modes["mode"]).index("vision_orbit")])
     t, phi = tr["t"], np.degrees(tr["euler"][:, 0])
-    on = t >= t0 + cfg.control.orbit.transition_s
+    on = t >= t0 + cfg.orbit.transition_s
     if on.sum() < 20:
         return {}
     x = phi[on] - phi[on].mean()
@@ -63,7 +63,7 @@ def bank_oscillation(log, cfg) -> dict:
     out = {"t_from_s": float(t[on][0]), "min_deg": float(phi[on].min()), "max_deg": float(phi[on].max()),
            "p5_deg": float(np.percentile(phi[on], 5)), "p95_deg": float(np.percentile(phi[on], 95)),
            "period_s": float(1.0 / f[k]),
-           "steady_deg": float(np.degrees(np.arctan(v**2 / (9.80665 * cfg.control.orbit.radius_m))))}
+           "steady_deg": float(np.degrees(np.arctan(v**2 / (9.80665 * cfg.orbit.radius_m))))}
     if loiter.any():
         out["loiter_p5_deg"] = float(np.percentile(phi[loiter], 5))
         out["loiter_p95_deg"] = float(np.percentile(phi[loiter], 95))
@@ -108,8 +108,8 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     tr, ctl, vis = log.get("truth"), log.get("control"), log.get("vision")
     if not tr:
         return out
-    target = np.array([cfg.target.north_m, cfg.target.east_m])
-    R_des = cfg.control.orbit.radius_m
+    target = np.array([scenario.world.tent.north_m, scenario.world.tent.east_m])
+    R_des = cfg.orbit.radius_m
     modes = np.asarray(ctl["mode"]) if ctl else np.array([])
     fig, ax = plt.subplots(figsize=(7.5, 7.5), layout="constrained")
     p = tr["position"]
@@ -127,7 +127,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         ax.text(target[1] + 45 * math.sin(ang), target[0] + 45 * math.cos(ang), f"wind {w.wind_speed_mps:.1f} m/s",
                 color="r")
     ax.set_xlabel("east [m]"), ax.set_ylabel("north [m]"), ax.axis("equal"), ax.legend(loc="upper right")
-    ax.set_title(f"Orbit over the field, controller '{cfg.control.orbit.logic}' (cf. Figs. 6.1, 7.4, 7.10)")
+    ax.set_title(f"Orbit over the field, controller '{scenario.control.condor.orbit.logic}' (cf. Figs. 6.1, 7.4, 7.10)")
     out.append(("Orbit track", _fig_to_img(fig)))
 
     fig, ax = plt.subplots(figsize=(12, 4), layout="constrained")
@@ -158,8 +158,8 @@ def plots(log, scenario) -> list[tuple[str, str]]:
         ax[2].set_ylabel("deflection [deg]"), ax[2].set_xlabel("t [s]"), ax[2].legend()
         ax[2].set_title("Aileron and rudder (cf. Figs. 7.8-7.9, 7.13-7.14)")
         for a_ in ax:
-            if cfg.control.orbit.switch_time_s < t[-1]:
-                a_.axvline(cfg.control.orbit.switch_time_s, color="0.5", ls=":")
+            if cfg.orbit.switch_time_s < t[-1]:
+                a_.axvline(cfg.orbit.switch_time_s, color="0.5", ls=":")
         out.append(("Controller", _fig_to_img(fig)))
     if vis:
         fig, ax = plt.subplots(figsize=(12, 3.5), layout="constrained")

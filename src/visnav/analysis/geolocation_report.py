@@ -26,7 +26,7 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
     if scenario is not None:
         from visnav.world.rural import mission_map
 
-        geo = mission_map(scenario.mission)
+        geo = mission_map(scenario.world.geo_map)
     tr = log.get("truth")
     if tr and geo is not None:
         fig, ax = plt.subplots(figsize=(8, 8))
@@ -87,8 +87,8 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
         from visnav.analysis.registrability import registrability_map
 
         try:
-            m = scenario.mission.map  # scored under the appearance change this flight's reference had
-            rq = registrability_map(geo, scenario.mission.control.altitude_m, unstable_m=m.change_m,
+            m = scenario.world.geo_map  # scored under the appearance change this flight's reference had
+            rq = registrability_map(geo, scenario.mission.altitude_m, unstable_m=m.change_m,
                                     texture_keep=m.change_keep, relief_level=m.relief_level,
                                     shift_m=m.relief_shift_m, shift_corr_m=m.relief_corr_m)
         except ValueError:

@@ -115,12 +115,12 @@ def _condor_outcome(log, scenario) -> tuple[str, str]:
     cfg = scenario.mission
     if getattr(cfg, "experiment", "orbit") != "orbit" or not st or not tr or "mode" not in st:
         return "safe", ""
-    o = cfg.control.orbit
+    o, tent = cfg.orbit, scenario.world.tent
     t = np.asarray(st["t"], float)
     tt = np.asarray(tr["t"], float)
     i = np.clip(np.searchsorted(tt, t), 0, max(tt.size - 1, 0))
     p = np.asarray(tr["position"], float)[i]
-    e = np.abs(np.hypot(p[:, 0] - cfg.target.north_m, p[:, 1] - cfg.target.east_m) - o.radius_m)
+    e = np.abs(np.hypot(p[:, 0] - tent.north_m, p[:, 1] - tent.east_m) - o.radius_m)
     vision = np.array([str(m) == "vision_orbit" for m in st["mode"]])
     on = np.nonzero(vision)[0]
     if not on.size:

@@ -20,7 +20,7 @@ NO_VRS_APPROACH = "no vortex-ring approach"
 
 def notes(log, scenario, metrics: dict) -> list[str]:
     """Below the summary: by how much and how long the roll passed the planning bank limit phi_max (the turns
-    are planned within it, eq. 4.15; the roll command may go phi_max + roll_margin_deg for corrections in wind)."""
+    are planned within it, eq. 4.15; the roll command may go phi_max + control.pfcm.roll_margin_deg for corrections in wind)."""
     tr = log.get("truth")
     m = scenario.mission
     if not tr or "euler" not in tr:
@@ -33,7 +33,7 @@ def notes(log, scenario, metrics: dict) -> list[str]:
     return [f"max roll {roll.max():.1f} deg exceeds the bank limit phi_max {m.phi_max_deg:g} deg by "
             f"{roll.max() - m.phi_max_deg:.1f} deg, for {np.sum(roll > m.phi_max_deg) * dt:.1f} s of the "
             f"{roll.size * dt:.0f} s on the path: the turns are planned within phi_max (eq. 4.15), the roll command "
-            f"may reach phi_max + roll_margin_deg = {m.phi_max_deg + m.roll_margin_deg:g} deg to correct in wind"]
+            f"may reach phi_max + roll_margin_deg = {m.phi_max_deg + scenario.control.pfcm.roll_margin_deg:g} deg to correct in wind"]
 
 
 def _follow_mask(log, t: np.ndarray) -> np.ndarray:

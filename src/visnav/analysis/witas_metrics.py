@@ -100,7 +100,7 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     try:
         from visnav.world.witas_map import make_ground
 
-        ground, _ = make_ground(scenario.mission, scenario.run.seed, scenario.sensors.camera)
+        ground, _ = make_ground(scenario.mission.path, scenario.world.witas_map, scenario.run.seed, scenario.sensors.camera)
         n0, n1, e0, e1 = ground.extent_ned()
         img = ground.level(min(2, ground.max_level))
         for a in axs:

@@ -38,7 +38,8 @@ def build_navigator(name: str, map_path: str | None = None, overrides: list[str]
     sets = list(overrides or [])
     sc = load_scenario(scenario, sets)
     if map_path:
-        key = "mission.map.file" if hasattr(sc.mission, "map") else "world.map_file"
+        key = {"witas-homing": "world.witas_map.file", "mav-geolocation": "world.geo_map.file"}.get(
+            sc.mission.type, "world.map_file")
         sc = load_scenario(scenario, sets + [f"{key}={Path(map_path).resolve()}"])
     return navigator_from_scenario(sc, recorder)
 

@@ -150,10 +150,10 @@ def build(ctx) -> MissionParts | GroundTest:
     s = sc.vehicle.mass_kg / 13.5  # Aerosonde inertias scaled with the mass (vehicles/fixedwing.py)
     params = FixedWingParams(mass=sc.vehicle.mass_kg, Jx=0.8244 * s, Jy=1.135 * s, Jz=1.759 * s, Jxz=0.1204 * s)
     va = sc.vehicle.airspeed_mps
-    o = cfg.control.orbit
+    o, tent = cfg.orbit, sc.world.tent
     trim_level = trim(params, va)
-    target = np.array([cfg.target.north_m, cfg.target.east_m, 0.0])
-    h = cfg.control.altitude_m
+    target = np.array([tent.north_m, tent.east_m, 0.0])
+    h = cfg.altitude_m
     a0 = 0.0  # start north of the tent, flying east: a right-hand orbit, tent on the right wing
     pos = target + np.array([o.loiter_radius_m * math.cos(a0), o.loiter_radius_m * math.sin(a0), -h])
     wind = scenario_wind(sc.world, rng[0], h, va)
@@ -161,7 +161,7 @@ def build(ctx) -> MissionParts | GroundTest:
     c = sn.camera
     camera = condor_camera(c.width_px, c.height_px, c.hfov_deg, c.k1, c.k2, c.crop_dx_px, c.crop_dy_px)
     renderer = TargetCamera(camera, rng[1], c.noise_sigma)
-    outline = target_outline(target[:2], cfg.target.length_m, cfg.target.width_m, math.radians(cfg.target.heading_deg))
+    outline = target_outline(target[:2], tent.length_m, tent.width_m, math.radians(tent.heading_deg))
     g = sn.gimbal
     gimbal = Gimbal(math.pi / 2, -math.atan2(h, o.loiter_radius_m), math.radians(g.pan_rate_deg_s),
                     math.radians(g.tilt_rate_deg_s), g.roll_leak, math.radians(g.roll_bias_deg))
@@ -184,10 +184,10 @@ def build(ctx) -> MissionParts | GroundTest:
     nav = build_navigator(sc, camera)
     if ctx.navigator_wrapper is not None:
         nav = ctx.navigator_wrapper(nav)
-    ctl = cfg.control
+    ctl = sc.control.condor
     gains = InnerGains(kp_phi=ctl.kp_phi, kd_phi=ctl.kd_phi, kp_psi=ctl.kp_psi, bank_limit=math.radians(ctl.bank_limit_deg))
     autopilot = FixedWingAutopilot(gains, trim_level.controls, rate_hz=50.0)
-    mission = CondorMission(cfg, nav, airspeed_mps=va, recorder=record)
+    mission = CondorMission(cfg, ctl.orbit, nav, airspeed_mps=va, recorder=record)
     truth = CurrentTruth(vehicle)
     operator = Operator(sn, nav, camera, renderer, gimbal, vehicle, truth, target, mission, record)
     environment = WindEnvironment(lambda: world.wind, dt, lambda: max(-vehicle.x[2], 1.0),

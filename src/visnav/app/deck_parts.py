@@ -63,9 +63,9 @@ class TrueCalibration:
     @classmethod
     def draw(cls, sc) -> "TrueCalibration":
         rng = np.random.default_rng([int(sc.run.seed), 3003])
-        n = rng.standard_normal((4 + len(sc.mission.deck.lights_m), 3))  # every draw made, whatever the sigmas
+        n = rng.standard_normal((4 + len(sc.world.deck.lights_m), 3))  # every draw made, whatever the sigmas
         c, imu = sc.sensors.camera, sc.sensors.imu
-        lights = np.asarray(sc.mission.deck.lights_m, float) + sc.mission.deck.light_survey_error_m * n[4:]
+        lights = np.asarray(sc.world.deck.lights_m, float) + sc.world.deck.light_survey_error_m * n[4:]
         nominal = c.pinhole()
         f = nominal.fx * (1.0 + c.focal_error_frac * n[0, 0])
         pp = c.principal_point_error_px * n[0, 1:]
@@ -140,7 +140,7 @@ class DeckContact:
         zb, zd = euler_to_dcm(s.euler)[:, 2], ds.C[:, 2]
         g_d = ds.C.T @ (gear - ds.position)
         pos_err = float(np.hypot(*(g_d[:2] - self.landing_point[:2])))  # from the desired landing location
-        on = bool(np.all(np.abs(g_d[:2]) <= self.cfg.deck.size_m / 2))  # on the square plate
+        on = bool(np.all(np.abs(g_d[:2]) <= self.world.size_m / 2))  # on the square plate
         speed = float(np.linalg.norm(rel))
         self.record("touchdown", t, rel_speed=speed, pos_err=pos_err, on_deck=on,
                     att_mismatch=float(np.degrees(np.arccos(np.clip(zb @ zd, -1, 1)))))
@@ -176,7 +176,7 @@ def build(ctx) -> MissionParts:
     cfg = sc.mission
     dt = sc.run.dt_s
     rng = ctx.rng  # 8 generators of the run's seed (as the R-MAX loop's)
-    d, c = cfg.deck, sc.sensors.camera
+    d, c = sc.world.deck, sc.sensors.camera
     motion = (DeckMotion.static() if d.motion == "static"
               else DeckMotion.from_sea_state(d.sea_state, rng[0], d.sinusoids, d.motion_scale))
     true = TrueCalibration.draw(sc)  # the filter keeps the nominal calibration (DeckNavConfig.from_mission)
@@ -227,9 +227,9 @@ def build(ctx) -> MissionParts:
         nav.initialize(NavInit(t=0.0, source="static"))
     d_ctrl = rate_divisor(CONTROL_HZ, dt)
     mission = DeckMission(cfg, nav, filter_cfg=sc.navigation, hold_point=rel, gear_offset=params.gear_offset, period_s=d_ctrl * dt,
-                          recorder=record)
+                          recorder=record, deck=d, gains=sc.control.deck)
     hov = params.hover_throttle
-    controller = DeckController(cfg.guidance, v.max_tilt_deg, params.gear_offset, cfg.guidance.overshoot_moving_m,
+    controller = DeckController(cfg.guidance, sc.control.deck, v.max_tilt_deg, params.gear_offset, cfg.guidance.overshoot_moving_m,
                                 hover_throttle_1m=hov,
                                 hover_throttle_ground=hov / params.ground_effect(v.gear_offset_m + params.rotor_height),
                                 rate_hz=1.0 / (d_ctrl * dt), recorder=record)

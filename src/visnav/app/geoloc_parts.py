@@ -56,11 +56,11 @@ def mav_camera(c) -> PinholeCamera:
                          (c.k1, c.k2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
 
 
-def mission_reference(cfg, geo: GeoImage, seed: int) -> GeoImage:
-    """The reference image the navigator registers to: the mission's map on another day (``mission.map.change_m``
-    > 0, ``world/appearance.another_day``, drawn from the run's 12th random stream), degraded
-    (``mission.map.ref_*``). The registry (replay) calls it with the recording's seed and gets the loop's image."""
-    m = cfg.map
+def mission_reference(m, geo: GeoImage, seed: int) -> GeoImage:
+    """The reference image the navigator registers to: the map (``m``: ``world.geo_map``) on another day
+    (``world.geo_map.change_m`` > 0, ``world/appearance.another_day``, drawn from the run's 12th random stream),
+    degraded (``world.geo_map.ref_*``). The registry (replay) calls it with the recording's seed and gets the loop's
+    image."""
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(12)[11])
     day = another_day(geo, rng, m.change_m, m.change_keep, m.relief_level, m.relief_shift_m, m.relief_corr_m)
     return degrade_reference(day, geo.resolution_m, m.ref_gain, m.ref_offset, m.ref_gamma, m.ref_blur_m)
@@ -165,7 +165,7 @@ class GroundStation:
 
     def __init__(self, telemetry, nav, mission, truth, cfg, airspeed_mps, record) -> None:
         self.telemetry, self.nav, self.geo_mission, self.truth, self.record = telemetry, nav, mission, truth, record
-        self.ref = (0.0, cfg.control.altitude_m, airspeed_mps)
+        self.ref = (0.0, cfg.altitude_m, airspeed_mps)
 
     @property
     def mode(self) -> str:
@@ -235,24 +235,24 @@ def build(ctx) -> MissionParts:
     cfg = sc.mission
     dt = sc.run.dt_s
     rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(12)]
-    geo = mission_map(cfg)
-    t = cfg.target
+    geo = mission_map(sc.world.geo_map)
+    t = sc.world.truck
     target = map_centre(geo) + np.array([t.north_m, t.east_m])
     n0, n1, e0, e1 = geo.extent_ned()
     if not (n0 < target[0] < n1 and e0 < target[1] < e1):
-        raise ValueError(f"mission.target ({t.north_m}, {t.east_m}) m from the map centre is off the map "
+        raise ValueError(f"world.truck ({t.north_m}, {t.east_m}) m from the map centre is off the map "
                          f"({n1 - n0:.0f} x {e1 - e0:.0f} m)")
     frames_map = paste_truck(geo, target, t.length_m, t.width_m, math.radians(t.heading_deg))
-    reference = mission_reference(cfg, geo, sc.run.seed)
-    c, ctl = sc.sensors.camera, cfg.control
+    reference = mission_reference(sc.world.geo_map, geo, sc.run.seed)
+    c, ctl = sc.sensors.camera, sc.control.mav
     va = sc.vehicle.airspeed_mps
-    wind = scenario_wind(sc.world, rng[0], ctl.altitude_m, va)
+    wind = scenario_wind(sc.world, rng[0], cfg.altitude_m, va)
     scene = World(ground=frames_map, surface="map", wind=wind)
     camera = mav_camera(c)
     renderer = CameraRenderer(camera, c.noise_sigma, rng[1])
-    axis = ctl.axis_deg if ctl.axis_deg is not None else (0.0 if (n1 - n0) >= (e1 - e0) else 90.0)
+    axis = cfg.axis_deg if cfg.axis_deg is not None else (0.0 if (n1 - n0) >= (e1 - e0) else 90.0)
     centre = target + rng[2].normal(0.0, 5.0, 2)  # where the operator believes the target is
-    path = FigureEight(centre, ctl.half_length_m, math.radians(axis), ctl.l1_m)
+    path = FigureEight(centre, cfg.half_length_m, math.radians(axis), ctl.l1_m)
     g = sc.sensors.gimbal
     b = rng[3].normal(0.0, math.radians(g.bias_deg), 2)
     ab = rng[7].normal(0.0, math.radians(g.ahrs_bias_deg), 2)
@@ -270,7 +270,7 @@ def build(ctx) -> MissionParts:
     mission = GeolocationMission(cfg, path, airspeed_mps=va, recorder=record)
     params = micro_params(sc.vehicle.mass_kg, sc.vehicle.span_m, va)
     start, heading = path.start_pose()
-    vehicle = trimmed_aircraft(params, va, np.array([start[0], start[1], -ctl.altitude_m]), heading, wind)
+    vehicle = trimmed_aircraft(params, va, np.array([start[0], start[1], -cfg.altitude_m]), heading, wind)
     # the CONDOR inner-loop gains, tuned on the 1.1 m airframe at 13 m/s (rounds 1-4), carried to this one by
     # its control power (the PingWing's surfaces move it 6-40x faster; unscaled, the 50 Hz loops diverge)
     ref = micro_params(sc.vehicle.mass_kg, MICRO_REFERENCE_SPAN_M, MICRO_REFERENCE_AIRSPEED_MPS)
@@ -285,7 +285,7 @@ def build(ctx) -> MissionParts:
     station = GroundStation(telemetry, nav, mission, truth, cfg, va, record)
     # in this order at one step: telemetry, frame (with the operator's click), the autopilot's sensors
     sensors = {"telemetry": TelemetrySensor(telemetry),
-               "camera": NadirCamera(camera, renderer, gimbal, target, c.frame_hz, t.click_sigma_px, rng[5], record, dt,
+               "camera": NadirCamera(camera, renderer, gimbal, target, c.frame_hz, cfg.click_sigma_px, rng[5], record, dt,
                                      frame_phase(c.frame_phase_s, c.frame_hz, dt, rng[6]))}
     sensors.update({f"autopilot{i}": x for i, x in enumerate(ap_sensors)})
     logger = GeolocLogger(vehicle, station, autopilot, nav, target, record)

@@ -175,8 +175,9 @@ def _pfcm(ctx: BuildContext) -> MissionParts:
     cfg = ctx.scenario.mission
     world = ctx.wind_world()  # no camera: no ground to render
     model, mount = ctx.camera_geometry()
-    mission = PfcmMission(cfg, recorder=ctx.record)
-    controller = PathFollowingController(path_loop_gains(cfg), recorder=ctx.record)
+    ctl = ctx.scenario.control.pfcm
+    mission = PfcmMission(cfg, recorder=ctx.record, iterations=ctl.iterations)
+    controller = PathFollowingController(path_loop_gains(cfg, ctl), recorder=ctx.record)
     # PFCM flies on the PALACE navigator's GPS solution: no camera
     return rmax_parts(ctx, world=world, sensors=ctx.rmax_sensors(camera=False), navigator=ctx.navigator("palace"),
                       mission=mission, controller=controller, metrics=pfcm_metrics,

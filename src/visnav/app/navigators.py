@@ -64,7 +64,8 @@ def _witas(sc, recorder, camera, mount, reference=None, **_):
 
     cfg = sc.mission
     if reference is None:  # the same degraded map as the closed loop's
-        reference = reference_map(cfg, make_ground(cfg, sc.run.seed, sc.sensors.camera)[0])
+        reference = reference_map(sc.world.witas_map, make_ground(cfg.path, sc.world.witas_map, sc.run.seed,
+                                                                   sc.sensors.camera)[0])
     return WitasNavigator(sc.navigation, camera.K, mount, reference, recorder=recorder, rng=mission_rngs(sc.run.seed)[4])
 
 
@@ -83,8 +84,7 @@ def _pad(sc, recorder, camera, mount, ptu=None, layout=None, **_):
     if ptu is None:
         raise ValueError("the pad navigator needs its pan-tilt unit (ptu): it points the camera; replay and bridge "
                          "of the pad landing need pan-tilt frames and a pan-tilt link (not there yet)")
-    cfg = sc.mission
-    pc, fc = cfg.pad, sc.navigation
+    pc, fc = sc.world.pad, sc.navigation
     layout = layout or PadLayout(tuple(pc.legs_m), tuple(pc.ring_ratio), tuple(pc.inner_ratio))
     detector = PadDetector(layout, camera.K, sigma_floor_px=fc.sigma_floor_px, cov_inflation=fc.cov_inflation)
     return PadNavigator(fc, detector, ptu, recorder=recorder)
@@ -156,7 +156,7 @@ def _geolocation(sc, recorder, camera, mount, reference=None, **_):
     from visnav.world.rural import mission_map
 
     if reference is None:
-        reference = mission_reference(sc.mission, mission_map(sc.mission), sc.run.seed)
+        reference = mission_reference(sc.world.geo_map, mission_map(sc.world.geo_map), sc.run.seed)
     return build_navigator(sc, reference, camera)
 
 

@@ -28,7 +28,7 @@ def build(ctx):
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
     cc, fc = sc.sensors.camera, sc.navigation
-    pc, pt, pf = cfg.pad, cc.pantilt, cc.platform
+    pc, pt, pf = sc.world.pad, cc.pantilt, cc.platform
     world = ctx.textured_world()  # the ground around the pad (the board is drawn over it)
     rng = [np.random.default_rng(s) for s in np.random.SeedSequence([sc.run.seed, 15]).spawn(5)]
     layout = PadLayout(tuple(pc.legs_m), tuple(pc.ring_ratio), tuple(pc.inner_ratio))

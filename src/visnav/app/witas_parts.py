@@ -1,5 +1,5 @@
 """Builds the WITAS homing mission for the R-MAX loop (registered as ``witas-homing`` in ``app/missions.py``):
-the world (procedural rural map, or ``mission.map.file``), the navigator's degraded reference map, the
+the world (procedural rural map, or ``world.witas_map.file``), the navigator's degraded reference map, the
 downward camera, the barometer (and compass), the navigator and the PFCM mission over the loop of
 ``mission/witas.py``. Here, not in ``mission/``, because it builds world and sensors (DESIGN §1).
 """
@@ -28,7 +28,7 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
 def build(ctx):
     from visnav.control.rmax_path import PathFollowingController
     from visnav.mission.pfcm import PfcmMission, path_loop_gains
-    from visnav.scenarios.schema import PfcmMissionConfig
+    from visnav.scenarios.schema import PfcmControlConfig, PfcmMissionConfig
     from visnav.sensors.baro import Compass, baro_sensor
     from visnav.sensors.camera import Camera
     from visnav.sensors.faults import map_faults
@@ -36,12 +36,12 @@ def build(ctx):
 
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
-    pc, cc, mc = cfg.path, sc.sensors.camera, cfg.map
+    pc, cc, mc = cfg.path, sc.sensors.camera, sc.world.witas_map
     rng = mission_rngs(sc.run.seed)
-    ground, (sn, se, r, centre) = make_ground(cfg, sc.run.seed, cc)
+    ground, (sn, se, r, centre) = make_ground(pc, mc, sc.run.seed, cc)
     ground = map_faults(ground, sc.faults, "world")  # [[faults]] feature_poor (issue #18)
     world = World(ground=ground, surface="grass", wind=ctx.scenario_wind(), detail=None)
-    reference = map_faults(reference_map(cfg, ground), sc.faults, "reference")  # map_offset
+    reference = map_faults(reference_map(mc, ground), sc.faults, "reference")  # map_offset
     P, T = loop_waypoints(sn, se, r, pc.altitude_m, centre, pc.direction)
     path = HermitePath.from_waypoints(P, T, scale="arc")
     notes = []
@@ -72,9 +72,9 @@ def build(ctx):
     # odometry drift median 0.88 % (max 1.92) against 0.67 % (1.35) and PMF max 2.98 m (4.53) against
     # 3.22 m (3.86), home error 0.84 against 1.06 m (docs/results-witas.md)
     pf = PfcmMissionConfig(v_cruise_mps=pc.speed_mps, accel_mps2=pc.accel_mps2, settle_s=cfg.settle_s,
-                           hold_s=cfg.hold_s, end_tolerance_m=1.0, roll_compensator=False)
+                           hold_s=cfg.hold_s, end_tolerance_m=1.0)
     mission = PfcmMission(pf, recorder=record, path=path)
-    controller = PathFollowingController(path_loop_gains(pf), recorder=record)
+    controller = PathFollowingController(path_loop_gains(pf, PfcmControlConfig(roll_compensator=False)), recorder=record)
     return rmax_parts(ctx, world=world, sensors=sensors, navigator=nav, mission=mission, controller=controller,
                       metrics=witas_metrics, start_position=mission.start_position(), start_yaw=mission.start_yaw,
                       camera_model=model, mount=mount, notes=notes)

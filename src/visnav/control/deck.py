@@ -48,11 +48,12 @@ def flare(a_cmd_ld: np.ndarray, n_up: np.ndarray, t_go: float, flare_s: float) -
 
 
 class DeckController:
-    """Runs at ``rate_hz``; ``guidance`` is the mission's ``DeckGuidanceConfig`` (gains, descent, flare)."""
+    """Runs at ``rate_hz``; ``guidance`` is the mission's ``DeckGuidanceConfig`` (descent, flare), ``gains`` the
+    scenario's ``control.deck`` (the eq. 4.25 spring-damper)."""
 
-    def __init__(self, guidance, max_tilt_deg: float, gear_offset: float, overshoot: float,
+    def __init__(self, guidance, gains, max_tilt_deg: float, gear_offset: float, overshoot: float,
                  hover_throttle_1m: float, hover_throttle_ground: float, rate_hz: float, recorder=None):
-        self.g = guidance
+        self.g, self.gains = guidance, gains
         self.max_tilt = np.radians(max_tilt_deg)
         self.gear_offset, self.overshoot = gear_offset, overshoot
         self.rate_hz = rate_hz
@@ -84,15 +85,15 @@ class DeckController:
         if ref.kind == "descend":  # thrust along the deck normal (attitude matched), sink at final_descent_mps
             c, n_up = ref.target, ref.normal
             p_des, v_des = np.array([c[0], c[1], p_ld[2]]), np.array([0.0, 0.0, g.final_descent_mps])
-            a_z = g.damper_per_s * (g.final_descent_mps - v_ld[2])
+            a_z = self.gains.damper_per_s * (g.final_descent_mps - v_ld[2])
             if ref.vertical_accel is not None:  # the mission sinks on the IMU (a blind end, no fix to trust)
                 a_z = float(ref.vertical_accel)
             a_ff = np.array([0.0, 0.0, G]) + (G - a_z) / max(-n_up[2], 0.5) * n_up
-            fb = follow(p_des, np.zeros(3), np.zeros(3), p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
+            fb = follow(p_des, np.zeros(3), np.zeros(3), p_ld, v_ld, self.gains.spring_per_s2, self.gains.damper_per_s)
             a_cmd_ld = a_ff + (np.array([fb[0], fb[1], 0.0]) if g.descent_hold else 0.0)
         elif ref.kind == "follow":
             p_des, v_des = ref.position, ref.velocity
-            a_cmd_ld = follow(p_des, v_des, ref.accel, p_ld, v_ld, g.spring_per_s2, g.damper_per_s)
+            a_cmd_ld = follow(p_des, v_des, ref.accel, p_ld, v_ld, self.gains.spring_per_s2, self.gains.damper_per_s)
             if ref.vertical_accel is not None:  # the mission holds the height on the IMU (hover without a fix)
                 a_cmd_ld = np.array([a_cmd_ld[0], a_cmd_ld[1], float(ref.vertical_accel)])
         else:

@@ -25,16 +25,17 @@ from visnav.mission.integrity import IntegrityWatch
 
 
 class CondorMission:
-    def __init__(self, cfg, navigator, airspeed_mps: float, recorder=None) -> None:
-        """``cfg``: the scenario's ``mission`` block (``config_condor.CondorMissionConfig``); ``airspeed_mps``: the
-        aircraft's (``vehicle.airspeed_mps``)."""
+    def __init__(self, cfg, gains, navigator, airspeed_mps: float, recorder=None) -> None:
+        """``cfg``: the scenario's ``mission`` block (``config_condor.CondorMissionConfig``); ``gains``: the orbit
+        controller's logic and gains (``control.condor.orbit``); ``airspeed_mps``: the aircraft's
+        (``vehicle.airspeed_mps``)."""
         self.cfg, self.nav, self.airspeed = cfg, navigator, airspeed_mps
         self.record = recorder or (lambda *a, **k: None)
-        o, va = cfg.control.orbit, airspeed_mps
-        g_orig, g_mod = OrbitGains(o.kp_original, o.kd_original), OrbitGains(o.kp_modified, o.kd_modified)
-        self.guidance = OrbitGuidance(o.logic, o.radius_m, va, g_orig, g_mod, o.base_limit)
+        o, k, va = cfg.orbit, gains, airspeed_mps
+        g_orig, g_mod = OrbitGains(k.kp_original, k.kd_original), OrbitGains(k.kp_modified, k.kd_modified)
+        self.guidance = OrbitGuidance(k.logic, o.radius_m, va, g_orig, g_mod, k.base_limit)
         # the GPS loiter knows its ground speed: base rate V_GS / R_loiter from a 0.5 s mean of it
-        self.loiter = OrbitGuidance("coordinated", o.loiter_radius_m, va, g_orig, g_mod, o.base_limit, v_avg_tau_s=0.5)
+        self.loiter = OrbitGuidance("coordinated", o.loiter_radius_m, va, g_orig, g_mod, k.base_limit, v_avg_tau_s=0.5)
         self.mode = "gps_loiter"
         self.done = False
         self.switched_at: float | None = None
@@ -45,13 +46,13 @@ class CondorMission:
 
     def start(self, t: float) -> None:
         self.record("mode", t, mode=self.mode,
-                    reason=f"GPS loiter at {self.cfg.control.orbit.loiter_radius_m:.0f} m, tracker started on the tent")
+                    reason=f"GPS loiter at {self.cfg.orbit.loiter_radius_m:.0f} m, tracker started on the tent")
 
     def on_touchdown(self, t: float) -> None:
         """A fixed wing on an orbit has no touchdown."""
 
     def step(self, t: float, estimate: FixedWingEstimate, health: Health) -> tuple[TurnReference, str]:
-        cfg, o = self.cfg, self.cfg.control.orbit
+        cfg, o = self.cfg, self.cfg.orbit
         dt = 1.0 / 50.0 if self._t is None else t - self._t
         self._t = t
         e = estimate
@@ -90,7 +91,7 @@ class CondorMission:
                        "psidot_ref_rud": None if ref["psidot_ref_rud"] is None else ref["base"]}
         self.info = {"R": e.radius, "Rdot": e.radius_rate, "base": ref["base"], "err": ref["err"],
                      "psidot_ref": ref["psidot_ref_ail"]}
-        return TurnReference(t, ref["psidot_ref_ail"], ref["psidot_ref_rud"], ref["v_bank"], cfg.control.altitude_m,
+        return TurnReference(t, ref["psidot_ref_ail"], ref["psidot_ref_rud"], ref["v_bank"], cfg.altitude_m,
                              self.airspeed), self.mode
 
 

@@ -65,16 +65,19 @@ G = 9.81
 
 
 class DeckMission:
-    def __init__(self, cfg, navigator, hold_point, gear_offset: float, period_s: float, recorder=None, *, filter_cfg):
+    def __init__(self, cfg, navigator, hold_point, gear_offset: float, period_s: float, recorder=None, *, filter_cfg,
+                 deck, gains):
         """``cfg``: the ``DeckMissionConfig``; ``filter_cfg``: the navigator's (``navigation``, its start and yaw
-        hypotheses for restarts); ``hold_point``: the start point held in ``manual`` and ``hover``
+        hypotheses for restarts); ``deck``: the world's deck (``world.deck``); ``gains``: the trajectories' tau
+        couplings and the follower's spring-damper (``control.deck``); ``hold_point``: the start point held in ``manual`` and ``hover``
         (level-deck frame, vehicle relative to the deck); ``period_s``: the interval ``step`` is called at."""
         self.cfg, self.nav, self.filter_cfg = cfg, navigator, filter_cfg
         self.period = period_s
         self.start_rel_ld = np.asarray(hold_point, float)
         self.gear_offset = gear_offset
         self.recorder = recorder
-        self.moving = cfg.deck.motion == "moving"
+        self.gains = gains
+        self.moving = deck.motion == "moving"
         self.landing_point = np.asarray(cfg.guidance.landing_point_m, float)
         self.approach = None
         self._a_td = np.zeros(3)
@@ -166,7 +169,7 @@ class DeckMission:
             pd, vd, a_now = self.approach.desired(tm)
             # the horizontal acceleration feed-forward is realised by tilting, through the attitude loop's lag:
             # take it that far ahead; the vertical one (thrust, fast) as it is
-            _, _, a_lead = self.approach.desired(min(tm + g.feedforward_lead_s, self.approach.T))
+            _, _, a_lead = self.approach.desired(min(tm + self.gains.feedforward_lead_s, self.approach.T))
             ref = DeckReference(t=t, kind="follow", position=c + pd, velocity=vd,
                                 accel=np.array([a_lead[0], a_lead[1], a_now[2]]), target=c, normal=n_up,
                                 flare_time_left=self.approach.T - tm if tau else None)
@@ -214,7 +217,7 @@ class DeckMission:
             # the sink rate on the IMU from the last good fix (a filter re-acquired near the deck had the
             # vehicle sinking while it hovered 4 cm above the deck, seed 5)
             self._v_land += self._imu_up_accel(est) * self.period
-            a_up = float(np.clip(g.damper_per_s * (-g.final_descent_mps - self._v_land), -BLIND_ACCEL_MAX,
+            a_up = float(np.clip(self.gains.damper_per_s * (-g.final_descent_mps - self._v_land), -BLIND_ACCEL_MAX,
                                  BLIND_ACCEL_MAX))
             return DeckReference(t=t, kind="descend", target=np.array([p_ld[0], p_ld[1], c[2]]),
                                  normal=np.array([0.0, 0.0, -1.0]), vertical_accel=-a_up), self.mode
@@ -334,7 +337,7 @@ class DeckMission:
         g = self.cfg.guidance
         self.nav.command(NavCommand(t, "track"))  # converged: from now on the sensor's own noise
         if not self.moving:
-            self._straight(t, p_ld, Cd0, wd, psi_d, f"manual hold over; straight tau gaps, k={g.k_static}, "
+            self._straight(t, p_ld, Cd0, wd, psi_d, f"manual hold over; straight tau gaps, k={self.gains.k_static}, "
                                                     f"T={g.duration_s}s")
         else:
             self._set_mode(t, "hover", "handed over to the autonomy")
@@ -343,7 +346,7 @@ class DeckMission:
         """Static deck: the straight tau approach from where the vehicle is to the landing point."""
         g = self.cfg.guidance
         self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
-        self.approach = StraightApproach(p_ld - self._c0, g.duration_s, g.k_static)
+        self.approach = StraightApproach(p_ld - self._c0, g.duration_s, self.gains.k_static)
         self._set_mode(t, "approach", why)
 
     def _maybe_start(self, t, tm, p_ld, Cd0, wd, psi_d):
@@ -371,7 +374,7 @@ class DeckMission:
             return
         self._held = False
         if ok or relaxed:
-            self.approach = TauGapApproach(p_ld - c, a_td, g.k_rho, g.k_alpha_beta)
+            self.approach = TauGapApproach(p_ld - c, a_td, self.gains.k_rho, self.gains.k_alpha_beta)
             self._a_td = a_td
             why = "conditions met" if ok else "waited max_wait_s"
             self._set_mode(t, "approach", f"{why}: lambda={np.degrees(lam):.0f} deg, gamma={np.degrees(gam):.0f} deg, "

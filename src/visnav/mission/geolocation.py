@@ -38,7 +38,7 @@ class GeolocationMission:
         psidot, info = self.path.heading_rate(tel.position[:2], vel)
         self.info = info
         c = self.cfg
-        return psidot, c.control.altitude_m, self.airspeed
+        return psidot, c.altitude_m, self.airspeed
 
     def _switch(self, t: float, mode: str, reason: str) -> None:
         self.mode = mode

@@ -83,15 +83,16 @@ def limits_from_config(cfg) -> PfcmLimits:
                       anticipate=cfg.anticipate_limits)
 
 
-def path_loop_gains(cfg):
-    """The eq. 4.25 outer-loop gains for a ``PfcmMissionConfig``: its command limits, the eq. 4.26 inner roll
-    loop with the lateral gains designed on it (``roll_compensator``), the lateral integral (``roll_integral``)."""
+def path_loop_gains(cfg, control):
+    """The eq. 4.25 outer-loop gains for a ``PfcmMissionConfig``'s command limits and the controller options of
+    ``control`` (``control.pfcm``): the eq. 4.26 inner roll loop with the lateral gains designed on it
+    (``roll_compensator``), the lateral integral (``roll_integral``), the roll command margin."""
     from visnav.control.rmax_path import PathLoopGains
 
-    make = PathLoopGains.with_roll_compensator if cfg.roll_compensator else PathLoopGains
-    return make(max_roll=math.radians(cfg.phi_max_deg + cfg.roll_margin_deg),
+    make = PathLoopGains.with_roll_compensator if control.roll_compensator else PathLoopGains
+    return make(max_roll=math.radians(cfg.phi_max_deg + control.roll_margin_deg),
                 max_pitch=math.radians(cfg.theta_max_deg), max_yaw_rate=math.radians(cfg.r_max_deg_s),
-                **({} if cfg.roll_integral else {"k3r": 0.0}))
+                **({} if control.roll_integral else {"k3r": 0.0}))
 
 
 def _heading(t: np.ndarray, fallback: float = 0.0) -> float:
@@ -101,11 +102,12 @@ def _heading(t: np.ndarray, fallback: float = 0.0) -> float:
 class PfcmMission:
     """Mission manager of a PFCM flight; ``step`` returns (reference source, mode)."""
 
-    def __init__(self, cfg, recorder=None, path: HermitePath | None = None):
+    def __init__(self, cfg, recorder=None, path: HermitePath | None = None, *, iterations: int = 1):
+        """``iterations``: the guidance's control-point feedback iterations per cycle (``control.pfcm``)."""
         self.cfg = cfg
         self.path = path if path is not None else build_path(cfg)
         self.limits = limits_from_config(cfg)
-        self.guidance = PfcmGuidance(self.path, self.limits, iterations=cfg.iterations)
+        self.guidance = PfcmGuidance(self.path, self.limits, iterations=iterations)
         first, last = self.path.segments[0], self.path.segments[-1]
         self.start_yaw = _heading(first.tangent(0.0))
         self.end_yaw = _heading(last.tangent(1.0), self.start_yaw)

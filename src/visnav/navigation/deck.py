@@ -151,7 +151,7 @@ class DeckNavConfig:
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
         """From a deck scenario: ``navigation.*``, the IMU's and camera's specifications (``sensors.imu``,
-        ``sensors.camera``), the light layout (``mission.deck.lights_m``).
+        ``sensors.camera``), the light layout (``world.deck.lights_m``).
 
         ``frame_interval_s`` is the interval between the frames the camera delivers (the bearing-rate
         sigma is a two-frame difference). The deck's true motion (``deck.motion``, ``deck.motion_scale``)
@@ -173,7 +173,7 @@ class DeckNavConfig:
         cal = (np.radians(f.calibration_bearing_deg) if f.calibration_bearing_deg is not None
                else float(np.hypot(np.hypot(np.radians(c.misalignment_deg), c.principal_point_error_px / c.focal_px),
                                    0.3 * c.focal_error_frac)))
-        survey = f.light_survey_sigma_m if f.light_survey_sigma_m is not None else sc.mission.deck.light_survey_error_m
+        survey = f.light_survey_sigma_m if f.light_survey_sigma_m is not None else sc.world.deck.light_survey_error_m
         bias = imu.accel_bias_mps2 if f.estimate_accel_bias else 0.0
         cam_sig = (np.radians(c.misalignment_deg), c.focal_error_frac, c.principal_point_error_px / c.focal_px)
         return cls(calibration_bearing_sigma=cal, light_survey_sigma=survey, calibration_floor=f.calibration_floor,
@@ -181,7 +181,7 @@ class DeckNavConfig:
                    bias_test_alpha=f.accel_bias_test_alpha or 1e-5, bias_step_sigma=f.accel_bias_step_mps2,
                    calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s,
                    accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
-                   lights=np.asarray(sc.mission.deck.lights_m, float),
+                   lights=np.asarray(sc.world.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
                    camera=c.pinhole(), imu_cov=imu_cov, ship_cov=np.diag(ship_var),
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,

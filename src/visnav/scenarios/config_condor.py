@@ -1,7 +1,7 @@
 """Scenario config of the CONDOR missions (seed 004): fixed wing + gimbal camera orbit, ground test.
 
 ``mission.type = "condor"``; ``mission.experiment`` picks the static ground test of Tables 4.1-4.2
-or the closed-loop orbit of ch. 6-7 (``--set mission.control.orbit.logic=coordinated``). Its aircraft is
+or the closed-loop orbit of ch. 6-7 (``--set control.condor.orbit.logic=coordinated``). Its aircraft is
 ``[vehicle] kind = "fixedwing"``, its camera ``[sensors.camera] kind = "gimbal-camera"`` on ``[sensors.gimbal]
 kind = "condor-gimbal"``, its video and telemetry link ``[sensors.link] kind = "link"``, its navigator
 ``[navigation] kind = "condor"``.
@@ -36,6 +36,8 @@ class CondorCameraConfig(_M):
 
 
 class TargetConfig(_M):
+    """The blue tent (``[world.tent]``)."""
+
     length_m: float = Field(3.0, ge=0.5, le=20.0)
     width_m: float = Field(2.0, ge=0.5, le=20.0)
     north_m: float = Field(0.0, ge=-1000.0, le=1000.0)
@@ -99,25 +101,33 @@ class CondorNavigationConfig(_M):
 
 
 class OrbitConfig(_M):
-    logic: Literal["original", "modified", "coordinated"] = "coordinated"
+    """The orbit the mission asks for (``[mission.orbit]``): GPS loiter, switch to vision, fallbacks."""
+
     radius_m: float = Field(110.0, ge=30.0, le=500.0, description="desired vision orbit radius")
     loiter_radius_m: float = Field(120.0, ge=30.0, le=500.0, description="GPS loiter before the switch")
     switch_time_s: float = Field(60.0, ge=0.0, le=3600.0)
     transition_s: float = Field(40.0, ge=0.0, le=600.0, description="excluded from the orbit error")
-    kp_original: float = Field(0.001, ge=0.0, le=0.1, description="rad/s per m (eq. 5.1, low as in flight 1)")
-    kd_original: float = Field(0.01, ge=0.0, le=0.5)
-    kp_modified: float = Field(0.012, ge=0.0, le=0.1)
-    kd_modified: float = Field(0.06, ge=0.0, le=0.5)
-    base_limit: float = Field(0.4, ge=0.0, le=1.0, description="eq. 5.2 limit (+-40 %)")
     integrity_unusable_s: float = Field(2.0, ge=0.0, le=60.0, description="vision orbit: navigator integrity "
                                         "unusable this long -> back to the GPS loiter (issue #18)")
     integrity_ok_s: float = Field(5.0, ge=0.0, le=600.0, description="... and back to vision after this long ok")
     max_fallbacks: int = Field(2, ge=0, le=100, description="GPS fallbacks before the vision orbit is given up")
 
 
-class ControlConfig(_M):
-    orbit: OrbitConfig = OrbitConfig()
-    altitude_m: float = Field(100.0, ge=20.0, le=500.0)
+class OrbitGainsConfig(_M):
+    """The orbit controller (``[control.condor.orbit]``, guidance/orbit.py): its logic and gains."""
+
+    logic: Literal["original", "modified", "coordinated"] = "coordinated"
+    kp_original: float = Field(0.001, ge=0.0, le=0.1, description="rad/s per m (eq. 5.1, low as in flight 1)")
+    kd_original: float = Field(0.01, ge=0.0, le=0.5)
+    kp_modified: float = Field(0.012, ge=0.0, le=0.1)
+    kd_modified: float = Field(0.06, ge=0.0, le=0.5)
+    base_limit: float = Field(0.4, ge=0.0, le=1.0, description="eq. 5.2 limit (+-40 %)")
+
+
+class CondorControlConfig(_M):
+    """CONDOR's controller gains (``[control.condor]``): the orbit logic and the inner loops (eq. 5.5-5.6)."""
+
+    orbit: OrbitGainsConfig = OrbitGainsConfig()
     kp_phi: float = Field(2.0, ge=0.0, le=10.0)
     kd_phi: float = Field(0.15, ge=0.0, le=5.0)
     kp_psi: float = Field(0.6, ge=0.0, le=10.0)
@@ -131,8 +141,10 @@ class GroundTestConfig(_M):
 
 
 class CondorMissionConfig(_M):
+    """What the CONDOR aircraft is asked to do; the tent is ``[world.tent]``, the gains ``[control.condor]``."""
+
     type: Literal["condor"] = "condor"
     experiment: Literal["orbit", "ground_test"] = "orbit"
-    target: TargetConfig = TargetConfig()
-    control: ControlConfig = ControlConfig()
+    altitude_m: float = Field(100.0, ge=20.0, le=500.0)
+    orbit: OrbitConfig = OrbitConfig()
     ground_test: GroundTestConfig = GroundTestConfig()

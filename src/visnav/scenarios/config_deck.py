@@ -1,5 +1,5 @@
-"""Scenario config of the ship-deck landing (seed 003, issue #6): ``[mission] type = "deck"`` (deck, guidance,
-start), its ``[vehicle] kind = "multirotor"``, ``[sensors.imu] kind = "multirotor-imu"``, ``[sensors.camera]
+"""Scenario config of the ship-deck landing (seed 003, issue #6): ``[mission] type = "deck"`` (guidance, start),
+the deck ``[world.deck]``, the gains ``[control.deck]``, its ``[vehicle] kind = "multirotor"``, ``[sensors.imu] kind = "multirotor-imu"``, ``[sensors.camera]
 kind = "led-camera"`` and ``[navigation] kind = "deck"``."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, field_validator
 
 from visnav.scenarios.base import _M
 
@@ -110,7 +110,7 @@ class DeckImuConfig(_M):
 
 
 #: ``--set`` overrides that turn every simulated calibration and sensor error of issue 30 off (the ideal case)
-IDEAL_DECK_SENSORS = ("mission.deck.light_survey_error_m=0", "sensors.camera.misalignment_deg=0",
+IDEAL_DECK_SENSORS = ("world.deck.light_survey_error_m=0", "sensors.camera.misalignment_deg=0",
                       "sensors.camera.focal_error_frac=0", "sensors.camera.principal_point_error_px=0",
                       "sensors.camera.time_offset_s=0", "sensors.imu.accel_bias_mps2=0", "sensors.imu.gyro_bias_deg_s=0",
                       "sensors.imu.accel_bias_walk_mps2_sqrt_s=0", "sensors.imu.gyro_bias_walk_deg_s_sqrt_s=0")
@@ -130,7 +130,7 @@ class DeckFilterConfig(_M):
                                                   "of each bearing's sigma, added to R (issue 30); None: from the "
                                                   "camera's specified misalignment, principal point and focal errors")
     light_survey_sigma_m: float | None = Field(None, ge=0, le=0.5, description="the light survey's sigma the "
-                                               "filter adds to R as sigma / range; None: mission.deck's "
+                                               "filter adds to R as sigma / range; None: world.deck's "
                                                "light_survey_error_m")
     calibration_floor: bool = Field(True, description="keep the position and attitude variances at least at the "
                                     "calibration's constant share (misalignment x range, survey error over the "
@@ -167,10 +167,10 @@ class DeckFilterConfig(_M):
     ship_accel_scale: float = Field(1.0, ge=0, le=100, description="multiplies the eq. 3.7 bound in Q")
     sea_state: Literal["calm", "stewart", "ship_ss4"] | None = Field(
         None, description="sea state the filter's ship process noise (eq. 3.7-3.8) is tuned for; None: the "
-        "nominal one of the scenario's deck (deck.sea_state for a moving deck, calm for a static one). The "
-        "filter never sees the world's deck.motion_scale")
+        "nominal one of the scenario's deck (world.deck.sea_state for a moving deck, calm for a static one). The "
+        "filter never sees world.deck.motion_scale")
     motion_scale: float = Field(1.0, ge=0, le=3, description="multiplies the tuned sea state's amplitudes in Q "
-                                "(the filter's assumption; deck.motion_scale is the world's)")
+                                "(the filter's assumption; world.deck.motion_scale is the world's)")
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
     integrity_stale_s: float = Field(0.5, gt=0, le=60, description="integrity unusable when no frame was fused "
                                      "for this long (15 frames at 30 Hz; issue #18)")
@@ -203,9 +203,6 @@ class DeckFilterConfig(_M):
 
 class DeckGuidanceConfig(_M):
     duration_s: float = Field(15.0, gt=1, le=120, description="static deck: trajectory duration (§5.3.3)")
-    k_static: float = Field(0.3, gt=0, lt=0.5)
-    k_rho: float = Field(0.5, gt=0, le=0.5)
-    k_alpha_beta: float = Field(0.45, gt=0, lt=0.5)
     touchdown_accel_mps2: float = Field(2.5, gt=0.2, le=6, description="eq. 4.1-4.3 nominal")
     hover_min_s: float = Field(5.0, ge=0, le=120)
     max_wait_s: float = Field(30.0, ge=0, le=600, description="after this long in hover, drop the lambda condition")
@@ -214,10 +211,6 @@ class DeckGuidanceConfig(_M):
     gamma_max_deg: float = Field(60.0, ge=0, le=90, description="no near-horizontal terminal paths")
     start_tolerance_m: float = Field(0.15, gt=0, le=2)
     retarget_tau_s: float = Field(0.5, ge=0, le=10, description="low-pass of the re-aimed terminal path (0: none)")
-    feedforward_lead_s: float = Field(0.18, ge=0, le=1, description="trajectory acceleration taken this far "
-                                      "ahead (about 2 zeta / omega of the attitude loop)")
-    spring_per_s2: float = Field(6.0, gt=0, le=100, description="K of eq. 4.25")
-    damper_per_s: float = Field(4.0, gt=0, le=100, description="B of eq. 4.25")
     overshoot_m: float = Field(0.04, ge=0, le=0.5, description="static deck: aim this far below the deck surface")
     overshoot_moving_m: float = Field(0.025, ge=0, le=0.5, description="moving deck: the same (k_rho = 0.5 ends "
                                       "at a_td, so the speed at contact is about sqrt(2 a_td overshoot))")
@@ -268,6 +261,19 @@ class DeckGuidanceConfig(_M):
                                 "missed the plate)")
 
 
+class DeckControlConfig(_M):
+    """The gains of the deck landing (``[control.deck]``): the tau couplings k of the trajectories (guidance/deck_approach.py)
+    and the spring-damper that follows them (eq. 4.25)."""
+
+    k_static: float = Field(0.3, gt=0, lt=0.5)
+    k_rho: float = Field(0.5, gt=0, le=0.5)
+    k_alpha_beta: float = Field(0.45, gt=0, lt=0.5)
+    feedforward_lead_s: float = Field(0.18, ge=0, le=1, description="trajectory acceleration taken this far "
+                                      "ahead (about 2 zeta / omega of the attitude loop)")
+    spring_per_s2: float = Field(6.0, gt=0, le=100, description="K of eq. 4.25")
+    damper_per_s: float = Field(4.0, gt=0, le=100, description="B of eq. 4.25")
+
+
 class DeckStartConfig(_M):
     distance_min_m: float = Field(1.4, gt=0.3, le=50)
     distance_max_m: float = Field(2.6, gt=0.3, le=50)
@@ -289,16 +295,18 @@ class DeckStartConfig(_M):
 
 
 class DeckMissionConfig(_M):
+    """What the deck landing does (guidance, start); the deck itself is ``[world.deck]``, the gains
+    ``[control.deck]``."""
+
     type: Literal["deck"] = "deck"
-    deck: DeckWorldConfig = DeckWorldConfig()
     guidance: DeckGuidanceConfig = DeckGuidanceConfig()
     start: DeckStartConfig = DeckStartConfig()
 
-    @model_validator(mode="after")
-    def _landing_point_on_plate(self):
-        x, y, z = self.guidance.landing_point_m
-        h = self.deck.size_m / 2
-        if not (np.isfinite([x, y, z]).all() and abs(x) < h and abs(y) < h and abs(z) <= 0.1):
-            raise ValueError(f"guidance.landing_point_m {self.guidance.landing_point_m} must lie on the "
-                             f"{self.deck.size_m} m deck plate (|x|, |y| < {h}, |z| <= 0.1)")
-        return self
+
+def check_landing_point(landing_point_m: list[float], deck: DeckWorldConfig) -> None:
+    """The landing point (``mission.guidance.landing_point_m``) lies on the plate of ``world.deck``."""
+    x, y, z = landing_point_m
+    h = deck.size_m / 2
+    if not (np.isfinite([x, y, z]).all() and abs(x) < h and abs(y) < h and abs(z) <= 0.1):
+        raise ValueError(f"mission.guidance.landing_point_m {landing_point_m} must lie on the "
+                         f"{deck.size_m} m deck plate of world.deck (|x|, |y| < {h}, |z| <= 0.1)")

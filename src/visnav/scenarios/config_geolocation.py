@@ -1,5 +1,6 @@
 """Scenario config of the ground-target geo-location mission (seed 002 ch. 7): ``mission.type =
-"mav-geolocation"`` (map, target, control). Its aircraft is ``[vehicle] kind = "mav"``, its camera
+"mav-geolocation"`` (figure-eight, operator); its map and truck are ``[world.geo_map]``, ``[world.truck]``, the
+path controller ``[control.mav]``. Its aircraft is ``[vehicle] kind = "mav"``, its camera
 ``[sensors.camera] kind = "mav-camera"`` on ``[sensors.gimbal] kind = "mav-gimbal"``, the autopilot's downlinked
 state ``[sensors.telemetry] kind = "mav-telemetry"``, its navigator ``[navigation] kind = "geolocation"``
 (``--set navigation.hough=false``).
@@ -16,6 +17,8 @@ from visnav.world.appearance import ANOTHER_DAY
 
 
 class MavMapConfig(_M):
+    """The ground and its geo-referenced image (``[world.geo_map]``)."""
+
     file: Optional[str] = Field(None, description="geo-referenced image (PNG + world file, GeoTIFF); "
                                 "none: the procedural rural world")
     rural_size_m: float = Field(400.0, ge=150.0, le=2000.0)
@@ -39,12 +42,13 @@ class MavMapConfig(_M):
 
 
 class MavTargetConfig(_M):
+    """The truck (``[world.truck]``)."""
+
     north_m: float = Field(0.0, ge=-5000.0, le=5000.0, description="from the map's centre")
     east_m: float = Field(0.0, ge=-5000.0, le=5000.0, description="from the map's centre")
     heading_deg: float = Field(30.0, ge=-180.0, le=180.0)
     length_m: float = Field(7.0, ge=1.0, le=20.0)
     width_m: float = Field(2.5, ge=0.5, le=10.0)
-    click_sigma_px: float = Field(3.0, ge=0.0, le=30.0, description="operator's click error")
 
 
 class MavAirframeConfig(_M):
@@ -109,12 +113,8 @@ class MavTelemetryConfig(_M):
 
 
 class MavControlConfig(_M):
-    altitude_m: float = Field(70.0, ge=30.0, le=300.0)
-    half_length_m: float = Field(80.0, ge=40.0, le=400.0, description="figure-eight half length = each lobe's "
-                                 "width, at least the turn diameter at the bank limit downwind (13 + 4 m/s at 35 deg: "
-                                 "84 m; the PingWing's 19 + 4 m/s: 154 m, 160 in mav-geolocation-pingwing)")
-    axis_deg: Optional[float] = Field(None, ge=-180.0, le=180.0, description="long axis from north; none: "
-                                      "along the map's longer side")
+    """The MAV's path controller (``[control.mav]``): L1 guidance and the bank limit."""
+
     l1_m: float = Field(30.0, ge=10.0, le=150.0, description="L1 guidance distance: 2.3 s ahead at 13 m/s (45 m, "
                         "2.4 s at the PingWing's 19 m/s)")
     bank_limit_deg: float = Field(35.0, ge=10.0, le=50.0)
@@ -150,7 +150,11 @@ class MavRegistrationConfig(_M):
 class GeolocationMissionConfig(_M):
     type: Literal["mav-geolocation"] = "mav-geolocation"
     experiment: Literal["figure_eight", "single_frame"] = "figure_eight"
-    map: MavMapConfig = MavMapConfig()
-    target: MavTargetConfig = MavTargetConfig()
-    control: MavControlConfig = MavControlConfig()
+    altitude_m: float = Field(70.0, ge=30.0, le=300.0)
+    half_length_m: float = Field(80.0, ge=40.0, le=400.0, description="figure-eight half length = each lobe's "
+                                 "width, at least the turn diameter at the bank limit downwind (13 + 4 m/s at 35 deg: "
+                                 "84 m; the PingWing's 19 + 4 m/s: 154 m, 160 in mav-geolocation-pingwing)")
+    axis_deg: Optional[float] = Field(None, ge=-180.0, le=180.0, description="long axis from north; none: "
+                                      "along the map's longer side")
+    click_sigma_px: float = Field(3.0, ge=0.0, le=30.0, description="operator's click error")
     max_samples: int = Field(40, ge=1, le=100000, description="stop once this many samples are in")

@@ -1,6 +1,7 @@
 """Config of the WITAS vision landing on the three-circle pad (seed 002 ch. 6): ``mission.type = "pad-landing"``.
 
-The mission holds the pad and the options (black-out, shadow, lighting: ``--set mission.blackout_height_m=5``);
+The mission holds the approach and the black-out (``--set mission.blackout_height_m=5``); the pad, its shadow and
+lighting are ``[world.pad]``;
 the camera on its pan-tilt unit and spring platform is ``[sensors.camera] kind = "pantilt-camera"``
 (``sensors.camera.pantilt.*``, ``sensors.camera.platform.*``), the filter with its IMU rates ``[navigation] kind =
 "pad"``. Dimensions and their reasons: docs/pad.md.
@@ -130,4 +131,3 @@ class PadMissionConfig(_M):
     blackout_height_m: Optional[float] = Field(None, ge=0, le=60, description="vision black-out from this height")
     blackout_s: float = Field(3.0, ge=0, le=60)
     timeout_s: float = Field(150.0, gt=0, le=3600)
-    pad: PadGeometryConfig = PadGeometryConfig()

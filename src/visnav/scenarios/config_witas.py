@@ -1,6 +1,6 @@
 """Config of the WITAS GPS-denied homing mission (seed 002 ch. 5): ``mission.type = "witas-homing"``.
 
-The mission holds the loop and the world and reference maps; the vision navigator (odometry, point-mass
+The mission holds the loop; the world and reference maps are ``[world.witas_map]``; the vision navigator (odometry, point-mass
 filter, registration, Kalman filter) is ``[navigation] kind = "witas"`` (``--set navigation.pmf_size_m=200``);
 its downward camera, barometer and optional compass are ``[sensors.camera] kind = "camera"``,
 ``[sensors.baro] kind = "baro"`` and ``[sensors.compass] kind = "compass"`` (``config_sensors.py``).
@@ -84,7 +84,6 @@ class WitasFilterConfig(_M):
 class WitasMissionConfig(_M):
     type: Literal["witas-homing"] = "witas-homing"
     path: WitasPathConfig = WitasPathConfig()
-    map: WitasMapConfig = WitasMapConfig()
     gps_loss_s: float = Field(8.0, ge=0, le=3600, description="GPS lost from this time on")
     settle_s: float = Field(10.0, ge=0, le=120)
     hold_s: float = Field(3.0, ge=0, le=600)

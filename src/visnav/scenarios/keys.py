@@ -8,7 +8,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from visnav.scenarios.schema import Scenario, SensorsConfig, describe_field, not_applicable
+from visnav.scenarios.schema import Scenario, SensorsConfig, _optional, describe_field, not_applicable
 
 # field-name suffix -> unit (longest first: ``_deg_s`` before ``_s``)
 _SUFFIX_UNITS = (
@@ -56,6 +56,10 @@ def settable_keys(sc: Scenario) -> list[dict]:
             if isinstance(value, BaseModel):
                 walk(value, loc)
                 continue
+            sub = _optional(f.annotation)
+            if value is None and isinstance(sub, type) and issubclass(sub, BaseModel):
+                continue  # another system's [world.<thing>] / [control.<system>] section
+
             if not_applicable(".".join(loc), mission_type) is not None:
                 continue
             default = None if f.default_factory is not None else f.default

@@ -5,6 +5,10 @@ and the navigator kind its builder (``app/missions.py``) assembles. A scenario f
 changes; a section the system does not fly (``sensors.sonar`` on the deck) or a kind its builder does not
 take is an error naming the key and the system.
 
+``WORLD`` / ``CONTROL``: the sections of ``[world.<thing>]`` and ``[control.<system>]`` each system has (filled
+with their defaults; another system's is an error). ``MOVED``: keys that left ``[mission]`` for them (issue #31):
+world content and controller gains; an old key still works (files, ``--set``) and says its new name once.
+
 ``LEGACY``: the mission-keyed layout before issue #13 kept every device of the deck, CONDOR, geo-location,
 WITAS and pad systems under ``mission`` (``mission.camera``, ``mission.filter``, ...). Such files (old
 ``scenario.toml`` of run directories included) and ``--set`` keys are translated key by key
@@ -64,6 +68,14 @@ SUITES: dict[str, dict[str, Any]] = {
 }
 
 
+#: mission.type -> the world's sub-sections ([world.<thing>]) and the controller sections ([control.<system>]) its
+#: simulation reads; present (at their defaults) exactly for it
+WORLD: dict[str, tuple[str, ...]] = {"deck": ("deck",), "witas-homing": ("witas_map",), "pad-landing": ("pad",),
+                                     "condor": ("tent",), "mav-geolocation": ("geo_map", "truck")}
+CONTROL: dict[str, tuple[str, ...]] = {"deck": ("deck",), "condor": ("condor",), "mav-geolocation": ("mav",),
+                                       "pfcm": ("pfcm",)}
+
+
 def _deep_merge(base: dict, over: dict) -> dict:
     out = copy.deepcopy(base)
     for k, v in over.items():
@@ -101,6 +113,18 @@ def fill_suite(data: dict) -> dict:
     if suite is None:
         return data
     data = dict(data)
+    for section, have in (("world", WORLD.get(mtype, ())), ("control", CONTROL.get(mtype, ()))):
+        given = data.get(section, {})
+        if hasattr(given, "model_dump"):  # a WorldConfig / ControlConfig object: checked and filled the same way
+            given = given.model_dump(exclude_none=True)
+        if not isinstance(given, dict):
+            continue  # a bad value: the schema reports it
+        known = {n for names in (WORLD if section == "world" else CONTROL).values() for n in names}
+        extra = [n for n in given if n in known and n not in have and given[n] is not None]
+        if extra:
+            raise ScenarioError(f"{section}.{extra[0]} does not apply to mission.type {mtype!r} (its {section} "
+                                f"sections: {', '.join(section + '.' + h for h in have) or 'none'})")
+        data[section] = {**given, **{h: given.get(h) or {} for h in have}}
     for role in ("vehicle", "navigation"):
         data[role] = _fill(role, data.get(role), suite[role], mtype)
     given = data.get("sensors")
@@ -262,4 +286,62 @@ def migrate(data: dict, rmax_defaults: dict[str, Any]) -> dict:
         out.get("sensors", {}).pop("compass", None)
     elif compass_on:
         out.setdefault("sensors", {}).setdefault("compass", {})
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Issue #31: world content and controller gains left [mission]: old dotted key (or prefix) -> new, per mission
+# type, first match wins (single keys before their section).
+_DECK_GAINS = ("k_static", "k_rho", "k_alpha_beta", "spring_per_s2", "damper_per_s", "feedforward_lead_s")
+_ORBIT_GAINS = ("logic", "kp_original", "kd_original", "kp_modified", "kd_modified", "base_limit")
+MOVED: dict[str, list[tuple[str, str]]] = {
+    "deck": [("mission.deck", "world.deck")]
+    + [(f"mission.guidance.{k}", f"control.deck.{k}") for k in _DECK_GAINS],
+    "witas-homing": [("mission.map", "world.witas_map")],
+    "pad-landing": [("mission.pad", "world.pad")],
+    "condor": [("mission.target", "world.tent")]
+    + [(f"mission.control.orbit.{k}", f"control.condor.orbit.{k}") for k in _ORBIT_GAINS]
+    + [("mission.control.orbit", "mission.orbit"), ("mission.control.altitude_m", "mission.altitude_m"),
+       ("mission.control", "control.condor")],
+    "mav-geolocation": [("mission.map", "world.geo_map"), ("mission.target.click_sigma_px", "mission.click_sigma_px"),
+                        ("mission.target", "world.truck"), ("mission.control.l1_m", "control.mav.l1_m"),
+                        ("mission.control.bank_limit_deg", "control.mav.bank_limit_deg"),
+                        ("mission.control", "mission")],
+    "pfcm": [(f"mission.{k}", f"control.pfcm.{k}") for k in ("iterations", "roll_integral", "roll_compensator",
+                                                              "roll_margin_deg")],
+}
+
+#: the messages already given in this process (each old key is named once, not once per run of a campaign)
+_SAID: set[str] = set()
+
+
+def moved_key(key: str, mission_type: str) -> str | None:
+    """The key's place since issue #31 (None: it did not move)."""
+    for old, new in MOVED.get(mission_type, ()):
+        if _match(key, old):
+            return new + key[len(old):]
+    return None
+
+
+def move(data: dict, say=None) -> dict:
+    """``data`` with the keys of ``MOVED`` at their new place; ``say(line)`` gets one line per old key (once per
+    process): "mission.deck.motion is now world.deck.motion". A key given in both places takes the old key's value
+    (``--set mission.deck.motion=moving`` on a file in the new layout sets it)."""
+    mtype = mission_type_of(data)
+    if mtype not in MOVED or not isinstance(data.get("mission"), dict):
+        return data
+    out: dict = {}
+    moved: list[tuple[tuple[str, ...], Any]] = []
+    for path, value in _leaves(data):
+        new = moved_key(".".join(path), mtype)
+        if new is None:
+            _set(out, list(path), value)
+        else:
+            moved.append((tuple(new.split(".")), value))
+            line = f"{'.'.join(path)} is now {new}"
+            if say is not None and line not in _SAID:
+                _SAID.add(line)
+                say(line)
+    for path, value in moved:
+        _set(out, list(path), value)
     return out

@@ -1,19 +1,23 @@
 """Scenario files: TOML validated by pydantic models.
 
-A scenario has the sections ``[run] [world] [vehicle] [sensors.<name>] [navigation] [mission]``, keyed by
+A scenario has the sections ``[run] [world] [vehicle] [sensors.<name>] [navigation] [control] [mission]``, keyed by
 role: ``[vehicle] kind``, ``[sensors.<name>] kind``, ``[navigation] kind`` and ``[mission] type`` pick one config
 class each (pydantic unions on the tag); the mission type's suite (``scenarios/roles.SUITES``) gives the kinds
 and the system's default values, so a file names only what it changes. Unknown keys are errors
 (``extra="forbid"``), so is a key of a section the scenario's system does not fly (a sensor it has not, a kind
 its builder does not take); every number has its allowed range, so a bad value is reported with its dotted key,
 the value and the range, in one line. Files and ``--set`` keys of the mission-keyed layout before issue #13
-(``mission.camera.*``, ``mission.filter.*``, ...) are translated (``roles.LEGACY``).
+(``mission.camera.*``, ``mission.filter.*``, ...) are translated (``roles.LEGACY``). The world (``[world]``, with
+a system's own things under ``[world.<thing>]``: the deck, the maps, the pad, the targets) and the controller
+gains (``[control.<system>]``) are not the mission's: what stood under ``[mission]`` before issue #31 is moved
+(``roles.MOVED``), one warning line per old key naming the new one.
 """
 
 from __future__ import annotations
 
 import copy
 import sys
+import types
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
@@ -26,16 +30,18 @@ else:  # pragma: no cover
 
 from visnav.scenarios import roles
 from visnav.scenarios.base import ScenarioError, _M  # noqa: F401  (re-exported: one base for every config)
-from visnav.scenarios.config_condor import (AirframeConfig, CondorCameraConfig, CondorMissionConfig,
-                                            CondorNavigationConfig, GimbalConfig, LinkConfig)
-from visnav.scenarios.config_deck import (DeckCameraConfig, DeckFilterConfig, DeckImuConfig, DeckMissionConfig,
-                                          MultirotorConfig)
+from visnav.scenarios.config_condor import (AirframeConfig, CondorCameraConfig, CondorControlConfig,
+                                            CondorMissionConfig, CondorNavigationConfig, GimbalConfig, LinkConfig,
+                                            TargetConfig)
+from visnav.scenarios.config_deck import (DeckCameraConfig, DeckControlConfig, DeckFilterConfig, DeckImuConfig,
+                                          DeckMissionConfig, DeckWorldConfig, MultirotorConfig, check_landing_point)
 from visnav.scenarios.config_fixedwing import AhrsConfig, MemsImuConfig, PitotConfig
 from visnav.scenarios.config_geolocation import (GeolocationMissionConfig, MavAirframeConfig, MavCameraConfig,
-                                                 MavGimbalConfig, MavRegistrationConfig, MavTelemetryConfig)
-from visnav.scenarios.config_pad import PadCameraConfig, PadFilterConfig, PadMissionConfig
+                                                 MavControlConfig, MavGimbalConfig, MavMapConfig, MavRegistrationConfig,
+                                                 MavTargetConfig, MavTelemetryConfig)
+from visnav.scenarios.config_pad import PadCameraConfig, PadFilterConfig, PadGeometryConfig, PadMissionConfig
 from visnav.scenarios.config_sensors import BaroConfig, CompassConfig, GpsConfig
-from visnav.scenarios.config_witas import WitasFilterConfig, WitasMissionConfig
+from visnav.scenarios.config_witas import WitasFilterConfig, WitasMapConfig, WitasMissionConfig
 from visnav.scenarios.config_integrity import FaultConfig, PalaceIntegrityConfig, check_faults_apply
 
 BUILTIN_DIR = Path(__file__).resolve().parent
@@ -50,6 +56,9 @@ class RunConfig(_M):
 
 
 class WorldConfig(_M):
+    """What the vehicle flies in, not what it does: the ground and the wind of every system, and a system's own
+    things (``[world.<thing>]``, present exactly for the mission types of ``roles.WORLD``)."""
+
     surface: Literal["concrete", "asphalt", "grass", "gravel"] = "asphalt"
     field_size_m: float = Field(80.0, ge=10, le=400)
     map_resolution_m: float = Field(0.02, ge=0.002, le=1.0)
@@ -58,6 +67,35 @@ class WorldConfig(_M):
     wind_speed_mps: float = Field(3.0, ge=0, le=25)
     wind_from_deg: float = Field(0.0, ge=-360, le=360, description="relative to the initial heading")
     turbulence: Literal["none", "light", "moderate", "severe"] = "light"
+    deck: Optional[DeckWorldConfig] = Field(None, description="the ship deck and its motion (deck)")
+    witas_map: Optional[WitasMapConfig] = Field(None, description="the ground raster and the navigator's reference "
+                                                "map (witas-homing)")
+    pad: Optional[PadGeometryConfig] = Field(None, description="the three-circle pad, its shadow and lighting "
+                                             "(pad-landing)")
+    tent: Optional[TargetConfig] = Field(None, description="the blue tent (condor)")
+    geo_map: Optional[MavMapConfig] = Field(None, description="the ground and its geo-referenced image "
+                                            "(mav-geolocation)")
+    truck: Optional[MavTargetConfig] = Field(None, description="the target truck (mav-geolocation)")
+
+
+class PfcmControlConfig(_M):
+    """The R-MAX path-following controller (``[control.pfcm]``, control/rmax_path.py, seed 002 §4.5)."""
+
+    iterations: int = Field(1, ge=1, le=20, description="control-point feedback iterations per cycle (eq. 4.10)")
+    roll_integral: bool = Field(True, description="lateral integral K3r ∫δp_y (wind)")
+    roll_compensator: bool = Field(True, description="eq. 4.26 inner roll loop (lead + integral) on the "
+                                   "YACS roll input, lateral gains designed on it")
+    roll_margin_deg: float = Field(1.5, ge=0, le=15, description="roll command limit = phi_max + this")
+
+
+class ControlConfig(_M):
+    """Controller gains, one section per system that has settable ones (present exactly for the mission types of
+    ``roles.CONTROL``)."""
+
+    deck: Optional[DeckControlConfig] = None
+    condor: Optional[CondorControlConfig] = None
+    mav: Optional[MavControlConfig] = None
+    pfcm: Optional[PfcmControlConfig] = None
 
 
 class VehicleConfig(_M):
@@ -255,11 +293,6 @@ class PfcmMissionConfig(_M):
     vrs_steep_descent_mps: float = Field(1.5, gt=0, le=10)
     vrs_shallow_descent_mps: float = Field(3.0, gt=0, le=10)
     anticipate_limits: bool = True
-    iterations: int = Field(1, ge=1, le=20, description="control-point feedback iterations per cycle (eq. 4.10)")
-    roll_integral: bool = Field(True, description="lateral integral K3r ∫δp_y (wind)")
-    roll_compensator: bool = Field(True, description="eq. 4.26 inner roll loop (lead + integral) on the "
-                                   "YACS roll input, lateral gains designed on it")
-    roll_margin_deg: float = Field(1.5, ge=0, le=15, description="roll command limit = phi_max + this")
     settle_s: float = Field(2.0, ge=0, le=60)
     end_tolerance_m: float = Field(0.5, gt=0, le=20)
     hold_s: float = Field(2.0, ge=0, le=600, description="hover at the end of the path before finishing")
@@ -366,6 +399,7 @@ class Scenario(_M):
     vehicle: _union(VEHICLE_KINDS, "kind") = VehicleConfig()  # type: ignore[valid-type]
     sensors: SensorsConfig = SensorsConfig()
     navigation: _union(NAVIGATION_KINDS, "kind") = NavigationConfig()  # type: ignore[valid-type]
+    control: ControlConfig = ControlConfig()
     mission: MissionConfig = PalaceMissionConfig()
     faults: list[FaultConfig] = Field(default_factory=list, description="injected faults (sensors/faults.py)")
 
@@ -376,16 +410,23 @@ class Scenario(_M):
         if isinstance(data, dict):
             if roles.is_legacy(data):  # the mission-keyed layout before issue #13
                 data = roles.migrate(data, _RMAX_OLD_DEFAULTS)
-            return roles.fill_suite(data)
+            return roles.fill_suite(roles.move(data, say=_say))  # world content and gains out of [mission] (#31)
         return data
 
     @model_validator(mode="after")
     def _deck_filter_sea_state(self):
-        nav, m = self.navigation, self.mission
-        if isinstance(nav, DeckFilterConfig) and nav.sea_state is None and isinstance(m, DeckMissionConfig):
+        nav, m, deck = self.navigation, self.mission, self.world.deck
+        if isinstance(m, DeckMissionConfig) and deck is not None:
+            check_landing_point(m.guidance.landing_point_m, deck)
+        if isinstance(nav, DeckFilterConfig) and nav.sea_state is None and deck is not None:
             # the nominal sea state of the deck the scenario names (the filter never sees motion_scale)
-            nav.sea_state = m.deck.sea_state if m.deck.motion == "moving" else "calm"
+            nav.sea_state = deck.sea_state if deck.motion == "moving" else "calm"
         return self
+
+
+def _say(line: str) -> None:
+    """A key of the layout before issue #31 was read at its new place: one warning line on stderr."""
+    print(f"warning: {line}", file=sys.stderr)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -397,15 +438,16 @@ class Scenario(_M):
 _WIND = ("wind_speed_mps", "wind_from_deg", "turbulence")
 
 
-def _fixed_wing(world: str) -> list[tuple[str, tuple[str, ...], str]]:
-    return [("world", _WIND, f"its world is the wind (world.{', world.'.join(_WIND)}) and {world}")]
+def _fixed_wing(world: str, own: tuple[str, ...]) -> list[tuple[str, tuple[str, ...], str]]:
+    return [("world", _WIND + own, f"its world is the wind (world.{', world.'.join(_WIND)}) and {world}")]
 
 
 _NO_FAULTS = "its simulation injects no faults (issue #18: the R-MAX, deck and CONDOR missions do)"
 NOT_APPLICABLE: dict[str, list[tuple[str, tuple[str, ...], str]]] = {
-    "deck": [("world", (), "its world is the ship deck, mission.deck.*")],
-    "condor": _fixed_wing("mission.target.*"),
-    "mav-geolocation": _fixed_wing("mission.map.* and mission.target.*") + [("faults", (), _NO_FAULTS)],
+    "deck": [("world", ("deck",), "its world is the ship deck, world.deck.*")],
+    "condor": _fixed_wing("the tent (world.tent.*)", ("tent",)),
+    "mav-geolocation": _fixed_wing("the map and the truck (world.geo_map.*, world.truck.*)", ("geo_map", "truck"))
+    + [("faults", (), _NO_FAULTS)],
     "witas-homing": [("sensors.baro.t_measured_c", (), "its navigator makes no eq. 2.1 temperature correction")],
     "pad-landing": [("sensors.imu.rate_hz", (), "its IMU rates are navigation.gyro_hz and navigation.accel_hz")],
     "pfcm": [
@@ -491,8 +533,16 @@ def _model_at(path: list[str], kinds: dict[str, str] | str | None = None) -> typ
             continue
         if not (isinstance(model, type) and issubclass(model, BaseModel)) or p not in model.model_fields:
             return None
-        model = model.model_fields[p].annotation
+        model = _optional(model.model_fields[p].annotation)
     return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
+def _optional(ann: Any) -> Any:
+    """X of ``Optional[X]`` (a system's own world or control section), else ``ann``."""
+    args = [a for a in getattr(ann, "__args__", ()) if a is not type(None)]
+    if len(args) == 1 and (getattr(ann, "__origin__", None) is Union or isinstance(ann, types.UnionType)):
+        return args[0]
+    return ann
 
 
 def describe_field(parent: type[BaseModel] | None, name: str) -> str:
@@ -555,6 +605,8 @@ def _format_error(err: ValidationError, data: dict) -> str:
                 return f"{key} does not apply to mission.type {kinds['mission']!r} {what}"
             return f"unknown scenario key '{key}' {what}"
         return f"unknown scenario key '{key}'; allowed keys here: {allowed}"
+    if not loc:  # a check across sections (the deck landing point on world.deck's plate)
+        return str(e["msg"]).removeprefix("Value error, ")
     value = e.get("input")
     desc = _describe_field(loc, kinds)
     msg = f"invalid value for '{key}': {value!r} ({e['msg']})"
@@ -599,7 +651,7 @@ _RMAX_OLD_DEFAULTS = {".".join(p): v for p, v in roles._leaves({
 def validate(data: dict) -> Scenario:
     if roles.is_legacy(data):
         data = roles.migrate(data, _RMAX_OLD_DEFAULTS)
-    data = roles.fill_suite(data)
+    data = roles.fill_suite(roles.move(data, say=_say))
     try:
         sc = Scenario.model_validate(data)
     except ValidationError as err:
@@ -656,9 +708,10 @@ def load_scenario(name_or_path: str, overrides: list[str] | None = None, seed: i
 def to_toml(sc: Scenario) -> str:
     import tomli_w
 
-    def clean(x):
+    def clean(x):  # None and sections left empty (a system without [control.<system>]) are left out
         if isinstance(x, dict):
-            return {k: clean(v) for k, v in x.items() if v is not None}
+            out = {k: clean(v) for k, v in x.items() if v is not None}
+            return {k: v for k, v in out.items() if v != {}}
         return x
 
     return tomli_w.dumps(clean(sc.model_dump()))

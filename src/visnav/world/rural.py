@@ -131,8 +131,8 @@ def rural_map(size_m: float = 700.0, resolution_m: float = 0.25, rng: np.random.
     return out
 
 
-def mission_map(cfg) -> GeoImage:
-    """The map of ``mission.map``: a geo-referenced file, or the procedural rural world."""
-    if cfg.map.file:
-        return GeoImage.load(cfg.map.file)
-    return rural_map(cfg.map.rural_size_m, 0.25, np.random.default_rng(cfg.map.rural_seed))
+def mission_map(m) -> GeoImage:
+    """The map of ``world.geo_map`` (``m``): a geo-referenced file, or the procedural rural world."""
+    if m.file:
+        return GeoImage.load(m.file)
+    return rural_map(m.rural_size_m, 0.25, np.random.default_rng(m.rural_seed))

@@ -1,4 +1,4 @@
-"""The WITAS homing world: the ground raster (procedural rural map or ``mission.map.file``) with the loop
+"""The WITAS homing world: the ground raster (procedural rural map or ``world.witas_map.file``) with the loop
 fitted on it, and the navigator's degraded reference map. Deterministic in the run seed: the simulation
 (``app/witas_parts.py``), the replay (``app/replay.py``) and the report (``analysis/witas_metrics.py``)
 rebuild the same one.
@@ -22,14 +22,15 @@ def fit_loop(cfg_path, extent, footprint_m: float) -> tuple[float, float, float,
     return sn, se, r, (0.5 * (n0 + n1), 0.5 * (e0 + e1))
 
 
-def make_ground(cfg, seed: int, camera):
-    """The world raster of a ``WitasMissionConfig`` and the loop fitted on it (sizes, radius, centre); ``camera``:
-    the scenario's ``sensors.camera`` (its footprint keeps the loop's view on the map).
+def make_ground(path, map_cfg, seed: int, camera):
+    """The world raster of ``map_cfg`` (``world.witas_map``) and the loop of ``path`` (``mission.path``) fitted on
+    it (sizes, radius, centre); ``camera``: the scenario's ``sensors.camera`` (its footprint keeps the loop's view on
+    the map).
     Deterministic in ``seed`` (the report rebuilds it to draw the tracks on the map)."""
     from visnav.world.maps import GeoImage
     from visnav.world.rural import rural_map
 
-    pc, cc, mc = cfg.path, camera, cfg.map
+    pc, cc, mc = path, camera, map_cfg
     footprint = cc.height * pc.altitude_m / cc.focal_px
     if mc.file:
         ground = GeoImage.load(mc.file)
@@ -48,10 +49,9 @@ def mission_rngs(seed: int) -> list[np.random.Generator]:
     return [np.random.default_rng(s) for s in np.random.SeedSequence([seed, 5]).spawn(6)]
 
 
-def reference_map(cfg, ground):
-    """The navigator's degraded reference map of the world raster ``ground`` (``mission.map`` keys)."""
+def reference_map(mc, ground):
+    """The navigator's degraded reference map of the world raster ``ground`` (``mc``: ``world.witas_map``)."""
     from visnav.world.maps import degrade_reference
 
-    mc = cfg.map
     return degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
                              mc.reference_gamma, mc.reference_blur_m)
