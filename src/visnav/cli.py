@@ -21,6 +21,9 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from rich.table import Table
 
 import visnav
+import time as _time
+import csv
+import time
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="visnav: UAV navigation without GPS")
 # off a terminal (``make run``, a pipe, a log) rich would lay tables out 80 columns wide: widen them (issue #32)
@@ -73,7 +76,6 @@ class RunProgress:
     every_s = 10.0
 
     def __init__(self, name: str, total_s: float, con: Console, clock=None, unit: str = "s"):
-        import time
 
         self.name, self.total, self.con, self.unit = name, float(total_s), con, unit
         self.clock = clock or time.perf_counter
@@ -236,7 +238,6 @@ def montecarlo(
 ) -> None:
     """Run N seeds (times every grid point). Resumable: rerunning the same campaign with its --out skips
     finished runs; another configuration there is refused (or --new)."""
-    import time as _time
 
     from visnav.app.montecarlo import Campaign, CampaignError, parse_grid
 
@@ -306,7 +307,6 @@ def faults(
 ) -> None:
     """Fault campaign (issue #18): the fault-free case and every fault that applies to the scenario on N seeds,
     one Monte Carlo campaign each in DIR/<fault>/ (resumable); writes DIR/faults.csv and DIR/faults.md."""
-    import time as _time
 
     from visnav.app.fault_campaign import FAULT_COLUMNS, campaigns, fault_row, faults_for, write_tables
     from visnav.app.montecarlo import CampaignError, _read_csv
@@ -365,8 +365,6 @@ def margins(
     force: bool = typer.Option(False, "--force", help="write into a non-empty --out (replaces margins.csv, frf.npz)"),
 ) -> None:
     """Stability margins at the cyclic actuators from closed-loop chirps (seed 000 Tables 5.1/5.2)."""
-    import csv
-    import time as _time
 
     from visnav.app.margins_campaign import check_margins_scenario, margins_campaign
     from visnav.app.runs import prepare_out_dir
@@ -565,8 +563,6 @@ def eval_(
     json_: bool = typer.Option(False, "--json", help="print the summary as JSON on stdout"),
 ) -> None:
     """Absolute trajectory error and relative pose error of an estimate against a reference (evo's definitions)."""
-    import json
-    from pathlib import Path
 
     from visnav.analysis.trajectory_eval import TrajectoryError, evaluate, read_trajectory
 
@@ -675,8 +671,6 @@ def bridge(
                                             "(defaults imu=1 camera=10, docs/autopilots.md)"),
 ) -> None:
     """Run a visnav navigator live: autopilot MAVLink + camera in, ODOMETRY / VISION_* / GPS_INPUT out."""
-    import time
-    from pathlib import Path
 
     from rich.live import Live
 
@@ -779,7 +773,6 @@ def sil_autopilot(
     gps_until: Optional[float] = typer.Option(None, help="stop sending GPS after this many seconds"),
 ) -> None:
     """A PX4 stand-in on 127.0.0.1 for trying `visnav bridge` on a desk (a circling vehicle's MAVLink)."""
-    import time
 
     import numpy as np
 
@@ -812,7 +805,6 @@ def map_quality(
                                   "day: the relief's texture changes and moves, world/appearance.py)"),
 ) -> None:
     """Registrability of a map: per cell, how reliably a nadir frame taken there registers (PNG + world file + .npy)."""
-    from pathlib import Path
 
     import numpy as np
 

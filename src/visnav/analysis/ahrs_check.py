@@ -20,6 +20,10 @@ from visnav.estimation.ahrs import AhrsConfig, attitude_differences, run_ahrs
 from visnav.estimation.ins import euler_to_quat, integrate_gyro, quat_to_euler
 from visnav.io.ulog import read_ulog
 from visnav.io.logs import open_recording
+from visnav.io.provenance import provenance
+from types import SimpleNamespace
+from visnav.geometry.rotations import euler_to_dcm
+from visnav.estimation.timesync import gyro_rotvecs, hand_eye_rotation, rotation_angle_deg
 
 __all__ = ["ahrs_check"]
 
@@ -98,7 +102,6 @@ def ahrs_check(log_path, out_dir=None, declination_deg: float | None = None,
     if out_dir is not None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        from visnav.io.provenance import provenance
 
         (out / "metrics.json").write_text(json.dumps({**metrics, "provenance": provenance()}, indent=2))
         _plot(out / "ahrs.png", data, res, ref, gyro_only, metrics)
@@ -144,9 +147,7 @@ def _plot(path: Path, data, res, ref, gyro_only, m) -> None:
 
 def _from_recording(path):
     """An opened recording as the fields ``ahrs_check`` reads from a ULog (magnetometer: field vectors only)."""
-    from types import SimpleNamespace
 
-    from visnav.geometry.rotations import euler_to_dcm
     from scipy.spatial.transform import Rotation
 
     rec = open_recording(path)
@@ -176,7 +177,6 @@ def _reference_frame(data) -> dict:
     from a tilt and which therefore shows in the roll / pitch differences."""
     from scipy.spatial.transform import Rotation, Slerp
 
-    from visnav.estimation.timesync import gyro_rotvecs, hand_eye_rotation, rotation_angle_deg
 
     ta = np.asarray(data.att_t, float)
     t = np.asarray(data.imu_t, float)

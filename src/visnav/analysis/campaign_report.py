@@ -6,6 +6,10 @@ import math
 from pathlib import Path
 
 import numpy as np
+import base64
+import html
+import io
+from visnav.analysis.outcome import outcome_text
 
 
 def _as_number(v):
@@ -16,16 +20,12 @@ def _as_number(v):
 
 
 def write_campaign_report(out: Path, rows: list[dict], summary: dict, grid_keys: list[str], scenario: str) -> None:
-    import base64
-    import html
-    import io
 
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from visnav.analysis.outcome import outcome_text
 
     ok = [r for r in rows if r.get("status") == "ok"]
     metrics = [k for k in summary.get("metrics", {}) if k not in ("sim_time_s",)][:12]

@@ -37,6 +37,9 @@ from visnav.estimation.timesync import (calibrate_camera_imu, gyro_rotvecs, hand
                                         rotation_angle_deg, wide_offset)
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.io.recording import STREAMS, read_csv
+import itertools
+from visnav.vision.frame_rotation import frame_rotations
+from html import escape
 
 __all__ = ["run_check", "camera_imu", "CheckResult", "write_check"]
 
@@ -75,7 +78,6 @@ def _attitude(rec):
 
 
 def _signed_permutations():
-    import itertools
 
     for p in itertools.permutations(range(3)):
         for s in itertools.product((1, -1), repeat=3):
@@ -244,7 +246,6 @@ def _frames_window(rec, max_frames: int | None) -> np.ndarray:
 
 def camera_imu(rec, max_offset_s: float = 0.25, max_frames: int | None = None, keep=None):
     """(``CameraImuCalibration`` of the recording's frames and gyro, None) or (None, why not observable)."""
-    from visnav.vision.frame_rotation import frame_rotations
 
     if "frames" not in rec.streams or "imu" not in rec.streams or rec.camera is None:
         return None, "no frames or no IMU"
@@ -614,7 +615,6 @@ def _jsonable(x):
 
 def write_check(res: CheckResult, out_dir: Path, title: str) -> dict:
     """``check.json`` (the summary keys plus the table) and ``check.html`` (table and plots)."""
-    from html import escape
 
     out_dir.mkdir(parents=True, exist_ok=True)
     doc = _jsonable({**res.summary, "checks": [dict(zip(("check", "status", "measured", "expected"), r))

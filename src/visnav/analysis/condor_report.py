@@ -7,13 +7,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from visnav.vision.rectification import CameraGeometry
+from visnav.vision.rectification_errors import error_maps
+from visnav.analysis.report import _fig_to_img
 
 
 def _error_map_figure(scenario):
     import matplotlib.pyplot as plt
 
-    from visnav.vision.rectification import CameraGeometry
-    from visnav.vision.rectification_errors import error_maps
 
     c = scenario.sensors.camera
     half_h = math.radians(c.hfov_deg) / 2
@@ -89,7 +90,6 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from visnav.analysis.report import _fig_to_img
 
     cfg = scenario.mission
     out = []

@@ -7,6 +7,7 @@ import numpy as np
 
 from visnav.analysis.deck_metrics import attitude_error_deg
 from visnav.geometry.rotations import euler_to_dcm
+from visnav.analysis.report import _fig_to_img
 
 STATE_GROUPS = (("position", "relative position [m]", ("x", "y", "z"), 1.0),
                 ("euler", "relative attitude [deg]", ("roll", "pitch", "yaw"), np.degrees(1.0)),
@@ -52,7 +53,6 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from visnav.analysis.report import _fig_to_img
 
     out = []
     tr, es = log.get("truth"), log.get("estimate")

@@ -6,6 +6,9 @@ and the registrability map of the mission's map (beyond the thesis)."""
 from __future__ import annotations
 
 import numpy as np
+from visnav.analysis.report import _fig_to_img
+from visnav.world.rural import mission_map
+from visnav.analysis.registrability import registrability_map
 
 
 
@@ -15,7 +18,6 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from visnav.analysis.report import _fig_to_img
 
     out = []
     smp, tgt = log.get("sample"), log.get("target")
@@ -24,7 +26,6 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
     target = tgt["position"][0]
     geo = None
     if scenario is not None:
-        from visnav.world.rural import mission_map
 
         geo = mission_map(scenario.world.geo_map)
     tr = log.get("truth")
@@ -84,7 +85,6 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
         out.append(("Sample and RLS error vs sample count (Figs. 7.9, 7.11)", _fig_to_img(fig)))
         plt.close(fig)
     if geo is not None:
-        from visnav.analysis.registrability import registrability_map
 
         try:
             m = scenario.world.geo_map  # scored under the appearance change this flight's reference had

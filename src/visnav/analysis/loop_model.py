@@ -14,6 +14,8 @@ import numpy as np
 
 from visnav.analysis.frequency import AXIS_INDEX, margins_from_frd
 from visnav.control.rmax import AxisMargins
+from visnav.estimation.position_filter import PositionFilter
+from visnav.control.rmax import DRAG, RmaxPositionGains, _freq, normalized_plant
 
 
 @functools.lru_cache(maxsize=32)
@@ -21,7 +23,6 @@ def _filter_gains(accel_noise: float = 0.3, sigma_m: float = 0.02, imu_rate_hz: 
                   update_rate_hz: float = 10.0) -> tuple[float, float]:
     """Steady-state (K_p, K_v) of the navigator's PositionFilter per position update, found by
     running its own covariance recursion to convergence."""
-    from visnav.estimation.position_filter import PositionFilter
 
     f = PositionFilter(accel_noise, np.zeros(3), np.zeros(3))
     f.t, n = 0.0, max(1, int(round(imu_rate_hz / update_rate_hz)))
@@ -39,7 +40,6 @@ def _model(axis: str, s, delay, altitude_m: float, delay_s: float | None, compen
            gains, rate_hz: float, filter_gains, image_delay_s: float = 0.0):
     """The loop of ``model_loop`` with ``s`` = jω (array) or ``control.tf('s')`` and ``delay(t)`` =
     e^{−st} or its Padé approximation."""
-    from visnav.control.rmax import DRAG, RmaxPositionGains
 
     if axis not in AXIS_INDEX:
         raise ValueError(f"axis must be one of {sorted(AXIS_INDEX)}, got {axis!r}")
@@ -89,7 +89,6 @@ def model_loop(axis: str, w, altitude_m: float = 12.0, delay_s: float | None = 0
     ``control.rmax.normalized_plant`` and e^{−sT/2} the 10 Hz hold. With τ = τ' = 0 (and for GPS)
     p̂ = x up to the hold: L reduces to ``control.rmax.position_loop``.
     """
-    from visnav.control.rmax import _freq, normalized_plant
 
     w = np.asarray(w, float)
     s = 1j * w
@@ -110,7 +109,6 @@ def model_stable(altitude_m: float, delay_s: float | None, axis: str = "lateral"
                  compensation_s: float = 0.0, pade_order: int = 5, **kw) -> bool:
     """Closed-loop stability of ``model_loop`` (delays as Padé approximations; a compensation
     beyond the delay counts as exact)."""
-    from visnav.control.rmax import normalized_plant
 
     def delay(t: float):
         return ct.tf(*ct.pade(t, pade_order)) if t > 0 else ct.tf([1.0], [1.0])

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from visnav.analysis.drift import measure_drift
 
 def interp_rows(t_query, t, values) -> np.ndarray:
     """Linear interpolation of each column of ``values`` (N,k) at ``t_query``."""
@@ -170,7 +171,6 @@ def palace_metrics(log, scenario, *, wall_time_s: float, error: str | None = Non
 
 def hover_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
     """Metrics of a hover mission: the §4.2.1 drift of MPE (open or closed loop) during the hold."""
-    from visnav.analysis.drift import measure_drift
 
     cfg = scenario.mission
     truth, mpe = log.get("truth"), log.get("mpe")

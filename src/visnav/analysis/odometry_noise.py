@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from visnav.vision.homography import _dlt_rows
+from pathlib import Path
 
 IMAGE = (360, 288)
 FOCAL_PX = 0.5 * IMAGE[0] / math.tan(math.radians(22.5))  # ~45 deg horizontal view (§5.9)
@@ -127,7 +128,6 @@ def noise_figures(trials: int = 1000, seed: int = 0) -> list[tuple[str, object]]
 
 def write_figures(out_dir, trials: int = 1000, seed: int = 0) -> list:
     """Save the §5.6.1 figures as PNG files in ``out_dir``; returns the paths."""
-    from pathlib import Path
 
     import matplotlib.pyplot as plt
 

@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.analysis.metrics import finish_metrics, interp_rows
+from visnav.analysis.metrics import final_mode
+from visnav.analysis.report import _fig_to_img
 
 
 
@@ -40,7 +42,6 @@ def vision_velocity(vis: dict, max_gap_s: float = 0.11) -> tuple[np.ndarray, np.
 
 
 def pad_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
-    from visnav.analysis.metrics import final_mode
 
     tr, est = log.get("truth"), log.get("estimate")
     out: dict = {}
@@ -95,7 +96,6 @@ def plots(log, sc=None) -> list[tuple[str, str]]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from visnav.analysis.report import _fig_to_img
 
     out = []
     tr, es, vis, ft = log.get("truth"), log.get("estimate"), log.get("pad_vision"), log.get("frame_truth")

@@ -14,6 +14,11 @@ import numpy as np
 
 from visnav.analysis.published import THESIS_TABLE_4_1  # noqa: F401  (re-exported)
 from visnav.io.provenance import provenance, provenance_html
+import csv
+from visnav.analysis.noise import closed_form, mpe_error_series
+from visnav.sensors.rangefinder import SURFACE_NOISE_FACTOR
+import html
+from visnav.analysis.report import _fig_to_img
 
 
 # --------------------------------------------------------------------------- FRF storage
@@ -83,7 +88,6 @@ def _num(v) -> float:
 
 
 def read_csv(path) -> list[dict]:
-    import csv
 
     p = Path(path)
     if not p.is_file():
@@ -214,8 +218,6 @@ def drift_figure(table: list[dict]):
 
 
 def noise_figure(table: list[dict], focal_px: float, depression_deg: float = 60.0):
-    from visnav.analysis.noise import closed_form
-    from visnav.sensors.rangefinder import SURFACE_NOISE_FACTOR
 
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -226,7 +228,6 @@ def noise_figure(table: list[dict], focal_px: float, depression_deg: float = 60.
         line = ax.plot([r["range_m"] for r in t], [r["sigma_m"] for r in t], "o", label=f"ours σ (§4.2.1 fit), {surf}")
         cf = closed_form(rr, focal_px, depression_deg, surface_factor=SURFACE_NOISE_FACTOR.get(surf, 1.0))
         ax.plot(rr, cf.sigma_horizontal_m, "--", color=line[0].get_color(), label=f"eq. 3.3 ⊕ laser (Fig. 3.4), {surf}")
-    from visnav.analysis.noise import mpe_error_series
 
     res, _ = mpe_error_series([8.0, 16.0, 32.0, 64.0], focal_px, depression_deg, n=300, surface_factor=1.5)
     ax.plot(res.range_m, res.sigma_horizontal_m, "kx", ms=9, label="open-loop MPE, integer pixels + laser (asphalt)")
@@ -292,7 +293,6 @@ def bode_figure(frfs: dict, altitude_m: float, min_coherence: float = 0.6):
 
 # --------------------------------------------------------------------------- the page
 def _html_table(header: list[str], rows: list[list[str]]) -> str:
-    import html
 
     h = "".join(f"<th>{html.escape(c)}</th>" for c in header)
     b = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
@@ -302,7 +302,6 @@ def _html_table(header: list[str], rows: list[list[str]]) -> str:
 def write_palace_report(out_html, drift_dirs=(), margins_path=None, focal_px: float = 1073.0) -> Path:
     """One HTML page from ``palace-hover-drift`` campaign directories (their runs.csv) and a
     ``visnav margins`` output (its directory or margins.csv; frf.npz beside it for Bode plots)."""
-    from visnav.analysis.report import _fig_to_img
 
     drift_rows = []
     for d in drift_dirs:

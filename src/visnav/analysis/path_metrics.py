@@ -11,6 +11,9 @@ import numpy as np
 
 from visnav.analysis.metrics import finish_metrics
 from visnav.guidance.speed_limits import descent_angle, max_descent_rate
+from visnav.analysis.metrics import final_mode, mode_entered
+from visnav.mission.pfcm import build_path
+from visnav.analysis.report import _fig_to_img
 
 
 
@@ -83,8 +86,6 @@ def saturation_times(log) -> tuple[float, dict[str, float]]:
 
 def pfcm_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
     """metrics.json of a PFCM run (issue #4 keys first), from the log and the scenario's path."""
-    from visnav.analysis.metrics import final_mode, mode_entered
-    from visnav.mission.pfcm import build_path
 
     truth, ref = log.get("truth"), log.get("pfcm")
     sim_time = float(truth["t"][-1]) if truth else 0.0
@@ -134,8 +135,6 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from visnav.analysis.report import _fig_to_img
-    from visnav.mission.pfcm import build_path
 
     tr, ref = log.get("truth"), log.get("pfcm")
     cmd = log.get("pfcm_control") or log.get("command")  # 50 Hz outer-loop log if there is one

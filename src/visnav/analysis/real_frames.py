@@ -29,6 +29,10 @@ import numpy as np
 from visnav.vision.correlation import PnccTracker, self_coherence
 from visnav.vision.interest import forstner_top_k
 from visnav.vision.klt import KltTracker
+from visnav.geometry.camera import PinholeCamera
+from visnav.geometry.pad import PadLayout
+from visnav.vision.pad import PadDetector
+import itertools
 
 __all__ = ["load_euroc_frames", "klt_on_frames", "palace_on_frames", "pad_on_photos", "pad_on_tiles", "marker_photos"]
 
@@ -224,9 +228,6 @@ def pad_on_photos(paths, detector=None, size: tuple[int, int] = (640, 480)) -> d
     number of photos, false poses (with the photo names), rings found per photo, the reasons the
     detector gave, and the per-frame time of ``detect`` (mean, median, max, in ms; wall clock ``ms_*``
     and this process's CPU time ``cpu_ms_*``, all threads: on a loaded machine the wall clock waits)."""
-    from visnav.geometry.camera import PinholeCamera
-    from visnav.geometry.pad import PadLayout
-    from visnav.vision.pad import PadDetector
 
     w, h = size
     det = detector or PadDetector(PadLayout(), PinholeCamera.ideal(w, h, float(w)).K)
@@ -266,11 +267,7 @@ def pad_on_tiles(paths, detector=None, per_tile: int = 4, limit: int = 300, size
     real rings of *different* markers are in one frame and reach the association (radius ratio,
     right isosceles triangle, 27-point homography residual, camera above the plane, ambiguity).
     Every pose is false. The first ``limit`` combinations of ``per_tile`` such photos (sorted)."""
-    import itertools
 
-    from visnav.geometry.camera import PinholeCamera
-    from visnav.geometry.pad import PadLayout
-    from visnav.vision.pad import PadDetector
 
     if per_tile != 4:
         raise ValueError(f"per_tile must be 4 (a 2x2 mosaic), got {per_tile}")

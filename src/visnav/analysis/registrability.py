@@ -33,6 +33,14 @@ from scipy import fft as sfft
 
 from visnav.vision.geolocation_registration import sobel_edges
 from visnav.world.appearance import ANOTHER_DAY, appearance_change
+from visnav.geometry.frames import LocalTangentPlane
+from visnav.geometry.camera import PinholeCamera
+from visnav.sensors.camera import CameraRenderer
+from visnav.vision.geolocation_registration import GeoRegistration, nadir_dcm
+from visnav.world.appearance import another_day
+from visnav.world.maps import degrade_reference
+from visnav.world.scene import World
+from visnav.world.wind import SteadyWind, Wind
 
 #: the former name (the uniform model: ``relief_level`` None)
 unstable_texture = appearance_change
@@ -185,7 +193,6 @@ def write_registrability(reg: Registrability, geo, out_dir: Path, stem: str = "r
     np.save(out_dir / f"{stem}.npy", reg.score)
     pts = np.array([[reg.north0, reg.east0], [reg.north0, reg.east0 + reg.cell_m], [reg.north0 - reg.cell_m, reg.east0]])
     if geo.origin_geodetic is not None:
-        from visnav.geometry.frames import LocalTangentPlane
 
         ltp = LocalTangentPlane(geo.origin_geodetic[0], geo.origin_geodetic[1], 0.0)
         lat, lon, _ = ltp.ned_to_geodetic(np.column_stack([pts, np.zeros(3)]))
@@ -240,13 +247,6 @@ def validate(reg: Registrability, geo, n: int = 60, heading_error_deg: float = 1
     frames, headings and GPS errors depend on ``seed`` only (the same for any ``hough`` or
     ``registration_kw``). Returns per-frame arrays (``error_m``, ``heading_error``, ``hough_applied``,
     ``quality``) and the failure rate below / above the median score and per score quantile."""
-    from visnav.geometry.camera import PinholeCamera
-    from visnav.sensors.camera import CameraRenderer
-    from visnav.vision.geolocation_registration import GeoRegistration, nadir_dcm
-    from visnav.world.appearance import another_day
-    from visnav.world.maps import degrade_reference
-    from visnav.world.scene import World
-    from visnav.world.wind import SteadyWind, Wind
 
     rng = np.random.default_rng(seed)
     f = 360.0 / math.tan(math.radians(26.5))

@@ -13,6 +13,7 @@ import numpy as np
 from visnav.analysis.metrics import interp_rows
 from visnav.analysis.published import notes, published, summary_rows
 from visnav.io.provenance import provenance as make_provenance, provenance_html
+from visnav.analysis.outcome import verdict_line
 
 
 def _fig_to_img(fig) -> str:
@@ -158,7 +159,6 @@ def metrics_table_html(sc, metrics: dict) -> str:
 def headline_html(sc, metrics: dict) -> str:
     """The top of a report (issue #32: the verdict was a row near the bottom of a 33-row table): the outcome
     line, then the few metrics the thesis gives a bound for, with their verdicts."""
-    from visnav.analysis.outcome import verdict_line
 
     rows, _, source = summary_rows(sc, metrics)
     scored = [r for r in rows if r.verdict.startswith(("meets", "does not meet"))]

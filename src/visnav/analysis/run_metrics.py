@@ -16,6 +16,9 @@ from pathlib import Path
 from typing import Callable
 from visnav.io.tum import trajectory_rmse, tum_frame
 from visnav.flightlog import FlightLog
+from visnav.analysis.integrity_metrics import integrity_metrics
+from visnav.analysis.outcome import apply_outcome
+from visnav.scenarios.schema import ScenarioError, load_scenario
 
 MetricsFn = Callable[..., dict]
 
@@ -54,8 +57,6 @@ def compute_metrics(log, scenario, *, wall_time_s: float = math.nan, error: str 
                     interrupted: bool = False) -> dict:
     """The metrics of ``scenario``'s mission from ``log`` (a ``FlightLog``); ``outcome`` as
     ``analysis/outcome.py`` defines it (``interrupted``: the run was stopped by Ctrl-C)."""
-    from visnav.analysis.integrity_metrics import integrity_metrics
-    from visnav.analysis.outcome import apply_outcome
 
     out = metrics_function(scenario.mission.type)(log, scenario, wall_time_s=wall_time_s, error=error)
     out.update(integrity_metrics(log, scenario))  # issue #18: every R-MAX navigator logs its integrity
@@ -71,7 +72,6 @@ def compute_metrics(log, scenario, *, wall_time_s: float = math.nan, error: str 
 def from_run_dir(run_dir: str | Path) -> dict:
     """Recompute the metrics of a run directory from its ``log.h5`` and ``scenario.toml``. The wall time and
     the error are the run's own (``metrics.json``, when there is one); ``RunDirError`` names what is missing."""
-    from visnav.scenarios.schema import ScenarioError, load_scenario
 
     d = Path(run_dir)
     if d.is_file() and d.name == "log.h5":  # the log itself: its folder is the run directory

@@ -20,6 +20,9 @@ import cv2
 import numpy as np
 
 from visnav.geometry.rotations import dcm_to_euler
+from visnav.world.maps import GeoImage
+from visnav.vision.geolocation_registration import GeoRegistration
+from visnav.vision.registration import MapRegistration
 
 
 @dataclass
@@ -39,7 +42,6 @@ def ortho_map(image: np.ndarray, K: np.ndarray, R_cn: np.ndarray, C_ned: np.ndar
     """Photo ``image`` orthorectified north-up onto the ground (down = C_ned[2] + height), ``half_m`` around its
     nadir point at ``res_m`` per pixel, as a ``GeoImage``: map pixel (c, r) -> ground point P -> image pixel
     K R_cn^T (P - C)."""
-    from visnav.world.maps import GeoImage
 
     n = int(round(2 * half_m / res_m))
     north0, east0 = C_ned[0] + half_m, C_ned[1] - half_m
@@ -55,8 +57,6 @@ def measure_pairs(images, camera, mount, poses, gps_ne, pairs, res_m: float = 0.
     """For each (a, b): photo a as the map, photo b registered to it by both methods, searched ``search_m``
     around b's GPS fix moved by ``predict_offset_m`` (a prediction error to recover). ``vo_offsets``:
     {(a, b): NE displacement from the VO chain}, scored the same way (the feature homography's own error)."""
-    from visnav.vision.geolocation_registration import GeoRegistration
-    from visnav.vision.registration import MapRegistration
 
     K = camera.K
     out = []

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+import csv
 
 
 class TrajectoryError(ValueError):
@@ -104,7 +105,6 @@ _CSV_Q = ("qx", "qy", "qz", "qw")
 
 
 def _read_csv(path: Path) -> Trajectory:
-    import csv
 
     with open(path, newline="") as fh:
         header = next(csv.reader(fh), None)

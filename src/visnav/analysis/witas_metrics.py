@@ -11,6 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from visnav.analysis.metrics import finish_metrics, interp_rows
+from visnav.analysis.metrics import mode_entered
+from visnav.analysis.report import _fig_to_img
+from visnav.world.witas_map import make_ground
 
 
 
@@ -23,7 +26,6 @@ def _wrap(a):
 
 
 def witas_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
-    from visnav.analysis.metrics import mode_entered
 
     cfg = scenario.mission
     tr, est = log.get("truth"), log.get("estimate")
@@ -90,7 +92,6 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     import matplotlib.pyplot as plt
     from matplotlib.patches import Ellipse
 
-    from visnav.analysis.report import _fig_to_img
 
     tr, est, pmf, odo, ins = (log.get(k) for k in ("truth", "estimate", "pmf", "odometry", "ins_only"))
     if not tr:
@@ -98,8 +99,6 @@ def plots(log, scenario) -> list[tuple[str, str]]:
     out = []
     fig, axs = plt.subplots(1, 2, figsize=(14, 7), layout="constrained")
     try:
-        from visnav.world.witas_map import make_ground
-
         ground, _ = make_ground(scenario.mission.path, scenario.world.witas_map, scenario.run.seed, scenario.sensors.camera)
         n0, n1, e0, e1 = ground.extent_ned()
         img = ground.level(min(2, ground.max_level))

@@ -60,6 +60,7 @@ from visnav.log_schema import register_stream
 from visnav.measurements import Frame, NavCommand, NavEstimate
 from visnav.app.record import RecordingNavigator
 from visnav.io.recording_writer import RecordingWriter
+from visnav.scenarios.schema import to_toml
 
 register_stream(
     "bridge_estimate", position=("m", "NED about the bridge's origin", "the estimate sent (float64, before encoding)"),
@@ -605,7 +606,6 @@ class BridgeRecording:
             cv2.imwrite(item[0], item[1], [cv2.IMWRITE_PNG_COMPRESSION, 1])
 
     def close(self) -> Path:
-        from visnav.scenarios.schema import to_toml
 
         self.navigator.recording = False
         self._images.put(None)

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 from visnav.app.navigators import NAVIGATORS, make_navigator, navigator_for
+from visnav.scenarios.schema import load_scenario
 
 
 @dataclass
@@ -32,7 +33,6 @@ class BuiltNavigator:
 def build_navigator(name: str, map_path: str | None = None, overrides: list[str] | None = None,
                     recorder=None) -> BuiltNavigator:
     """Raises ScenarioError / FileNotFoundError / ValueError with a one-line message on bad input."""
-    from visnav.scenarios.schema import load_scenario
 
     scenario = NAVIGATORS[name].scenario if name in NAVIGATORS else name
     sets = list(overrides or [])

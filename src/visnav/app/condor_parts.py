@@ -37,6 +37,7 @@ from visnav.vehicles.fixedwing import FixedWingParams, trim
 from visnav.vision.condor_pipeline import VisionRange
 from visnav.analysis.condor_metrics import condor_metrics
 from visnav.analysis.integrity_metrics import integrity_metrics
+from visnav.sim.condor_ground import run_ground_test
 
 
 class CondorWorld(AircraftAir):
@@ -136,7 +137,6 @@ def build(ctx) -> MissionParts | GroundTest:
     cfg = sc.mission
     rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(14)]
     if cfg.experiment == "ground_test":
-        from visnav.sim.condor_ground import run_ground_test
 
         mission = GroundTestMission()
 

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 from visnav.app.montecarlo import Campaign
+from visnav.scenarios.schema import load_scenario
 
 FAULT_COLUMNS = ("fault", "runs", "detected_share", "detection_delay_s", "false_alarms", "safe", "unsafe",
                  "over_hpl_while_ok_pct", "worst_error_while_ok_m")
@@ -117,7 +118,6 @@ def fault_name(d: dict) -> str:
 def faults_for(scenario: str, overrides: list[str], names: list[str]) -> list[dict]:
     """The fault definitions to run: ``names == ["all"]`` every one of the scenario's mission, else those
     named (by kind or label). ValueError (one line) for a mission without a fault set or an unknown name."""
-    from visnav.scenarios.schema import load_scenario
 
     mtype = load_scenario(scenario, overrides).mission.type
     if mtype not in FAULT_SETS:

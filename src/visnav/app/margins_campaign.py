@@ -16,6 +16,9 @@ import numpy as np
 from visnav.analysis.delay_id import CombinedDelay, combine_delays, identify_imu_delay, identify_laser_delays
 from visnav.analysis.frequency import AXIS_INDEX, broken_loop_response, margins_from_frd
 from visnav.app.loop import Simulation
+from visnav.scenarios.schema import load_scenario, ScenarioError, builtin_names
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
 
 
 @dataclass(frozen=True)
@@ -64,7 +67,6 @@ def sweep_run(altitude_m: float, axis: str, source: str = "mpe", imu_delay_s: fl
     5.4), and notes (track lost, sweep cut short, point near the image edge). ``imu_delay_s`` and
     ``laser_delay_s`` are the simulated (unknown) sensor delays; ``attitude_delay_s`` and
     ``laser_compensation_s`` the navigator's compensation (``navigation.mpe.*``)."""
-    from visnav.scenarios.schema import load_scenario
 
     if axis not in AXIS_INDEX:
         raise ValueError(f"axis must be one of {sorted(AXIS_INDEX)}, got {axis!r}")
@@ -200,7 +202,6 @@ IDENT_SWEEP = SweepSettings(amplitude=64.0, f0_hz=0.4, f1_hz=2.5, duration_s=40.
 def check_margins_scenario(scenario: str, overrides=()) -> None:
     """The sweeps hover with a chirp at an actuator: only a ``mission.type = "hover"`` scenario fits.
     Any other raises ScenarioError naming the scenarios that do."""
-    from visnav.scenarios.schema import ScenarioError, builtin_names, load_scenario
 
     sc = load_scenario(scenario, list(overrides))
     if sc.mission.type != "hover":
@@ -269,8 +270,6 @@ def margins_campaign(altitudes, delays, compensate: bool = False, seed: int = 1,
         pool = executor
         own = pool is None and workers > 1
         if own:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
         total = done[0] + len(jobs)
         try:

@@ -22,6 +22,7 @@ from visnav.analysis.metrics import palace_metrics, hover_metrics
 from visnav.analysis.path_metrics import pfcm_metrics
 from visnav.app.navigators import rmax_camera, make_navigator
 from visnav.app.rmax_parts import rmax_parts
+import importlib
 
 Builder = Callable[["BuildContext"], "MissionParts | GroundTest"]
 REGISTRY: dict[str, Builder] = {}
@@ -36,7 +37,6 @@ SIMULATION = "visnav.app.loop:Simulation"
 
 def simulation_class():
     """The one simulation class (``app/loop.Simulation``)."""
-    import importlib
 
     module, name = SIMULATION.split(":")
     return getattr(importlib.import_module(module), name)

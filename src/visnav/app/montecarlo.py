@@ -30,6 +30,10 @@ from visnav.analysis.campaign_report import _as_number, write_campaign_report
 from visnav.app.missions import make_simulation
 from visnav.app.runs import OutputDirError, prepare_out_dir
 from visnav.io.provenance import provenance
+from visnav.scenarios.schema import load_scenario, _parse_value, ScenarioError, scenario_hash
+import multiprocessing
+from visnav.analysis.report import published_figures
+from concurrent.futures import ProcessPoolExecutor, as_completed
 
 TIMING_KEYS = ("wall_time_s", "real_time_factor")
 ID_KEYS = ("seed", "status", "error")
@@ -78,7 +82,6 @@ def run_job(job: Job) -> dict:
     import cv2
 
     cv2.setNumThreads(1)  # one run per core
-    from visnav.scenarios.schema import load_scenario
 
     row: dict = {"seed": job.seed, **{k: v for k, v in job.grid}}
     try:
@@ -99,7 +102,6 @@ def run_job(job: Job) -> dict:
 
 def parse_grid(items: Iterable[str]) -> dict[str, list]:
     """``["mission.altitude_m=6,12", "world.surface=grass,asphalt"]`` -> {key: [values]}; values as TOML."""
-    from visnav.scenarios.schema import _parse_value
 
     grid: dict[str, list] = {}
     for it in items:
@@ -117,7 +119,6 @@ def parse_grid(items: Iterable[str]) -> dict[str, list]:
 
 def validate_campaign(scenario: str, overrides: list[str], grid: dict[str, list]) -> None:
     """Load the scenario once per grid value so a bad key or value fails before any run starts."""
-    from visnav.scenarios.schema import ScenarioError, load_scenario
 
     try:
         load_scenario(scenario, overrides)
@@ -244,8 +245,6 @@ def config_diff(old: dict, new: dict, limit: int = 8) -> str:
 
 def _published(sc) -> tuple[dict, str]:
     try:
-        from visnav.analysis.report import published_figures
-
         return published_figures(sc)
     except Exception:  # noqa: BLE001 - the figures are a comment beside the numbers, never a reason to stop
         return {}, ""
@@ -280,7 +279,6 @@ class Campaign:
 
     def identity(self) -> dict:
         """What a resume must match: the resolved scenario without its seed (hash and content), the grid keys."""
-        from visnav.scenarios.schema import load_scenario, scenario_hash
 
         sc = load_scenario(self.scenario, self.overrides, seed=0)
         self._published = _published(sc)
@@ -387,8 +385,6 @@ class Campaign:
                 yield run_job(j)
             return
         jobs = [replace(j, render_thread=False) for j in jobs]  # a run per core: frames render on its own thread
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor, as_completed
 
         # spawn, not fork: forking a process that already runs OpenCV / render threads can deadlock
         with ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn")) as ex:

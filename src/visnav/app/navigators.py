@@ -16,6 +16,8 @@ from typing import Callable
 import numpy as np
 from visnav.measurements import FRAMES
 from visnav.sim.clock import rate_divisor
+from dataclasses import replace
+import importlib
 
 
 @dataclass(frozen=True)
@@ -107,7 +109,6 @@ def _deck_frame_interval(sc) -> float:
 def _deck(sc, recorder, camera, mount, **_):
     """``DeckNavigator`` tuned from ``navigation`` (``DeckNavConfig.from_mission``); the camera's intrinsics,
     distortion and mount are the ones given (a recording's camera.yaml) when they are."""
-    from dataclasses import replace
 
     from visnav.estimation.deck import CameraGeometry
     from visnav.navigation.deck import DeckNavConfig, DeckNavigator
@@ -216,7 +217,6 @@ NAVIGATORS: dict[str, NavigatorSpec] = {
 
 def stream_table(s: NavigatorSpec) -> dict | None:
     """The stream table of a navigator's loop (``NavigatorSpec.streams``), None when it has none of its own."""
-    import importlib
 
     if not s.streams:
         return None

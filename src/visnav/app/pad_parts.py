@@ -14,16 +14,16 @@ from visnav.geometry.pad import PadLayout
 from visnav.mission.pad import PadLandingMission
 from visnav.analysis.pad_report import pad_metrics
 from visnav.app.rmax_parts import rmax_parts
+from visnav.control.rmax import RmaxPositionController
+from visnav.geometry.camera import PinholeCamera
+from visnav.sensors.imu import Imu
+from visnav.sensors.pad_camera import PadCamera
+from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
+from visnav.sensors.split_imu import SplitRateImu
+from visnav.world.pad import pad_board
 
 
 def build(ctx):
-    from visnav.control.rmax import RmaxPositionController
-    from visnav.geometry.camera import PinholeCamera
-    from visnav.sensors.imu import Imu
-    from visnav.sensors.pad_camera import PadCamera
-    from visnav.sensors.pantilt import PanTiltUnit, SpringPlatform
-    from visnav.sensors.split_imu import SplitRateImu
-    from visnav.world.pad import pad_board
 
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission

@@ -24,6 +24,10 @@ from visnav.analysis.trajectory_eval import Trajectory, TrajectoryError, evaluat
 from visnav.analysis.trajectory_export import write_tum_file
 from visnav.app.navigators import make_navigator, spec, NAVIGATORS, stream_table
 from visnav.app.runs import _jsonable
+import tomllib
+from visnav.scenarios.schema import apply_overrides, load_scenario, validate, to_toml
+from visnav.world.maps import GeoImage
+from visnav.analysis.replay_report import write_replay_report
 
 register_stream("nav_request", method=("text", "", "a mission request replayed to the navigator (commands.csv): the "
                                              "NavCommand name, initialize, or an older recording's method"),
@@ -56,9 +60,7 @@ class ReplayResult:
 
 def scenario_of(rec: Recording, default: str, overrides=()):
     """The recording's resolved scenario (``scenario.toml``), else the built-in ``default`` one."""
-    import tomllib
 
-    from visnav.scenarios.schema import apply_overrides, load_scenario, validate
 
     if rec.scenario_toml is None:
         return load_scenario(default, list(overrides))
@@ -78,7 +80,6 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
     if kind not in s.mission_types:  # another system's flight: the navigator's settings from its own scenario
         rec.notes.append(f"the recording was flown as {sc.run.name} (mission.type {kind}); the {name} navigator "
                          f"takes its settings from {s.scenario}")
-        from visnav.scenarios.schema import load_scenario
 
         sc = load_scenario(s.scenario, list(opts.scenario_overrides))
     parts: dict = {}
@@ -88,7 +89,6 @@ def _navigator(name: str, rec: Recording, opts: ReplayOptions, recorder):
         rec.notes.append("no camera.yaml and no frames: PALACE runs on GPS / inertial only")
     if name in ("witas", "geolocation"):
         if opts.map_path:
-            from visnav.world.maps import GeoImage
 
             try:
                 parts["reference"] = GeoImage.load(opts.map_path)
@@ -406,7 +406,6 @@ def denied_metrics(log: FlightLog, t_cut: float) -> dict:
 def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title: str = "visnav replay") -> Path:
     """log.h5, scenario.toml, estimate.tum (valid estimates only; the header names the frame), truth.tum,
     metrics.json, report.html."""
-    from visnav.scenarios.schema import to_toml
 
     result.log.to_hdf5(out_dir / "log.h5", attrs={"replay": 1})
     (out_dir / "scenario.toml").write_text(to_toml(result.scenario))
@@ -417,7 +416,6 @@ def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title
     if ref is not None:
         write_tum_file(out_dir / "truth.tum", ref, result.frame)
     if report:
-        from visnav.analysis.replay_report import write_replay_report
 
         write_replay_report(result, out_dir / "report.html", title, result.verdict)
     return out_dir

@@ -14,6 +14,7 @@ from visnav.scenarios.schema import to_toml
 from visnav.analysis.outcome import apply_outcome
 from visnav.io.provenance import provenance
 from visnav.io.recording import COMMANDS, STREAMS, TRUTH
+from visnav.analysis.report import write_report
 
 # every file a run writes (``--force`` removes them first so that none is left from an earlier run)
 RUN_FILES = ("scenario.toml", "metrics.json", "log.h5", "truth.tum", "estimate.tum", "report.html")
@@ -139,7 +140,6 @@ def write_run(result, out_dir: Path, report: bool = True) -> Path:
     if frame is not None:
         write_run_tum(out_dir, log, frame)
     if report:
-        from visnav.analysis.report import write_report
 
         write_report(result, out_dir / "report.html", provenance=prov)
     return out_dir

@@ -62,6 +62,8 @@ from visnav.analysis.integrity_metrics import integrity_metrics
 from visnav.app.missions import make_simulation
 from visnav.app.navigators import navigator_for
 from visnav.flightlog import FlightLog
+import tempfile
+from visnav.scenarios.schema import to_toml
 
 P0_HPA = 1013.25  # pressure at the NED origin's height
 ORIGIN = (58.395, 15.575, 0.0)  # the simulation's NED origin as the autopilot reports it
@@ -431,9 +433,7 @@ def run_sil(sc, progress=None, notify=None, sim=None, out_dir: str | Path | None
     the bridge's keys added to its metrics (``sil_`` prefix for the autopilot side's own figures). The
     bridge's log folder (metrics.json, bridge.tlog, recording/, navigator.h5, bridge.out) is ``out_dir``
     (default: a temporary folder)."""
-    import tempfile
 
-    from visnav.scenarios.schema import to_toml
 
     sim = sim if sim is not None else sil_simulation(sc)
     link: SilLink = sim.sil_link

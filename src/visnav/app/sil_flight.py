@@ -18,6 +18,7 @@ from visnav.io.camera_source import CallableSource
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
 from visnav.app.missions import make_simulation
+import socket
 
 CASES = {  # navigator -> SIL circle (radius m, speed m/s, height m) inside the scenario's world
     "witas": (80.0, 8.0, 60.0),
@@ -26,7 +27,6 @@ CASES = {  # navigator -> SIL circle (radius m, speed m/s, height m) inside the 
 
 
 def _free_port() -> int:
-    import socket
 
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.bind(("127.0.0.1", 0))

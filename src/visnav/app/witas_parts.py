@@ -15,6 +15,13 @@ from visnav.world.witas_map import make_ground, mission_rngs, reference_map  # n
 from visnav.analysis.witas_metrics import witas_metrics
 from visnav.app.navigators import NAVIGATORS
 from visnav.app.rmax_parts import rmax_parts
+from visnav.control.rmax_path import PathFollowingController
+from visnav.mission.pfcm import PfcmMission, path_loop_gains
+from visnav.scenarios.schema import PfcmControlConfig, PfcmMissionConfig
+from visnav.sensors.baro import Compass, baro_sensor
+from visnav.sensors.camera import Camera
+from visnav.sensors.faults import map_faults
+from visnav.world.scene import World
 
 register_stream("note", message=("text", "", "how the scenario was set up (e.g. the loop shrunk to fit the map)"))
 register_stream("witas_setup", t=("s", "simulation time", "written once at the start"),
@@ -26,13 +33,6 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
 
 
 def build(ctx):
-    from visnav.control.rmax_path import PathFollowingController
-    from visnav.mission.pfcm import PfcmMission, path_loop_gains
-    from visnav.scenarios.schema import PfcmControlConfig, PfcmMissionConfig
-    from visnav.sensors.baro import Compass, baro_sensor
-    from visnav.sensors.camera import Camera
-    from visnav.sensors.faults import map_faults
-    from visnav.world.scene import World
 
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission

@@ -47,6 +47,7 @@ from visnav.estimation.ins import (
 )
 from visnav.geometry.rotations import euler_to_dcm, skew, wrap_angle
 from visnav.measurements import ImuSample, NavEstimate
+from dataclasses import replace
 
 __all__ = ["EskfConfig", "ErrorStateKF", "UpdateResult", "heading_from_mag"]
 
@@ -168,7 +169,6 @@ class ErrorStateKF:
         """Change noise densities or the gate in flight (``EskfConfig`` fields; not ``gyro_bias``, the state
         size): e.g. a larger bias random walk once a sensor is known faulty, so that the bias states follow
         its steps."""
-        from dataclasses import replace
 
         if "gyro_bias" in changes and bool(changes["gyro_bias"]) != self.cfg.gyro_bias:
             raise ValueError("retune cannot change the state size (gyro_bias)")

@@ -17,6 +17,9 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import socket
+import queue
+import threading
 
 IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm")
 
@@ -177,7 +180,6 @@ class FrameStreamSource(FrameSource):
 
     def __init__(self, spec: str, connect_s: float = 10.0, **kw):
         super().__init__(**kw)
-        import socket
 
         host, _, port = spec[len(FRAME_STREAM_SCHEME):].rpartition(":")
         try:
@@ -236,9 +238,6 @@ class FrameStreamServer:
     counted in ``dropped``, instead of stalling the sender)."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0, queue_size: int = 8):
-        import queue
-        import socket
-        import threading
 
         self.srv = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -254,7 +253,6 @@ class FrameStreamServer:
         self._th.start()
 
     def send(self, image: np.ndarray, exposed_monotonic: float, index: int) -> None:
-        import queue
 
         try:
             self.q.put_nowait((np.ascontiguousarray(image, np.uint8), float(exposed_monotonic), int(index)))
@@ -262,8 +260,6 @@ class FrameStreamServer:
             self.dropped += 1
 
     def _serve(self) -> None:
-        import queue
-        import socket
 
         self.srv.settimeout(0.2)
         while not self._stop.is_set() and self.conn is None:

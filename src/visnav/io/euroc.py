@@ -32,6 +32,7 @@ import numpy as np
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.io.recording import CameraInfo, Recording, RecordingError
+from visnav.geometry.rotations import dcm_to_euler
 
 _REST_S = 0.5
 _T_NED_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -152,7 +153,6 @@ def read_euroc(path: str | Path) -> Recording:
     """An EuRoC / ASL folder (``ROOT`` holding ``mav0/``, or ``mav0`` itself) as a ``Recording``."""
     from scipy.spatial.transform import Rotation
 
-    from visnav.geometry.rotations import dcm_to_euler
 
     root = Path(path)
     mav = root / "mav0" if (root / "mav0").is_dir() else root

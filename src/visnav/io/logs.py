@@ -30,6 +30,16 @@ from visnav.geometry.rotations import dcm_to_euler
 from visnav.io.recording import Recording, RecordingError, read_camera_yaml
 from visnav.io.streams import (camera_stream, flow_stream, gps_stream, heading_stream, mag_field_stream,
                                 read_summary, sorted_stream)
+from visnav.io.euroc import is_euroc, read_euroc
+from visnav.io.photos import is_photo_folder, read_photos
+from visnav.io.tlog import read_tlog
+import struct
+import re
+from visnav.io.ulog import read_ulog
+import os
+import sys
+import contextlib
+import io
 
 
 def open_recording(path: str | Path, allow_truncated: bool = False) -> Recording:
@@ -40,12 +50,10 @@ def open_recording(path: str | Path, allow_truncated: bool = False) -> Recording
     p = Path(path)
     if p.is_dir() and (p / "bridge.tlog").is_file() and (p / "recording").is_dir():  # a `visnav bridge` log folder
         p = p / "recording"
-    from visnav.io.euroc import is_euroc, read_euroc
 
     if is_euroc(p):  # the EuRoC / ASL dataset layout (mav0/imu0, cam0, ground truth)
         return read_euroc(p)
     if p.is_dir() and not (p / "metadata.yaml").is_file():
-        from visnav.io.photos import is_photo_folder, read_photos  # a folder of geotagged photos (a survey)
 
         return read_photos(p) if is_photo_folder(p) else Recording.open(p, allow_truncated)
     if not p.exists():
@@ -56,7 +64,6 @@ def open_recording(path: str | Path, allow_truncated: bool = False) -> Recording
     if suffix == ".ulg":
         return read_px4(p)
     if suffix == ".tlog":
-        from visnav.io.tlog import read_tlog
 
         return read_tlog(p)
     if suffix in (".bag", ".db3", ".mcap") or p.is_dir():
@@ -79,7 +86,6 @@ _BUILTIN_MULT = frozenset("cCeEL")  # format chars pymavlink already scales (cen
 
 def _df_fmtu(reader) -> dict[int, str]:
     """FMTU: message type -> its multiplier ids (one char per column; MULT maps a char to a factor)."""
-    import struct
 
     fmt = next((f for f in reader.formats.values() if f.name == "FMTU"), None)
     if fmt is None or fmt.type >= len(reader.offsets) or "MultIds" not in fmt.colhash:
@@ -98,7 +104,6 @@ def _df_type(reader, name: str, notes: list, fmtu: dict | None = None) -> dict[s
     """All messages of one DataFlash type as columns, or None if absent. Multipliers applied: the format
     char's own (c, C, e, E: x0.01; L: x1e-7), else the FMTU one where the log has it (the time columns
     stay in their raw units). ``out["_fmtu"]`` (0-d) says whether FMTU described the type."""
-    import re
 
     fmt = next((f for f in reader.formats.values() if f.name == name), None)
     if fmt is None or fmt.type >= len(reader.offsets) or not reader.offsets[fmt.type]:
@@ -272,8 +277,6 @@ class _quiet:
     byte of a damaged log to fd 2)."""
 
     def __enter__(self):
-        import os
-        import sys
 
         for f in (sys.stdout, sys.stderr):
             try:
@@ -284,8 +287,6 @@ class _quiet:
         self.saved = [os.dup(1), os.dup(2)]
         os.dup2(self.null, 1)
         os.dup2(self.null, 2)
-        import contextlib
-        import io
 
         self.py = [contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO())]
         for c in self.py:
@@ -293,7 +294,6 @@ class _quiet:
         return self
 
     def __exit__(self, *exc):
-        import os
 
         for c in reversed(self.py):
             c.__exit__(*exc)
@@ -322,7 +322,6 @@ def read_px4(path: Path) -> Recording:
     distance sensor, optical flow, camera events."""
     from scipy.spatial.transform import Rotation
 
-    from visnav.io.ulog import read_ulog
 
     try:
         u = read_ulog(path)

@@ -33,6 +33,7 @@ import numpy as np
 from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.io.recording import CameraInfo, Recording, RecordingError, read_camera_yaml
+from visnav.io.streams import gps_stream
 
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".tif", ".tiff")
 NADIR = FixedMount.depressed(90.0)  # optical axis = body down, image top = body forward
@@ -198,7 +199,6 @@ class PhotoRecording(Recording):
 
 def read_photos(folder: str | Path) -> PhotoRecording:
     """A folder of geotagged photos as a ``Recording`` (frames, gps; attitude / camera_attitude from DJI XMP)."""
-    from visnav.io.streams import gps_stream
 
     d = Path(folder)
     files = photo_files(d)

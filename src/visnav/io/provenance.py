@@ -15,15 +15,16 @@ import sys
 from datetime import datetime, timezone
 from functools import lru_cache
 from pathlib import Path
+from importlib.metadata import PackageNotFoundError, version
+from visnav import __version__
+from visnav.scenarios.schema import scenario_hash
 
 
 def visnav_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
 
     try:
         return version("visnav")
     except PackageNotFoundError:  # run from a source tree that was never installed
-        from visnav import __version__
 
         return __version__
 
@@ -57,7 +58,6 @@ def provenance(scenario=None, argv: list[str] | None = None) -> dict:
            "command_line": shlex.join(argv),
            "date_utc": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     if scenario is not None:
-        from visnav.scenarios.schema import scenario_hash
 
         out["scenario"] = scenario.run.name
         out["scenario_hash"] = scenario_hash(scenario)

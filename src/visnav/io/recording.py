@@ -41,6 +41,8 @@ from visnav.geometry.camera import PinholeCamera
 from visnav.geometry.mounts import FixedMount
 from visnav.measurements import (AirspeedSample, AttitudeSample, BaroSample, Frame, GpsSample, HeadingSample,
                                  ImuSample, OperatorClick, PanSample, RangeSample, TargetRangeSample, TelemetrySample)
+import csv
+from visnav.io.streams import gps_stream, heading_stream
 
 
 class RecordingError(ValueError):
@@ -108,7 +110,6 @@ def stream_of(m) -> str | None:
 # ---------------------------------------------------------------------------------------------- CSV
 def _short_row(path: Path, n: int) -> tuple[int, int] | None:
     """(line number, its column count) of the first data row of ``path`` whose column count is not ``n``."""
-    import csv
 
     with open(path, newline="") as fh:
         for i, r in enumerate(csv.reader(fh)):
@@ -454,7 +455,6 @@ def _convert(streams: dict, d: Path) -> None:
     """Alternative columns into the canonical ones: GPS in latitude / longitude (NED about the first fix;
     velocity by central differences when absent), magnetometer field vectors (tilt-compensated heading
     with attitude.csv)."""
-    from visnav.io.streams import gps_stream, heading_stream
 
     g = streams.get("gps")
     if g is not None and "n_m" not in g:

@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import numpy as np
+from visnav.geometry.frames import LocalTangentPlane
 
 
 def headings_from_mag(mag: np.ndarray, roll, pitch, declination: float = 0.0) -> np.ndarray:
@@ -29,7 +30,6 @@ def heading_stream(t, mag, att: dict, declination: float = 0.0) -> dict:
 
 def gps_stream(t, lat, lon, alt, vel=None, origin=None) -> dict:
     """``gps`` columns (NED about ``origin`` = (lat, lon, alt), default the first fix)."""
-    from visnav.geometry.frames import LocalTangentPlane
 
     t = np.asarray(t, float)
     o = origin if origin is not None else (lat[0], lon[0], alt[0])

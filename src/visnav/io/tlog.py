@@ -30,6 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from visnav.io.recording import Recording, RecordingError
+from visnav.io.recording import read_camera_yaml
+from visnav.io.streams import camera_stream, flow_stream, gps_stream, heading_stream, mag_field_stream, read_summary, sorted_stream
+from visnav.io.ulog import pressure_altitude
 
 __all__ = ["read_tlog", "tlog_records"]
 
@@ -84,10 +87,6 @@ def read_tlog(path: Path) -> Recording:
     """A MAVLink telemetry log (module docstring)."""
     from pymavlink.dialects.v20 import common
 
-    from visnav.io.recording import read_camera_yaml
-    from visnav.io.streams import (camera_stream, flow_stream, gps_stream, heading_stream, mag_field_stream,
-                                   read_summary, sorted_stream)
-    from visnav.io.ulog import pressure_altitude
 
     p = Path(path)
     try:

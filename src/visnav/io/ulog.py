@@ -39,6 +39,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import struct
+from visnav.io.streams import read_summary
 
 __all__ = ["ULogData", "read_ulog", "clean_series", "ulog_damage", "REQUIRED_TOPICS"]
 
@@ -128,7 +130,6 @@ def ulog_damage(path) -> tuple[int | None, int, int]:
     uint8 multi_id, uint16 msg_id, name). The damage is a message cut by the end of the file or a
     byte that is not a message type. Appended data (the flag-bits message's ``appended_offsets``): a
     message that runs past the next offset is the logger's unfinished one; reading goes on at the offset."""
-    import struct
 
     b = Path(path).read_bytes()
     n, pos, topics, appended = len(b), 16, set(), []
@@ -218,7 +219,6 @@ def read_ulog(path) -> ULogData:
         if t is not None:
             extra = f"; {out.gps_no_fix} more without a 3D fix" if name == "GPS" and out.gps_no_fix else ""
             parts.append(f"{name} {len(t)} ({src}{extra})")
-    from visnav.io.streams import read_summary
 
     cut = at is not None and _cut_at_end(p, at, size)
     if damaged and at is None:

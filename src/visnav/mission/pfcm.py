@@ -25,6 +25,7 @@ from visnav.guidance.pfcm import PfcmGuidance, PfcmLimits, PointHold
 from visnav.measurements import Health, NavEstimate
 from visnav.mission.integrity import IntegrityWatch
 from visnav.log_schema import register_stream
+from visnav.control.rmax_path import PathLoopGains
 
 register_stream("pfcm", **{k: ("m/s", "", d) for k, d in (
     ("v_target", "speed target v_targ = min of the three"), ("v_targ1", "accelerate / cruise / brake profile"),
@@ -87,7 +88,6 @@ def path_loop_gains(cfg, control):
     """The eq. 4.25 outer-loop gains for a ``PfcmMissionConfig``'s command limits and the controller options of
     ``control`` (``control.pfcm``): the eq. 4.26 inner roll loop with the lateral gains designed on it
     (``roll_compensator``), the lateral integral (``roll_integral``), the roll command margin."""
-    from visnav.control.rmax_path import PathLoopGains
 
     make = PathLoopGains.with_roll_compensator if control.roll_compensator else PathLoopGains
     return make(max_roll=math.radians(cfg.phi_max_deg + control.roll_margin_deg),

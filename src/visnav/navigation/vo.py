@@ -37,6 +37,7 @@ from visnav.geometry.rotations import dcm_to_euler
 from visnav.log_schema import register_stream
 from visnav.measurements import Frame, GpsSample, Health, NavCommand, NavEstimate, NavInit
 from visnav.navigation.base import CommandDispatch
+from visnav.vision.features import FeatureMatcher
 
 register_stream("vo_photo", registered=("bool", "", "registered to an earlier photo (else placed by prediction)"),
                 refs=("count", "", "earlier photos it was registered to"), inliers=("count", "", "homography inliers"),
@@ -114,7 +115,6 @@ class VONavigator(CommandDispatch):
     """Frame-only visual odometry of nadir photos, scaled and oriented by the GPS while it is allowed."""
 
     def __init__(self, camera, cfg: VOConfig | None = None, recorder=None, mount=None) -> None:
-        from visnav.vision.features import FeatureMatcher
 
         self.cfg = cfg or VOConfig()
         self.camera = camera

@@ -42,6 +42,9 @@ from visnav.navigation.integrity import (HandoverCheck, NavIntegrity, TiltCheck,
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
 from visnav.log_schema import register_stream
+from visnav.estimation.eskf import BA_
+from visnav.estimation.eskf import EskfConfig, ErrorStateKF
+from visnav.estimation.ins import NavState, StrapdownINS, euler_to_quat
 
 _NED = "NED world (origin at the scenario's home)"
 register_stream("vision_engaged", position=("m", _NED, "filter position when GPS was lost"),
@@ -112,12 +115,6 @@ class _EskfBackend:
 
     def __init__(self, t, position, velocity, euler, sigma_p=0.5, sigma_v=0.2, sigma_att_deg=1.0,
                  gate_probability=1.0):
-        try:
-            from visnav.estimation.eskf import EskfConfig, ErrorStateKF
-            from visnav.estimation.ins import NavState, euler_to_quat
-        except ImportError as exc:  # pragma: no cover - the ESKF lives in estimation/eskf.py
-            raise RuntimeError(f"filter.backend 'eskf' needs visnav.estimation.eskf ({exc}); "
-                               "use --set navigation.backend=ahrs") from None
         s = NavState(t=float(t), position=np.asarray(position, float).copy(),
                      velocity=np.asarray(velocity, float).copy(), quat=euler_to_quat(euler))
         sa = math.radians(sigma_att_deg)
@@ -146,7 +143,6 @@ class _EskfBackend:
     def open_accel_bias(self, sigma: float, noise: float) -> None:
         """An accelerometer fault flagged (issue #30): the bias states are opened by ``sigma`` [m/s^2] and follow
         a random walk of ``noise`` from now on (they learn the faulty bias, and its end)."""
-        from visnav.estimation.eskf import BA_
 
         self.kf.P[BA_, BA_] += np.eye(3) * sigma * sigma
         self.kf.retune(accel_bias_noise=max(self.kf.cfg.accel_bias_noise, noise))
@@ -438,25 +434,13 @@ class WitasNavigator(CommandDispatch):
 
     # ------------------------------------------------------------------ INS-only comparison track
     def _init_ins_only(self, t, p, v, e) -> None:
-        try:
-            from visnav.estimation.ins import NavState, StrapdownINS, euler_to_quat
-
-            self.ins_only = ("ins", StrapdownINS(earth_rotation=False, gravity=9.81),
-                             NavState(t=float(t), position=p.copy(), velocity=v.copy(), quat=euler_to_quat(e)))
-        except ImportError:  # no strapdown INS available: integrate on the AHRS attitude
-            pf = PositionFilter()
-            pf.reset(t, p, v)
-            self.ins_only = ("ahrs", pf, None)
+        self.ins_only = (StrapdownINS(earth_rotation=False, gravity=9.81),
+                         NavState(t=float(t), position=p.copy(), velocity=v.copy(), quat=euler_to_quat(e)))
 
     def _ins_only_step(self, t, acc, gyr, dt, ahrs_euler) -> None:
-        kind, a, b = self.ins_only
-        if kind == "ins":
-            self.ins_only = (kind, a, a.propagate(b, acc, gyr, dt))
-            pos = self.ins_only[2].position
-        else:
-            if ahrs_euler is not None:
-                a.predict(t, accel_ned(euler_to_dcm(ahrs_euler), acc))
-            pos = a.p
+        ins, state = self.ins_only
+        self.ins_only = (ins, ins.propagate(state, acc, gyr, dt))
+        pos = self.ins_only[1].position
         if t - self._ins_log_t >= 0.1 - 1e-6:
             self._ins_log_t = t
             self.recorder("ins_only", t, position=pos.copy())

@@ -10,6 +10,9 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from visnav.scenarios.base import _M
+from visnav.world.deck import validate_lights
+from visnav.geometry.camera import PinholeCamera
+from visnav.estimation.deck import camera_rotation
 
 
 #: lens distortion of eq. 5.6-5.7 in OpenCV's rational order (k1, k2, p1, p2, k3, k4, k5, k6)
@@ -31,7 +34,6 @@ class DeckWorldConfig(_M):
     @field_validator("lights_m")
     @classmethod
     def _lights(cls, v):
-        from visnav.world.deck import validate_lights
 
         validate_lights(v)
         return v
@@ -81,7 +83,6 @@ class DeckCameraConfig(_M):
 
     def pinhole(self):
         """The camera's intrinsics (``geometry.camera.PinholeCamera``), with eq. 5.6-5.7 distortion if enabled."""
-        from visnav.geometry.camera import PinholeCamera
 
         dist = DIST_EQ_5_6_5_7 if self.distortion else (0.0,) * 8
         return PinholeCamera(self.width_px, self.height_px, self.focal_px, self.focal_px, (self.width_px - 1) / 2,
@@ -89,7 +90,6 @@ class DeckCameraConfig(_M):
 
     def rotation(self) -> np.ndarray:
         """T_cam: body FRD -> camera axes (eq. 5.9)."""
-        from visnav.estimation.deck import camera_rotation
 
         return camera_rotation(np.radians(self.depression_deg), np.radians(self.yaw_deg))
 

@@ -10,6 +10,7 @@ from typing import Literal
 from pydantic import Field
 
 from visnav.scenarios.base import _M
+from visnav.sensors.autopilot import Ahrs, AutopilotImu, Pitot
 
 
 class AhrsConfig(_M):
@@ -40,7 +41,6 @@ class PitotConfig(_M):
 def build_autopilot_sensors(sensors, rng) -> list:
     """[Ahrs, AutopilotImu, Pitot] of the scenario's ``sensors`` (``ahrs``, ``imu``, ``pitot``), each with its own
     generator from ``rng`` (a list of 3)."""
-    from visnav.sensors.autopilot import Ahrs, AutopilotImu, Pitot
 
     a, i, p = sensors.ahrs, sensors.imu, sensors.pitot
     return [Ahrs(rng[0], a.rate_hz, a.noise_deg, a.bias_deg, a.yaw_noise_deg, a.yaw_bias_deg),

@@ -20,6 +20,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from visnav.scenarios.base import _M
+from visnav.estimation.integrity import IntegrityConfig
 
 
 class IntegrityBlock(_M):
@@ -33,7 +34,6 @@ class IntegrityBlock(_M):
                               "of the last this-many horizontal updates (reacts within a few fixes; 0: off)")
 
     def monitor_config(self):
-        from visnav.estimation.integrity import IntegrityConfig
 
         return IntegrityConfig(window=self.window, alpha=self.alpha, max_rejected_share=self.max_rejected_share,
                                probability=self.probability, alert_limit_m=self.alert_limit_m,

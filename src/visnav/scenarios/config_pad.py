@@ -15,6 +15,7 @@ from pydantic import Field, model_validator
 
 from visnav.scenarios.base import _M
 from visnav.scenarios.config_integrity import PadIntegrityConfig
+from visnav.geometry.pad import PadLayout
 
 
 class PadGeometryConfig(_M):
@@ -31,7 +32,6 @@ class PadGeometryConfig(_M):
 
     @model_validator(mode="after")
     def _layout(self):
-        from visnav.geometry.pad import PadLayout
 
         PadLayout(tuple(self.legs_m), tuple(self.ring_ratio), tuple(self.inner_ratio))
         return self

@@ -43,6 +43,8 @@ from visnav.scenarios.config_pad import PadCameraConfig, PadFilterConfig, PadGeo
 from visnav.scenarios.config_sensors import BaroConfig, CompassConfig, GpsConfig
 from visnav.scenarios.config_witas import WitasFilterConfig, WitasMapConfig, WitasMissionConfig
 from visnav.scenarios.config_integrity import FaultConfig, PalaceIntegrityConfig, check_faults_apply
+import hashlib
+from visnav.guidance.hermite import HermitePath
 
 BUILTIN_DIR = Path(__file__).resolve().parent
 
@@ -301,7 +303,6 @@ class PfcmMissionConfig(_M):
     @field_validator("tangents")
     @classmethod
     def _waypoint_path(cls, tangents, info):
-        from visnav.guidance.hermite import HermitePath
 
         d = info.data
         if d.get("path") != "waypoints" or "waypoints_ned_m" not in d:
@@ -321,7 +322,6 @@ class PfcmMissionConfig(_M):
     @field_validator("segments")
     @classmethod
     def _segment_path(cls, segments, info):
-        from visnav.guidance.hermite import HermitePath
 
         if info.data.get("path") != "segments":
             return segments
@@ -720,7 +720,6 @@ def to_toml(sc: Scenario) -> str:
 def scenario_hash(sc: Scenario, *, ignore_seed: bool = False) -> str:
     """SHA-256 (hex) of the fully resolved scenario's canonical TOML: the identity of a configuration
     (provenance of a run; the resume key of a campaign, there with ``ignore_seed=True``)."""
-    import hashlib
 
     if ignore_seed:
         sc = sc.model_copy(update={"run": sc.run.model_copy(update={"seed": 0})})

@@ -37,6 +37,7 @@ import numpy as np
 
 from visnav.measurements import AttitudeSample, Frame, GpsSample, ImuSample, RangeSample
 from visnav.sensors.camera import PendingFrame
+from visnav.world.maps import GeoImage
 
 #: kind -> the sensor it targets by default (None: not a sensor fault)
 TARGET = {"camera_blackout": "camera", "camera_frozen": "camera", "camera_brightness": "camera",
@@ -257,7 +258,6 @@ def inject_faults(sensors: dict, world, faults, rng: np.random.Generator) -> dic
 def water_area(geo, centre_ne, size_ne):
     """A copy of the ``GeoImage`` with a ``size_ne`` rectangle at ``centre_ne`` replaced by still water
     (the rural map's pond grey with a smooth 40 m shading: no texture to track or register)."""
-    from visnav.world.maps import GeoImage
 
     r = geo.resolution_m
     h, w = geo.shape
@@ -276,7 +276,6 @@ def water_area(geo, centre_ne, size_ne):
 
 def shifted(geo, offset_ne):
     """The ``GeoImage`` georeferenced ``offset_ne`` metres off (its content claims to lie there)."""
-    from visnav.world.maps import GeoImage
 
     out = GeoImage(geo.image, geo.north0 + offset_ne[0], geo.east0 + offset_ne[1], geo.resolution_m,
                    name=geo.name + "-offset")

@@ -12,6 +12,7 @@ from typing import Callable
 import numpy as np
 
 from visnav.sensors.base import TruthHistory
+from visnav.navigation.integrity import STATE_CODES
 
 
 @dataclass
@@ -161,7 +162,6 @@ class IntegrityStatus:
     step, CONDOR at 10 Hz)."""
 
     def __init__(self, record) -> None:
-        from visnav.navigation.integrity import STATE_CODES
 
         self.record, self.codes, self.code = record, STATE_CODES, None  # the first state is an event too
 

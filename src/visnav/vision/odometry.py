@@ -26,6 +26,7 @@ import numpy as np
 
 from visnav.vision.homography import ransac_homography
 from visnav.vision.klt import KltTracker
+from visnav.vision.homography import normalized_dlt
 
 __all__ = ["displacement_from_homography", "VisualOdometry", "OdometryStep"]
 
@@ -100,7 +101,6 @@ class VisualOdometry:
             res = ransac_homography(pairs.prev, pairs.curr, self.sigma_px, rng=self.rng)
             H, n_in = res.H, res.n_inliers
         else:
-            from visnav.vision.homography import normalized_dlt
 
             H, n_in = normalized_dlt(pairs.prev, pairs.curr), n
         if H is None or n_in < self.min_inliers:

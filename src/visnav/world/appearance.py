@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+from visnav.world.maps import GeoImage
 
 __all__ = ["ANOTHER_DAY", "another_day", "appearance_change", "coherence", "relief_weight"]
 
@@ -112,7 +113,6 @@ def another_day(geo, rng: np.random.Generator, scale_m: float = ANOTHER_DAY["sca
     """A GeoImage's ground on another day (same geo-reference); ``scale_m`` <= 0: ``geo`` itself."""
     if scale_m <= 0:
         return geo
-    from visnav.world.maps import GeoImage
 
     r = geo.resolution_m
     out = GeoImage(appearance_change(geo.image, scale_m / r, rng, keep, relief_level, shift_m / r, corr_m / r),

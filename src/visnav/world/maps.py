@@ -13,6 +13,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import json
+import tempfile
+from visnav.geometry.frames import LocalTangentPlane
 
 __all__ = ["GeoImage", "degrade_reference"]
 
@@ -34,16 +37,7 @@ def _as_points(x, name: str) -> tuple[np.ndarray, tuple[int, ...]]:
 
 def _geodetic_to_ne(lat_deg, lon_deg, origin: tuple[float, float]) -> np.ndarray:
     """North, east [m] of geodetic points (h = 0) in the tangent plane at ``origin``."""
-    try:
-        from visnav.geometry.frames import LocalTangentPlane
-
-        ned = LocalTangentPlane(origin[0], origin[1], 0.0).geodetic_to_ned(lat_deg, lon_deg, 0.0)
-        ned = np.asarray(ned, dtype=float)
-    except ImportError:  # pragma: no cover - frames.py is part of the package
-        import pymap3d
-
-        n, e, d = pymap3d.geodetic2ned(lat_deg, lon_deg, 0.0, origin[0], origin[1], 0.0)
-        ned = np.stack(np.broadcast_arrays(n, e, d), axis=-1)
+    ned = np.asarray(LocalTangentPlane(origin[0], origin[1], 0.0).geodetic_to_ned(lat_deg, lon_deg, 0.0), dtype=float)
     return ned[..., :2]
 
 
@@ -350,7 +344,6 @@ def _check_sidecar(path: Path, world_file: Path, wf: tuple, shape: tuple[int, in
     crs = "geodetic" if _is_geodetic(a, e, c, f) else "projected"
     side = path.with_suffix(".json")
     if side.is_file():
-        import json
 
         try:
             meta = json.loads(side.read_text())
@@ -394,7 +387,6 @@ def _load_geotiff(cls, path: Path, origin) -> GeoImage:
     except ImportError:
         raise ValueError(f"{path}: reading GeoTIFF needs rasterio (pip install rasterio), "
                          "or give a PNG/JPEG with a world file") from None
-    import tempfile
 
     with rasterio.open(path) as src:
         band = src.read(1)

@@ -7,6 +7,8 @@ rebuild the same one.
 from __future__ import annotations
 
 import numpy as np
+from visnav.world.maps import GeoImage, degrade_reference
+from visnav.world.rural import rural_map
 
 
 def fit_loop(cfg_path, extent, footprint_m: float) -> tuple[float, float, float, tuple[float, float]]:
@@ -27,8 +29,6 @@ def make_ground(path, map_cfg, seed: int, camera):
     it (sizes, radius, centre); ``camera``: the scenario's ``sensors.camera`` (its footprint keeps the loop's view on
     the map).
     Deterministic in ``seed`` (the report rebuilds it to draw the tracks on the map)."""
-    from visnav.world.maps import GeoImage
-    from visnav.world.rural import rural_map
 
     pc, cc, mc = path, camera, map_cfg
     footprint = cc.height * pc.altitude_m / cc.focal_px
@@ -51,7 +51,6 @@ def mission_rngs(seed: int) -> list[np.random.Generator]:
 
 def reference_map(mc, ground):
     """The navigator's degraded reference map of the world raster ``ground`` (``mc``: ``world.witas_map``)."""
-    from visnav.world.maps import degrade_reference
 
     return degrade_reference(ground, mc.reference_resolution_m, mc.reference_gain, mc.reference_offset,
                              mc.reference_gamma, mc.reference_blur_m)
