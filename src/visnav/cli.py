@@ -42,9 +42,9 @@ def _fail(message, code: int = 2) -> NoReturn:
 
 
 def _print_json(obj) -> None:
-    from visnav.app.runs import _jsonable
+    from visnav.io.json_values import jsonable
 
-    print(json.dumps(_jsonable(obj), indent=2))
+    print(json.dumps(jsonable(obj), indent=2))
 
 
 def _version(value: bool) -> None:
@@ -441,7 +441,7 @@ def metrics(
 ) -> None:
     """Recompute a run's metrics from its log."""
     from visnav.analysis.run_metrics import RunDirError, from_run_dir
-    from visnav.app.runs import _jsonable
+    from visnav.io.json_values import jsonable
 
     try:
         m = from_run_dir(run_dir)
@@ -449,7 +449,7 @@ def metrics(
         _fail(exc)
     if out:
         try:
-            Path(out).write_text(json.dumps(_jsonable(m), indent=2) + "\n")
+            Path(out).write_text(json.dumps(jsonable(m), indent=2) + "\n")
         except OSError as exc:
             _fail(f"cannot write {out}: {exc}")
     if json_:

@@ -39,6 +39,7 @@ from visnav.geometry.rotations import euler_to_dcm
 from visnav.io.recording import STREAMS, read_csv
 import itertools
 from visnav.vision.frame_rotation import frame_rotations
+from visnav.io.json_values import jsonable
 from html import escape
 
 __all__ = ["run_check", "camera_imu", "CheckResult", "write_check"]
@@ -599,25 +600,11 @@ def _plots(res: CheckResult) -> list[tuple[str, str]]:
     return figs
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return float(x) if math.isfinite(float(x)) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    return x
-
-
 def write_check(res: CheckResult, out_dir: Path, title: str) -> dict:
     """``check.json`` (the summary keys plus the table) and ``check.html`` (table and plots)."""
 
     out_dir.mkdir(parents=True, exist_ok=True)
-    doc = _jsonable({**res.summary, "checks": [dict(zip(("check", "status", "measured", "expected"), r))
+    doc = jsonable({**res.summary, "checks": [dict(zip(("check", "status", "measured", "expected"), r))
                                                for r in res.rows]})
     (out_dir / "check.json").write_text(json.dumps(doc, indent=2))
     colour = {OK: "#2a2", WARN: "#c80", PROBLEM: "#c22", NA: "#888"}

@@ -23,7 +23,7 @@ from visnav.analysis.check import camera_imu
 from visnav.analysis.trajectory_eval import Trajectory, TrajectoryError, evaluate
 from visnav.analysis.trajectory_export import write_tum_file
 from visnav.app.navigators import make_navigator, spec, NAVIGATORS, stream_table
-from visnav.app.runs import _jsonable
+from visnav.io.json_values import jsonable
 import tomllib
 from visnav.scenarios.schema import apply_overrides, load_scenario, validate, to_toml
 from visnav.world.maps import GeoImage
@@ -409,7 +409,7 @@ def write_replay(result: ReplayResult, out_dir: Path, report: bool = True, title
 
     result.log.to_hdf5(out_dir / "log.h5", attrs={"replay": 1})
     (out_dir / "scenario.toml").write_text(to_toml(result.scenario))
-    (out_dir / "metrics.json").write_text(json.dumps(_jsonable(result.metrics), indent=2) + "\n")
+    (out_dir / "metrics.json").write_text(json.dumps(jsonable(result.metrics), indent=2) + "\n")
     est, ref = trajectories(result.log, result.frame)
     if est is not None:
         write_tum_file(out_dir / "estimate.tum", est, result.frame)

@@ -15,6 +15,7 @@ from visnav.analysis.outcome import apply_outcome
 from visnav.io.provenance import provenance
 from visnav.io.recording import COMMANDS, STREAMS, TRUTH
 from visnav.analysis.report import write_report
+from visnav.io.json_values import jsonable
 
 # every file a run writes (``--force`` removes them first so that none is left from an earlier run)
 RUN_FILES = ("scenario.toml", "metrics.json", "log.h5", "truth.tum", "estimate.tum", "report.html")
@@ -107,21 +108,6 @@ def new_run_dir(name: str, out: str | Path | None = None, force: bool = False) -
     return prepare_out_dir(d)
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        v = float(x)
-        return None if math.isnan(v) or math.isinf(v) else v
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
 def write_run(result, out_dir: Path, report: bool = True) -> Path:
     """Write everything a run produced; each piece is written even if a later one fails. An
     interrupted run (Ctrl-C) is written as far as it got, ``"interrupted": true`` in metrics.json."""
@@ -133,7 +119,7 @@ def write_run(result, out_dir: Path, report: bool = True) -> Path:
     if getattr(result, "interrupted", False):
         metrics["interrupted"] = True
     result.metrics = apply_outcome(metrics, log, sc, bool(getattr(result, "interrupted", False)))
-    (out_dir / "metrics.json").write_text(json.dumps(_jsonable({**metrics, "provenance": prov}), indent=2) + "\n")
+    (out_dir / "metrics.json").write_text(json.dumps(jsonable({**metrics, "provenance": prov}), indent=2) + "\n")
     log.to_hdf5(out_dir / "log.h5", attrs={"seed": sc.run.seed,
                                            **{k: "" if v is None else v for k, v in prov.items()}})
     frame = tum_frame(sc)
