@@ -27,7 +27,14 @@ def figures(monkeypatch):
         made.append(fig)
         return f"fig{len(made) - 1}"
 
-    monkeypatch.setattr(report, "_fig_to_img", keep)
+    import sys
+
+    import visnav.analysis.condor_report, visnav.analysis.deck_report, visnav.analysis.witas_metrics  # noqa: E401, F401
+
+    original = report._fig_to_img  # every report module that took it at import
+    for mod in [m for name, m in sys.modules.items() if name.startswith("visnav.")]:
+        if getattr(mod, "_fig_to_img", None) is original:
+            monkeypatch.setattr(mod, "_fig_to_img", keep)
     yield made
     for f in made:
         plt.close(f)

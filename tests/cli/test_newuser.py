@@ -338,7 +338,7 @@ def test_the_report_page_has_the_verdict_above_the_metrics_table(tmp_path):
 def test_the_witas_pmf_map_panel_has_a_legend(monkeypatch):
     import numpy as np
 
-    import visnav.analysis.report as report
+    import visnav.analysis.witas_metrics as witas_metrics
     from visnav.analysis.witas_metrics import plots
     from visnav.scenarios.schema import load_scenario
 
@@ -351,7 +351,7 @@ def test_the_witas_pmf_map_panel_has_a_legend(monkeypatch):
         figs.append(fig)
         raise Enough
 
-    monkeypatch.setattr(report, "_fig_to_img", keep)
+    monkeypatch.setattr(witas_metrics, "_fig_to_img", keep)
     t = np.linspace(0.0, 10.0, 11)
     pos = np.column_stack([t * 5.0, t * 2.0, -60.0 + 0 * t])
     log = {"truth": {"t": t, "position": pos},

@@ -340,7 +340,7 @@ def test_the_manual_level_hover_damps_the_vertical_speed_the_filter_sees():
     sc = load_scenario("deck-static")
     assert sc.mission.start.pilot == "imu"
     m = DeckMission(sc.mission, _StubNav(), hold_point=[-1.0, 0.0, -1.5], gear_offset=0.17, period_s=0.02,
-                    recorder=FlightLog().record, filter_cfg=sc.navigation)
+                    recorder=FlightLog().record, filter_cfg=sc.navigation, deck=sc.world.deck, gains=sc.control.deck)
     x = np.r_[1.0, 0.0, 1.5, np.zeros(3), 0.0, 0.0, 0.3, np.zeros(3)]  # deck 1.5 m below, receding at 0.3 m/s
     est = DeckEstimate(t=0.0, state=x, covariance=np.eye(12), gyro=np.zeros(3), accel=np.array([0.0, 0.0, -9.81]),
                        roll=0.0, pitch=0.0)
