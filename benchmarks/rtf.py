@@ -19,7 +19,11 @@ import numpy as np
 
 def run(name: str, seed: int = 1, dump: str | None = None, profile: bool = False) -> dict:
     from visnav.scenarios.schema import load_scenario
-    from visnav.app.missions import make_simulation
+
+    try:
+        from visnav.app.missions import make_simulation
+    except ImportError:  # a checkout from before the run assembly moved to visnav.app (issue #31)
+        from visnav.sim.missions import make_simulation
 
     from visnav.sensors import camera
 
