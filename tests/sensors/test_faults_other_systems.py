@@ -126,3 +126,16 @@ def test_a_gust_reaches_the_vehicle_environment(scenario):
         e0 = clean.parts.hooks.environment(k_, k_ * clean.dt).wind_ned
         e1 = faulted.parts.hooks.environment(k_, k_ * clean.dt).wind_ned
         np.testing.assert_allclose(np.asarray(e1) - np.asarray(e0), [0.0, -expect, 0.0], atol=1e-9)
+
+
+def test_a_camera_clock_jump_flies_through_condor():
+    """A jumped frame arrives when it is taken (stamped ahead): the CONDOR loop's logger compares it with the
+    truth of the step it arrives in, not of its stamp (which the one-step truth does not hold: it raised)."""
+    sc = load_scenario("condor-orbit", ["run.duration_s=8",
+                                        "faults=[{kind='clock_jump', sensor='camera', start_s=4, duration_s=2, jump_s=0.2}]"])
+    res = Simulation(sc).run()
+    assert res.error is None
+    vis = res.log.get("vision")
+    t = np.asarray(vis["t"], float)
+    ahead = t[(t > 4.0) & (t < 6.3)]
+    assert ahead.size > 10 and np.all(ahead >= 4.2 - 1e-9)  # the stamps in the window are the jumped ones

@@ -84,7 +84,9 @@ class Operator:
         if not isinstance(m, Frame):
             return
         rec, cam = self.nav.last_vision, self.camera
-        s = self.truth(m.t)
+        # the truth when the frame was taken: now (CONDOR's frames arrive in the step they are taken); not at its
+        # stamp, which a camera clock that jumped puts ahead (sensors/faults: clock_jump)
+        s = self.truth(t)
         _, tilt, roll = self.gimbal.camera_attitude(s.euler)
         r_true = float(math.hypot(*(s.position[:2] - self.target[:2])))
         self.record("vision", m.t, radius=rec["radius"], true_radius=r_true, valid=rec["valid"],
