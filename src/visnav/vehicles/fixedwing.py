@@ -28,6 +28,7 @@ import numpy as np
 
 from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
 from visnav.vehicles.base import Environment
+from visnav.vehicles.kernels import fixedwing_rk4
 from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
 G = 9.81
@@ -158,6 +159,9 @@ class FixedWingModel:
     params: FixedWingParams = field(default_factory=FixedWingParams)
     x: np.ndarray = field(default_factory=lambda: np.zeros(12))
     t: float = 0.0
+    #: step through ``vehicles/kernels.fixedwing_rk4`` (the same equations on floats, held to this module's
+    #: ``derivatives`` at 1e-12 by the tests); False: the readable RK4 below
+    kernel: bool = True
 
     def __post_init__(self) -> None:
         self._gam = self.params.gammas()
@@ -199,20 +203,24 @@ class FixedWingModel:
         if not isinstance(environment, Environment):
             raise TypeError(f"FixedWingModel.step takes a vehicles.base.Environment, got {type(environment).__name__}")
         w = np.asarray(environment.wind_ned, float)
-        if not np.all(np.isfinite(w)):
+        if not np.isfinite(w).all():
             raise ValueError(f"wind must be finite, got {environment.wind_ned}")
 
         def f(x):
             return derivatives(self.params, x, uc, w, self._gam)[0]
 
         x = self.x
-        k1 = f(x)
-        k2 = f(x + 0.5 * dt * k1)
-        k3 = f(x + 0.5 * dt * k2)
-        k4 = f(x + dt * k3)
-        x1 = x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        if self.kernel:
+            u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
+            x1 = np.array(fixedwing_rk4(self.params, self._gam, _lift_drag, x.tolist(), u4, w.tolist(), dt))
+        else:
+            k1 = f(x)
+            k2 = f(x + 0.5 * dt * k1)
+            k3 = f(x + 0.5 * dt * k2)
+            k4 = f(x + dt * k3)
+            x1 = x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         x1[8] = (x1[8] + math.pi) % (2 * math.pi) - math.pi
-        if not np.all(np.isfinite(x1)):
+        if not np.isfinite(x1).all():
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
         self.x = x1
         self.t += dt
