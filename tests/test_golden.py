@@ -5,7 +5,8 @@ Tolerance, per metric: 2 % of the stored value, or an absolute floor in the metr
 0.05 s, 0.01 m/s, 0.05 %, 0.05 px), whichever is larger. Why: the same code on another CPU (libm, BLAS, SIMD)
 changes a closed-loop run in the last digits, and a mode switch or a gate that flips on such a difference moves a
 figure by far less than 2 %; a change of what a result means (a filter that is worse, a controller that overshoots)
-moves it by more. Outcomes (safe / unsafe / ...) and booleans must be equal. The default run flies three quick
+moves it by more. Outcomes (safe / unsafe / ...) and booleans must be equal. A seed whose run flips between two
+branches on last-digit changes stores both (``also``, with ``why``): witas-homing seed 4. The default run flies three quick
 scenarios at seed 1; ``-m slow`` flies every stored scenario and seed.
 """
 
@@ -52,6 +53,23 @@ def differences(stored: dict, now: dict) -> list[str]:
     return out
 
 
+def matches(stored: dict, now: dict) -> list[str]:
+    """``differences`` against the stored figures, or against any of the alternatives a seed with two outcomes
+    stores in ``also`` (with ``why``: a seed whose run flips between two branches on last-digit changes, each
+    branch reproduced by a perturbation of 1e-9 or less); the main entry's differences when none matches."""
+    main = {k: v for k, v in stored.items() if k not in ("also", "why")}
+    first = differences(main, now)
+    if first and any(not differences(alt, now) for alt in stored.get("also", [])):
+        return []
+    return first
+
+
+def test_a_seed_with_two_stored_outcomes_matches_either():
+    stored = {"drift_pct": 0.36, "also": [{"drift_pct": 1.18}], "why": "two branches"}
+    assert matches(stored, {"drift_pct": 0.361}) == [] and matches(stored, {"drift_pct": 1.179}) == []
+    assert matches(stored, {"drift_pct": 0.8}) == ["drift_pct: 0.8, stored 0.36 (tolerance 0.05)"]
+
+
 def test_the_comparison_sees_a_change_of_meaning():
     stored = {"touchdown_error_m": 0.30, "outcome": "safe", "landed": True}
     assert differences(stored, {"touchdown_error_m": 0.305, "outcome": "safe", "landed": True}) == []
@@ -78,9 +96,9 @@ def test_every_builtin_scenario_has_golden_figures():
 
 @pytest.mark.parametrize("scenario,seed", _cases(quick=True))
 def test_golden_figures_quick(scenario, seed):
-    assert differences(_stored()[scenario][seed], _script().headline(scenario, int(seed))) == []
+    assert matches(_stored()[scenario][seed], _script().headline(scenario, int(seed))) == []
 
 
 @pytest.mark.parametrize("scenario,seed", _cases(quick=False))
 def test_golden_figures(scenario, seed):
-    assert differences(_stored()[scenario][seed], _script().headline(scenario, int(seed))) == []
+    assert matches(_stored()[scenario][seed], _script().headline(scenario, int(seed))) == []

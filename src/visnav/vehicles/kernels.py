@@ -73,3 +73,34 @@ def fixedwing_rk4(p, gam, lift_drag, x, u, wind, dt: float) -> list[float]:
     k4 = f([a + dt * b for a, b in zip(x, k3)])
     w = dt / 6.0
     return [a + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4)]
+
+
+def rmax_derivatives(P, y, att, wind) -> list[float]:
+    """``rmax.RmaxModel._deriv(y, att, wind)[0]`` on floats (seed 002 eq. 3.9 with the thrust of eq. 3.10):
+    d/dt of (u v w N E D ψ w_yacs); ``P`` the model's ``RmaxParams``, ``att`` (φ, θ, p, q, r, ΔaZ)."""
+    u, v, w, _, _, _, psi, w_yacs = y
+    phi, theta, p, q, r, az = att
+    wn, we, wd = wind
+    cf, sf, ct, st = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _dcm_rows(cf, sf, ct, st, math.cos(psi), math.sin(psi))
+    ua = u - (c00 * wn + c10 * we + c20 * wd)  # body velocity relative to the air
+    va = v - (c01 * wn + c11 * we + c21 * wd)
+    wa = w - (c02 * wn + c12 * we + c22 * wd)
+    w_hold = w_yacs if P.heave_damping == "yacs" else 0.0
+    fx, fy, fz = P.Xu * ua, P.Yv * va, P.Zw * (wa - w_hold) - P.g * (1.0 + az)
+    return [fx - (q * w - r * v) + P.g * c20,  # eq. 3.9: f − ω × v + C_nb (0, 0, g)
+            fy - (r * u - p * w) + P.g * c21,
+            fz - (p * v - q * u) + P.g * c22,
+            c00 * u + c01 * v + c02 * w, c10 * u + c11 * v + c12 * w, c20 * u + c21 * v + c22 * w,
+            (q * sf + r * cf) / ct,  # ψ̇, eq. 3.7
+            -P.g * az]
+
+
+def rmax_rk4(P, y, a0, ah, a1, wind, dt: float) -> list[float]:
+    """``RmaxModel.step``'s RK4 of :func:`rmax_derivatives` with the attitude at t, t + dt/2 and t + dt."""
+    h = 0.5 * dt
+    k1 = rmax_derivatives(P, y, a0, wind)
+    k2 = rmax_derivatives(P, [a + h * b for a, b in zip(y, k1)], ah, wind)
+    k3 = rmax_derivatives(P, [a + h * b for a, b in zip(y, k2)], ah, wind)
+    k4 = rmax_derivatives(P, [a + dt * b for a, b in zip(y, k3)], a1, wind)
+    return [a + dt * (b1 + 2.0 * b2 + 2.0 * b3 + b4) / 6.0 for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]

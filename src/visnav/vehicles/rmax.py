@@ -32,6 +32,7 @@ from scipy import signal
 from visnav.geometry.rotations import cross3, euler_to_dcm3
 from visnav.measurements import VehicleState, YacsCommand
 from visnav.vehicles.base import Environment
+from visnav.vehicles.kernels import rmax_rk4
 
 #: channel -> (numerator, denominator), highest power first; units in the module docstring.
 RMAX_TRANSFER_FUNCTIONS: dict[str, tuple[np.ndarray, np.ndarray]] = {
@@ -176,6 +177,9 @@ class RmaxModel:
                  initial: VehicleState | None = None, *, position: ArrayLike = (0.0, 0.0, 0.0),
                  yaw: float = 0.0, t0: float = 0.0) -> None:
         self.params = params if params is not None else RmaxParams()
+        #: step through ``vehicles/kernels.rmax_rk4`` (eq. 3.9 on floats, held to ``_deriv`` at 1e-12 by the tests);
+        #: False: the readable RK4 on ``_deriv``
+        self.kernel = True
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
         self.dt = float(dt)
@@ -291,6 +295,12 @@ class RmaxModel:
         if self.on_ground:  # skids hold the position; attitude still follows eq. 3.4
             y1 = y.copy()
             y1[6] += dt * (_psi_rate(a0) + 4 * _psi_rate(ah) + _psi_rate(a1)) / 6.0
+        elif self.kernel:  # the same RK4 on floats (vehicles/kernels, held to _deriv by tests/vehicles/test_kernels)
+            y1 = np.array(rmax_rk4(self.params, y.tolist(), a0, ah, a1, w.tolist(), dt))
+            vd = float(euler_to_dcm3(a1[0], a1[1], y1[6])[2] @ y1[0:3])
+            if y1[5] >= 0.0 and vd > 0.0:
+                self.touchdown_speed = float(vd)
+                self.on_ground = True
         else:  # RK4, the attitude at t, t + dt/2 and t + dt from the exact TF states
             k1 = self._deriv(y, a0, w)[0]
             k2 = self._deriv(y + 0.5 * dt * k1, ah, w)[0]
