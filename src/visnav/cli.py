@@ -76,7 +76,6 @@ class RunProgress:
     every_s = 10.0
 
     def __init__(self, name: str, total_s: float, con: Console, clock=None, unit: str = "s"):
-
         self.name, self.total, self.con, self.unit = name, float(total_s), con, unit
         self.clock = clock or time.perf_counter
         self._bar = self._task = None
@@ -174,7 +173,6 @@ def run(
         err_console.print(f"--sil: starting `visnav bridge` and waiting for it, then {sc.run.duration_s:g} s of real "
                           "time", soft_wrap=True)
     with RunProgress(sc.run.name, sc.run.duration_s, err_console) as prog:
-
         def progress(t, total):
             prog.update(t, f"mode {sim.mission.mode}")
 

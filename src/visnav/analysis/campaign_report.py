@@ -20,7 +20,6 @@ def _as_number(v):
 
 
 def write_campaign_report(out: Path, rows: list[dict], summary: dict, grid_keys: list[str], scenario: str) -> None:
-
     import matplotlib
 
     matplotlib.use("Agg")

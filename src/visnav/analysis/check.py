@@ -79,7 +79,6 @@ def _attitude(rec):
 
 
 def _signed_permutations():
-
     for p in itertools.permutations(range(3)):
         for s in itertools.product((1, -1), repeat=3):
             M = np.zeros((3, 3))

@@ -26,7 +26,6 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
     target = tgt["position"][0]
     geo = None
     if scenario is not None:
-
         geo = mission_map(scenario.world.geo_map)
     tr = log.get("truth")
     if tr and geo is not None:
@@ -85,7 +84,6 @@ def plots(log, scenario=None) -> list[tuple[str, str]]:
         out.append(("Sample and RLS error vs sample count (Figs. 7.9, 7.11)", _fig_to_img(fig)))
         plt.close(fig)
     if geo is not None:
-
         try:
             m = scenario.world.geo_map  # scored under the appearance change this flight's reference had
             rq = registrability_map(geo, scenario.mission.altitude_m, unstable_m=m.change_m,

@@ -42,7 +42,6 @@ def vision_velocity(vis: dict, max_gap_s: float = 0.11) -> tuple[np.ndarray, np.
 
 
 def pad_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
-
     tr, est = log.get("truth"), log.get("estimate")
     out: dict = {}
     sim_time = float(tr["t"][-1]) if tr else 0.0

@@ -88,7 +88,6 @@ def _num(v) -> float:
 
 
 def read_csv(path) -> list[dict]:
-
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"no such file: {p}")
@@ -218,7 +217,6 @@ def drift_figure(table: list[dict]):
 
 
 def noise_figure(table: list[dict], focal_px: float, depression_deg: float = 60.0):
-
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4))
     rr = np.linspace(2.0, 70.0, 60)
@@ -293,7 +291,6 @@ def bode_figure(frfs: dict, altitude_m: float, min_coherence: float = 0.6):
 
 # --------------------------------------------------------------------------- the page
 def _html_table(header: list[str], rows: list[list[str]]) -> str:
-
     h = "".join(f"<th>{html.escape(c)}</th>" for c in header)
     b = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
     return f"<table><tr>{h}</tr>{b}</table>"

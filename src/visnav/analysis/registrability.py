@@ -193,7 +193,6 @@ def write_registrability(reg: Registrability, geo, out_dir: Path, stem: str = "r
     np.save(out_dir / f"{stem}.npy", reg.score)
     pts = np.array([[reg.north0, reg.east0], [reg.north0, reg.east0 + reg.cell_m], [reg.north0 - reg.cell_m, reg.east0]])
     if geo.origin_geodetic is not None:
-
         ltp = LocalTangentPlane(geo.origin_geodetic[0], geo.origin_geodetic[1], 0.0)
         lat, lon, _ = ltp.ned_to_geodetic(np.column_stack([pts, np.zeros(3)]))
         x, y = np.asarray(lon, float), np.asarray(lat, float)

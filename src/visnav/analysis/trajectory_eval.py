@@ -105,7 +105,6 @@ _CSV_Q = ("qx", "qy", "qz", "qw")
 
 
 def _read_csv(path: Path) -> Trajectory:
-
     with open(path, newline="") as fh:
         header = next(csv.reader(fh), None)
     if not header:

@@ -26,7 +26,6 @@ def _wrap(a):
 
 
 def witas_metrics(log, scenario, *, wall_time_s: float, error: str | None = None) -> dict:
-
     cfg = scenario.mission
     tr, est = log.get("truth"), log.get("estimate")
     out: dict = {}

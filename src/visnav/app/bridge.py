@@ -606,7 +606,6 @@ class BridgeRecording:
             cv2.imwrite(item[0], item[1], [cv2.IMWRITE_PNG_COMPRESSION, 1])
 
     def close(self) -> Path:
-
         self.navigator.recording = False
         self._images.put(None)
         self._th.join()

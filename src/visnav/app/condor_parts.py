@@ -139,7 +139,6 @@ def build(ctx) -> MissionParts | GroundTest:
     cfg = sc.mission
     rng = [np.random.default_rng(s) for s in np.random.SeedSequence(sc.run.seed).spawn(14)]
     if cfg.experiment == "ground_test":
-
         mission = GroundTestMission()
 
         def evaluate(progress=None) -> None:

@@ -24,7 +24,6 @@ from visnav.world.pad import pad_board
 
 
 def build(ctx):
-
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
     cc, fc = sc.sensors.camera, sc.navigation

@@ -126,6 +126,5 @@ def write_run(result, out_dir: Path, report: bool = True) -> Path:
     if frame is not None:
         write_run_tum(out_dir, log, frame)
     if report:
-
         write_report(result, out_dir / "report.html", provenance=prov)
     return out_dir

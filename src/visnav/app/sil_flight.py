@@ -27,7 +27,6 @@ CASES = {  # navigator -> SIL circle (radius m, speed m/s, height m) inside the 
 
 
 def _free_port() -> int:
-
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.bind(("127.0.0.1", 0))
     p = s.getsockname()[1]

@@ -33,7 +33,6 @@ register_stream("witas_setup", t=("s", "simulation time", "written once at the s
 
 
 def build(ctx):
-
     sc, record = ctx.scenario, ctx.record
     cfg = sc.mission
     pc, cc, mc = cfg.path, sc.sensors.camera, sc.world.witas_map

@@ -238,7 +238,6 @@ class FrameStreamServer:
     counted in ``dropped``, instead of stalling the sender)."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0, queue_size: int = 8):
-
         self.srv = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.srv.bind((host, port))
@@ -253,14 +252,12 @@ class FrameStreamServer:
         self._th.start()
 
     def send(self, image: np.ndarray, exposed_monotonic: float, index: int) -> None:
-
         try:
             self.q.put_nowait((np.ascontiguousarray(image, np.uint8), float(exposed_monotonic), int(index)))
         except queue.Full:
             self.dropped += 1
 
     def _serve(self) -> None:
-
         self.srv.settimeout(0.2)
         while not self._stop.is_set() and self.conn is None:
             try:

@@ -54,7 +54,6 @@ def open_recording(path: str | Path, allow_truncated: bool = False) -> Recording
     if is_euroc(p):  # the EuRoC / ASL dataset layout (mav0/imu0, cam0, ground truth)
         return read_euroc(p)
     if p.is_dir() and not (p / "metadata.yaml").is_file():
-
         return read_photos(p) if is_photo_folder(p) else Recording.open(p, allow_truncated)
     if not p.exists():
         raise RecordingError(f"{p}: no such recording folder or log")
@@ -64,7 +63,6 @@ def open_recording(path: str | Path, allow_truncated: bool = False) -> Recording
     if suffix == ".ulg":
         return read_px4(p)
     if suffix == ".tlog":
-
         return read_tlog(p)
     if suffix in (".bag", ".db3", ".mcap") or p.is_dir():
         return read_rosbag(p.parent if suffix in (".db3", ".mcap") else p)
@@ -277,7 +275,6 @@ class _quiet:
     byte of a damaged log to fd 2)."""
 
     def __enter__(self):
-
         for f in (sys.stdout, sys.stderr):
             try:
                 f.flush()
@@ -294,7 +291,6 @@ class _quiet:
         return self
 
     def __exit__(self, *exc):
-
         for c in reversed(self.py):
             c.__exit__(*exc)
         os.dup2(self.saved[0], 1)

@@ -21,7 +21,6 @@ from visnav.scenarios.schema import scenario_hash
 
 
 def visnav_version() -> str:
-
     try:
         return version("visnav")
     except PackageNotFoundError:  # run from a source tree that was never installed
@@ -58,7 +57,6 @@ def provenance(scenario=None, argv: list[str] | None = None) -> dict:
            "command_line": shlex.join(argv),
            "date_utc": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     if scenario is not None:
-
         out["scenario"] = scenario.run.name
         out["scenario_hash"] = scenario_hash(scenario)
     return out

@@ -115,7 +115,6 @@ class VONavigator(CommandDispatch):
     """Frame-only visual odometry of nadir photos, scaled and oriented by the GPS while it is allowed."""
 
     def __init__(self, camera, cfg: VOConfig | None = None, recorder=None, mount=None) -> None:
-
         self.cfg = cfg or VOConfig()
         self.camera = camera
         self.K = np.asarray(camera.K, float)

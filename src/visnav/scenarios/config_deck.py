@@ -34,7 +34,6 @@ class DeckWorldConfig(_M):
     @field_validator("lights_m")
     @classmethod
     def _lights(cls, v):
-
         validate_lights(v)
         return v
 

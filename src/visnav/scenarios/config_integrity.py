@@ -34,7 +34,6 @@ class IntegrityBlock(_M):
                               "of the last this-many horizontal updates (reacts within a few fixes; 0: off)")
 
     def monitor_config(self):
-
         return IntegrityConfig(window=self.window, alpha=self.alpha, max_rejected_share=self.max_rejected_share,
                                probability=self.probability, alert_limit_m=self.alert_limit_m,
                                stale_s=self.stale_s, short_window=self.short_window)

@@ -32,7 +32,6 @@ class PadGeometryConfig(_M):
 
     @model_validator(mode="after")
     def _layout(self):
-
         PadLayout(tuple(self.legs_m), tuple(self.ring_ratio), tuple(self.inner_ratio))
         return self
 

@@ -303,7 +303,6 @@ class PfcmMissionConfig(_M):
     @field_validator("tangents")
     @classmethod
     def _waypoint_path(cls, tangents, info):
-
         d = info.data
         if d.get("path") != "waypoints" or "waypoints_ned_m" not in d:
             return tangents
@@ -322,7 +321,6 @@ class PfcmMissionConfig(_M):
     @field_validator("segments")
     @classmethod
     def _segment_path(cls, segments, info):
-
         if info.data.get("path") != "segments":
             return segments
         if not segments or any(len(s) != 12 for s in segments):

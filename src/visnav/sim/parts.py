@@ -162,7 +162,6 @@ class IntegrityStatus:
     step, CONDOR at 10 Hz)."""
 
     def __init__(self, record) -> None:
-
         self.record, self.codes, self.code = record, STATE_CODES, None  # the first state is an event too
 
     def __call__(self, t: float, health, mode) -> None:

@@ -101,7 +101,6 @@ class VisualOdometry:
             res = ransac_homography(pairs.prev, pairs.curr, self.sigma_px, rng=self.rng)
             H, n_in = res.H, res.n_inliers
         else:
-
             H, n_in = normalized_dlt(pairs.prev, pairs.curr), n
         if H is None or n_in < self.min_inliers:
             return OdometryStep(t, False, nan, n, n_in, n - n_in,

@@ -344,7 +344,6 @@ def _check_sidecar(path: Path, world_file: Path, wf: tuple, shape: tuple[int, in
     crs = "geodetic" if _is_geodetic(a, e, c, f) else "projected"
     side = path.with_suffix(".json")
     if side.is_file():
-
         try:
             meta = json.loads(side.read_text())
         except ValueError as exc:
