@@ -9,7 +9,66 @@ from __future__ import annotations
 
 import numpy as np
 
+import time
+
+from tests.io.mavlink_helpers import free_udp_port
+from visnav.io.camera_source import Captured, FrameSource
+from visnav.io.mavlink_link import MavlinkLink
 from visnav.measurements import AttitudeSample, Frame, GpsSample, Health, ImuSample, NavEstimate
+
+
+def frame_image(i, t=None) -> np.ndarray:
+    """A 64x48 frame whose grey level is the frame number (mod 256)."""
+    return np.full((48, 64), i % 256, np.uint8)
+
+
+class PacedFrames(FrameSource):
+    """20 fps on the wall clock; no frame for ``stall_s`` after frame ``stall_after``; frame ``early`` (if given)
+    stamped 0.2 s before its time (out of order)."""
+
+    def __init__(self, stall_after: int = 30, stall_s: float = 2.0, early: int | None = None):
+        super().__init__()
+        self.next = time.monotonic()
+        self.stall_after, self.stall_s, self.early = stall_after, stall_s, early
+
+    def read(self):
+        self.next += 0.05
+        time.sleep(max(0.0, self.next - time.monotonic()))
+        if self.index == self.stall_after:
+            time.sleep(self.stall_s)
+            self.next = time.monotonic()
+        c = self._stamp(frame_image(self.index))
+        if c.index == self.early:
+            c = Captured(c.image, c.t - 0.2, c.capture_t, c.index)
+        return c
+
+
+class SyncedClock:
+    """A link clock already synchronised with its peer (1000 s apart)."""
+
+    synced = True
+
+    def to_peer(self, t_ns):
+        return t_ns + 1e12
+
+    def to_ours(self, peer_ns):
+        return peer_ns - 1e12
+
+    def offset_ms(self):
+        return 1e6
+
+    def rtt_ms(self):
+        return 0.5
+
+
+def offline_link() -> tuple[MavlinkLink, list]:
+    """A MAVLink link whose sends are kept in a list instead of going out (target 1/1, clock synchronised)."""
+    link = MavlinkLink(f"udpout:127.0.0.1:{free_udp_port()}", notify=lambda m: None)
+    sent: list = []
+    link.send = sent.append
+    link.sync = SyncedClock()
+    link.target_system, link.target_component = 1, 1
+    return link, sent
 
 
 class GpsFollowNavigator:

@@ -5,15 +5,12 @@ which streams apply, stale / expired thresholds, GPS_INPUT's fix type, and IMU s
 import numpy as np
 import pytest
 
-from tests.io.bridge_fixtures import GpsFollowNavigator
-from tests.io.mavlink_helpers import free_udp_port
-from tests.io.test_bridge_requests import _Synced
+from tests.io.bridge_fixtures import GpsFollowNavigator, offline_link
 from visnav.io import mavlink_messages as mm
 from visnav.app.bridge import Bridge, BridgeConfig
 from visnav.io.bridge_freshness import (DEFAULT_BUDGETS, Freshness, FreshnessConfig, StreamBudget, inflate,
                                         stream_of)
 from visnav.io.camera_source import Captured
-from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import AttitudeSample, BaroSample, GpsSample, ImuSample, NavEstimate, RangeSample
 
@@ -88,11 +85,7 @@ def test_quality_and_fix_fall_with_age_and_stop_past_the_timeout():
 
 # ---------------------------------------------------------------------------------- the bridge, no sockets
 def _bridge(**cfg):
-    link = MavlinkLink(f"udpout:127.0.0.1:{free_udp_port()}", notify=lambda m: None)
-    sent = []
-    link.send = sent.append
-    link.sync = _Synced()
-    link.target_system, link.target_component = 1, 1
+    link, sent = offline_link()
     notes = []
     nav = GpsFollowNavigator()
     br = Bridge(link, None, nav, BridgeConfig(**cfg), notify=notes.append)

@@ -9,20 +9,16 @@ import time
 import numpy as np
 import pytest
 
-from tests.io.bridge_fixtures import GpsFollowNavigator
+from tests.io.bridge_fixtures import GpsFollowNavigator, PacedFrames, frame_image
 from tests.io.mavlink_helpers import free_udp_port
 from visnav.io import mavlink_messages as mm
 from visnav.app.bridge import Bridge, BridgeConfig
 from visnav.io.bridge_freshness import FreshnessConfig
-from visnav.io.camera_source import CallableSource, FrameSource
+from visnav.io.camera_source import CallableSource
 from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
 
 pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
-
-
-def _img(i, t=None):
-    return np.full((48, 64), i % 256, np.uint8)
 
 
 def _fly(tmp_path, duration_s, fault_at_s, fault, camera=None, nav=None, **cfg):
@@ -31,7 +27,7 @@ def _fly(tmp_path, duration_s, fault_at_s, fault, camera=None, nav=None, **cfg):
     link = MavlinkLink(f"udpin:127.0.0.1:{port}", tlog=tmp_path / "bridge.tlog", notify=notes.append)
     sil = SilAutopilot(f"udpout:127.0.0.1:{port}", truth=CircleTruth(20.0, 5.0, 15.0))
     sil.start(duration_s + 1.0)
-    bridge = Bridge(link, camera or CallableSource(_img, fps=20.0), nav or GpsFollowNavigator(), BridgeConfig(**cfg),
+    bridge = Bridge(link, camera or CallableSource(frame_image, fps=20.0), nav or GpsFollowNavigator(), BridgeConfig(**cfg),
                     notify=notes.append, on_sent=lambda t, est, m: sent.append((t, est, m)))
     marks = {}
 
@@ -111,22 +107,6 @@ def test_link_cut_2s_and_restored_rates_over_link_up_time(tmp_path):
     assert metrics["link_up_s"] < metrics["session_s"] - 1.8
 
 
-class _Stalling(FrameSource):
-    """20 fps; no frame for 3 s after frame 30."""
-
-    def __init__(self):
-        super().__init__()
-        self.next = time.monotonic()
-
-    def read(self):
-        self.next += 0.05
-        time.sleep(max(0.0, self.next - time.monotonic()))
-        if self.index == 30:
-            time.sleep(3.0)
-            self.next = time.monotonic()
-        return self._stamp(_img(self.index))
-
-
 class _VisionNav(GpsFollowNavigator):
     """A GPS-follower that says its estimate is vision's (source "mpe"): the camera's age applies."""
 
@@ -139,7 +119,7 @@ class _VisionNav(GpsFollowNavigator):
 
 def test_camera_stalled_vision_estimate_widens_then_stops(tmp_path):
     fresh = FreshnessConfig().with_overrides(camera={"timeout_s": 2.0})
-    sil, bridge, metrics, notes, sent, _ = _fly(tmp_path, 6.0, 0.0, lambda s: None, camera=_Stalling(),
+    sil, bridge, metrics, notes, sent, _ = _fly(tmp_path, 6.0, 0.0, lambda s: None, camera=PacedFrames(stall_after=30, stall_s=3.0),
                                                 nav=_VisionNav(), freshness=fresh)
     text = "\n".join(notes)
     assert "camera stalled" in text and "camera back after" in text

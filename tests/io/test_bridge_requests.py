@@ -6,29 +6,11 @@ import time
 
 import numpy as np
 
-from tests.io.bridge_fixtures import GpsFollowNavigator
-from tests.io.mavlink_helpers import free_udp_port
+from tests.io.bridge_fixtures import GpsFollowNavigator, offline_link
 from visnav.io import mavlink_messages as mm
 from visnav.app.bridge import Bridge, BridgeConfig, NavRequest
-from visnav.io.mavlink_link import MavlinkLink
 from visnav.io.mavlink_messages import mavlink
 from visnav.measurements import Health, NavCommand
-
-
-class _Synced:
-    synced = True
-
-    def to_peer(self, t_ns):
-        return t_ns + 1e12
-
-    def to_ours(self, peer_ns):
-        return peer_ns - 1e12
-
-    def offset_ms(self):
-        return 1e6
-
-    def rtt_ms(self):
-        return 0.5
 
 
 class _Nav(GpsFollowNavigator):
@@ -46,11 +28,7 @@ class _Nav(GpsFollowNavigator):
 
 
 def _bridge():
-    link = MavlinkLink(f"udpout:127.0.0.1:{free_udp_port()}", notify=lambda m: None)
-    sent = []
-    link.send = sent.append
-    link.sync = _Synced()
-    link.target_system, link.target_component = 1, 1
+    link, sent = offline_link()
     notes = []
     br = Bridge(link, None, _Nav(), BridgeConfig(send_health=True), notify=notes.append)
     sent.clear()

@@ -9,18 +9,14 @@ import time
 import numpy as np
 import pytest
 
-from tests.io.bridge_fixtures import GpsFollowNavigator
+from tests.io.bridge_fixtures import GpsFollowNavigator, PacedFrames, frame_image
 from tests.io.mavlink_helpers import free_udp_port
 from visnav.app.bridge import Bridge, BridgeConfig
-from visnav.io.camera_source import CallableSource, Captured, FrameSource
+from visnav.io.camera_source import CallableSource
 from visnav.io.mavlink_link import MavlinkLink, MavlinkLinkError
 from visnav.io.mavlink_sil import CircleTruth, SilAutopilot
 
 pytestmark = pytest.mark.realtime  # paced to the wall clock: run apart from the CPU-heavy suite (Makefile)
-
-
-def _img(i, t=None):
-    return np.full((48, 64), i % 256, np.uint8)
 
 
 def _setup(tmp_path, duration_s, camera=None, nav=None, output="odometry", **sil_kw):
@@ -30,7 +26,7 @@ def _setup(tmp_path, duration_s, camera=None, nav=None, output="odometry", **sil
     sil = SilAutopilot(f"udpout:127.0.0.1:{port}", truth=CircleTruth(20.0, 5.0, 15.0), **sil_kw)
     sil.start(duration_s + 1.0)
     nav = nav or GpsFollowNavigator()
-    bridge = Bridge(link, camera or CallableSource(_img, fps=20.0), nav, BridgeConfig(output=output),
+    bridge = Bridge(link, camera or CallableSource(frame_image, fps=20.0), nav, BridgeConfig(output=output),
                     notify=notes.append)
     return link, sil, nav, bridge, notes
 
@@ -77,27 +73,8 @@ def test_sil_stamps_within_2ms_and_positions_land(tmp_path):
     assert any("seen on udpin" in n for n in notes)
 
 
-class _Faulty(FrameSource):
-    """20 fps; frame 15 stamped before frame 14 (out of order); a 2 s stall after frame 30."""
-
-    def __init__(self):
-        super().__init__()
-        self.next = time.monotonic()
-
-    def read(self):
-        self.next += 0.05
-        time.sleep(max(0.0, self.next - time.monotonic()))
-        if self.index == 30:
-            time.sleep(2.0)
-            self.next = time.monotonic()
-        c = self._stamp(_img(self.index))
-        if c.index == 15:
-            c = Captured(c.image, c.t - 0.2, c.capture_t, c.index)
-        return c
-
-
 def test_faults_link_drop_stall_out_of_order_malformed(tmp_path):
-    link, sil, nav, bridge, notes = _setup(tmp_path, 9.0, camera=_Faulty())
+    link, sil, nav, bridge, notes = _setup(tmp_path, 9.0, camera=PacedFrames(stall_after=30, stall_s=2.0, early=15))
     import threading
 
     def faults():
