@@ -147,6 +147,7 @@ class DeckNavConfig:
     bias_test_alpha: float = 1e-5
     bias_step_sigma: float = 0.2
     bias_test_rest_s: float = 1.0
+    bias_test_reacquire_rest_s: float = 3.0  # ... and for this long after a re-acquisition
 
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
@@ -634,6 +635,8 @@ class DeckNavigator(CommandDispatch):
             s.x, s.P = reset(s.x, s.P)
         self.stats.reacquisitions += 1
         self._t_reacq = t
+        self._nis_window.clear()  # the deck attitude re-converging is not a bias step (_bias_test)
+        self._bias_rest_until = t + self.cfg.bias_test_reacquire_rest_s
         if self.recorder is not None:
             self._log_init(t, self.ukf.x, np.diag(self.ukf.P),
                            f"re-acquisition after {t - self._t_fused:.2f} s without a fused frame: "
