@@ -89,7 +89,6 @@ class DeckMission:
         self._held = False  # an approach start is being held for integrity (logged once per hold)
         self._blind_t: float | None = None  # start of the hover's level hold without a fix
         self._v_up: float | None = None  # vertical speed (up) the level hold flies on (_vertical_speed)
-        self._bias = np.zeros(3)  # the accelerometer-bias estimate of the last trusted fix (_vertical_speed)
         self._climbed = 0.0  # height gained on the IMU since the blind hold began
         self._climb_to = 0.0  # ... and what it climbs to before steering back to the start point
         self._blind_land_t: float | None = None  # start of a blind end's descent (blind_end = "land")
@@ -217,7 +216,7 @@ class DeckMission:
             # onto the predicted normal, no flare: they swept it sideways at 0.4 m/s over the last 3 cm, seed 7),
             # the sink rate on the IMU from the last good fix (a filter re-acquired near the deck had the
             # vehicle sinking while it hovered 4 cm above the deck, seed 5)
-            self._v_land += self._imu_up_accel(est, self._bias) * self.period
+            self._v_land += self._imu_up_accel(est) * self.period
             a_up = float(np.clip(self.gains.damper_per_s * (-g.final_descent_mps - self._v_land), -BLIND_ACCEL_MAX,
                                  BLIND_ACCEL_MAX))
             return DeckReference(t=t, kind="descend", target=np.array([p_ld[0], p_ld[1], c[2]]),
@@ -252,31 +251,24 @@ class DeckMission:
         it, and its holds flew without a vertical-speed loop, black-out seed 5). Only a trusted fix: the HPL bounds
         the horizontal error, and a degraded fix whose HPL was still below ``hover_hpl_m`` had the vertical speed
         0.4-0.6 m/s off (IMU drops seed 11, accelerometer bias seed 20), which the hold then flew for good.
-        The time constant averages the deck's heave out of the relative speed. The accelerometer bias taken off
-        the specific force is the navigator's estimate at the last trusted fix: a filter that has lost
-        consistency moves its bias estimate by tenths of m/s^2 at each of its bias-test widenings, and the hold
-        flying on the live estimate climbed 2 m in 1.5 s and then sank onto the deck (black-out and blur, static
-        seed 5)."""
+        The time constant averages the deck's heave out of the relative speed."""
         g, w = self.cfg.guidance, self.watch
         trusted = (w.state == "ok" and w.hpl_m <= (g.commit_hpl_m if self.moving else g.hover_hpl_m)
                    and np.isfinite(v_up_fix))
-        if trusted:
-            self._bias = np.asarray(est.accel_bias, float)
         if self._v_up is None:
             if trusted:
                 self._v_up = float(v_up_fix)
             return
-        self._v_up += self._imu_up_accel(est, self._bias) * self.period
+        self._v_up += self._imu_up_accel(est) * self.period
         if trusted:
             self._v_up += (float(v_up_fix) - self._v_up) * min(self.period / V_UP_TAU_S, 1.0)
 
     @staticmethod
-    def _imu_up_accel(est, bias) -> float:
-        """The vertical acceleration (up) from the IMU's specific force less ``bias`` and the autopilot's roll and
-        pitch."""
+    def _imu_up_accel(est) -> float:
+        """The vertical acceleration (up) from the IMU's specific force and the autopilot's roll and pitch."""
         if not (np.isfinite(est.roll) and np.isfinite(est.pitch)):
             return 0.0
-        f = np.asarray(est.accel, float) - bias
+        f = np.asarray(est.accel, float) - est.accel_bias  # the navigator's accelerometer-bias estimate taken off
         return float(-(euler_to_dcm3(float(est.roll), float(est.pitch), 0.0) @ f)[2] - G)
 
     def _blind_hold(self, t: float, p_ld: np.ndarray) -> DeckReference:
