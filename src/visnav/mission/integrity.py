@@ -24,12 +24,14 @@ class IntegrityWatch:
         self.hpl_m = float("inf")
         self.seen_ok = False  # the navigator has been ok once (before that it has no estimate to judge)
 
-    def update(self, t: float, health) -> str:
+    def update(self, t: float, health, hpl_m: float | None = None) -> str:
+        """``hpl_m``: the protection level the mission's rules take instead of ``health.hpl_m`` (the deck's at the
+        contact range)."""
         s = getattr(health, "integrity", "ok")
         if s != self.state:
             self.state, self.since = s, t
         self.reason = getattr(health, "integrity_reason", "")
-        self.hpl_m = float(getattr(health, "hpl_m", float("inf")))
+        self.hpl_m = float(getattr(health, "hpl_m", float("inf")) if hpl_m is None else hpl_m)
         self.seen_ok = self.seen_ok or s == "ok"
         return s
 
