@@ -101,7 +101,7 @@ def test_deck_goes_around_while_the_protection_level_is_too_large_even_with_the_
     t = _run(m, t, 0.02, 1, "ok", hpl_m=2.0 * g.commit_hpl_m)
     assert m.mode == "hover"
     r = log.get("integrity_reaction")
-    assert r["action"][-1] == "go-around" and f"HPL at contact {2.0 * g.commit_hpl_m:.2f} m above" in r["reason"][-1]
+    assert r["action"][-1] == "go-around" and f"HPL {2.0 * g.commit_hpl_m:.2f} m above" in r["reason"][-1]
     # the hover starts no new approach while the HPL is above the limit, and does once it is below
     t = _run(m, t + max(g.go_around_hover_s, g.max_wait_s), 0.1, 3, "ok", hpl_m=2.0 * g.commit_hpl_m)
     assert m.mode == "hover" and log.get("integrity_reaction")["action"][-1] == "hold"

@@ -1,21 +1,26 @@
 """The deck's protection level with the LED survey's constant error (issue 30): a bias that no number of frames
-averages out is in the HPL as a covariance of its own, growing with the range, and the mission's rules take it at
-the contact range."""
+averages out is in the HPL as a covariance of its own, growing with the range."""
 
 import math
 
 import numpy as np
 
 from visnav.app.missions import make_simulation
-from visnav.navigation.deck import DeckHealth
 from visnav.scenarios.schema import load_scenario
 
 
-def test_hpl_at_splits_the_protection_level_into_noise_and_range_proportional_bias():
-    h = DeckHealth(hpl_m=0.5, hpl_noise_m=0.3, hpl_bias_per_m=0.4)
-    assert math.isclose(h.hpl_at(1.0), 0.5)  # hypot(0.3, 0.4): lambda_max(P + s^2 I) = lambda_max(P) + s^2
-    assert math.isclose(h.hpl_at(0.0), 0.3)
-    assert DeckHealth(hpl_m=0.7).hpl_at(0.1) == 0.7  # not split: the HPL as it is
+def test_the_survey_share_per_metre_is_the_tilt_of_the_fitted_deck_plane():
+    """sigma_survey sqrt(2 / S), S = sum |b_i - b_mean|^2 of eq. 5.10's lights: 0.071 per metre for 1 cm."""
+    from visnav.navigation.deck import DeckNavConfig, DeckNavigator
+
+    sc = load_scenario("deck-moving")
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc, 1.0 / 30.0))
+    L = np.asarray(sc.world.deck.lights_m, float)
+    S = float(((L - L.mean(0)) ** 2).sum())
+    assert math.isclose(nav._survey_sigma_per_m(), 0.01 * math.sqrt(2.0 / S), rel_tol=1e-12)
+    assert 0.06 < nav._survey_sigma_per_m() < 0.08
+    ideal = load_scenario("deck-moving", ["world.deck.light_survey_error_m=0"])
+    assert DeckNavigator(DeckNavConfig.from_mission(ideal, 1.0 / 30.0))._survey_sigma_per_m() == 0.0
 
 
 def test_realistic_deck_fault_free_error_stays_inside_the_protection_level():
@@ -36,7 +41,7 @@ def test_realistic_deck_fault_free_error_stays_inside_the_protection_level():
     # the survey's share: 3.72 x 0.01 x sqrt(2 / S) per metre (S of eq. 5.10's lights) is in every ok step's HPL
     L = np.asarray(sc.world.deck.lights_m, float)
     per_m = np.sqrt(-2 * np.log(1e-3)) * 0.01 * np.sqrt(2.0 / ((L - L.mean(0)) ** 2).sum())
-    assert np.all(st["hpl_m"][ok] >= per_m * rng[ok] - 1e-9)
+    assert np.all(st["hpl_m"][ok] >= per_m * rng[ok] * np.sqrt(st["k2"][ok]) - 1e-9)
     assert res.metrics["outcome"] == "safe", res.metrics["outcome_reason"]
     td = sim.log.get("touchdown")
     assert len(td["t"]) == 1 and bool(td["on_deck"][0])

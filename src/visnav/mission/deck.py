@@ -79,9 +79,6 @@ class DeckMission:
         self.gains = gains
         self.moving = deck.motion == "moving"
         self.landing_point = np.asarray(cfg.guidance.landing_point_m, float)
-        # the deck origin's distance from the vehicle at contact: the range at which the rules below take the HPL
-        # (``DeckHealth.hpl_at``: the survey's share of it shrinks with the range)
-        self.contact_range = float(np.hypot(np.linalg.norm(self.landing_point[:2]), gear_offset))
         self.approach = None
         self._a_td = np.zeros(3)
         self._c0 = np.zeros(3)
@@ -121,8 +118,11 @@ class DeckMission:
 
     def step(self, t: float, est, health) -> tuple[DeckReference, str]:
         cfg, g = self.cfg, self.cfg.guidance
-        hpl_at = getattr(health, "hpl_at", None)
-        self.watch.update(t, health, hpl_at(self.contact_range) if hpl_at is not None else None)
+        # the rules below act on the filter's own share of the HPL (``DeckHealth.hpl_noise_m``): what grows in an
+        # outage or a fault. The LED survey's constant share is a property of the installation that no rule in
+        # flight can change; taken at the contact range it held 5 more of 100 moving-deck fault runs' approaches,
+        # and their go-arounds ended off the plate (issue 30)
+        self.watch.update(t, health, getattr(health, "hpl_noise_m", None))
         mode = self.mode
         pilot_view = None
         if mode == "manual" and cfg.start.pilot == "truth" and "pilot" in self._seen:
@@ -239,7 +239,7 @@ class DeckMission:
             return f"navigator unusable {w.unusable_for(t):.1f} s" if (
                 not persist or w.unusable_for(t) >= g.integrity_unusable_s) else ""
         if hpl and w.hpl_m > g.commit_hpl_m:
-            return f"HPL at contact {w.hpl_m:.2f} m above {g.commit_hpl_m:g} m"
+            return f"HPL {w.hpl_m:.2f} m above {g.commit_hpl_m:g} m"
         return ""
 
     def _degraded_for(self, t: float) -> float:
@@ -293,7 +293,7 @@ class DeckMission:
             # up to the start height by the estimate, at most blind_climb_m (all of it if the estimate is no guide)
             below = -self.start_rel_ld[2] + p_ld[2] if w.hpl_m <= BLIND_FOLLOW_HPL_M else np.inf
             self._climb_to = float(np.clip(below, 0.0, g.blind_climb_m))
-            w.react(t, "hold height", f"hover without a fix (HPL at contact {w.hpl_m:.2f} m): height on the IMU, climb "
+            w.react(t, "hold height", f"hover without a fix (HPL {w.hpl_m:.2f} m): height on the IMU, climb "
                                       f"{self._climb_to:.2f} m at {g.blind_climb_mps:g} m/s")
         v_up = self._v_up if self._v_up is not None else 0.0
         climbing = self._climbed < self._climb_to

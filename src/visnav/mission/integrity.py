@@ -25,8 +25,8 @@ class IntegrityWatch:
         self.seen_ok = False  # the navigator has been ok once (before that it has no estimate to judge)
 
     def update(self, t: float, health, hpl_m: float | None = None) -> str:
-        """``hpl_m``: the protection level the mission's rules take instead of ``health.hpl_m`` (the deck's at the
-        contact range)."""
+        """``hpl_m``: the protection level the mission's rules take instead of ``health.hpl_m`` (the deck's filter
+        share, without the survey's constant error)."""
         s = getattr(health, "integrity", "ok")
         if s != self.state:
             self.state, self.since = s, t

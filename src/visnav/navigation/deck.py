@@ -239,18 +239,10 @@ class DeckHealth(Health):
     min_lights_1s: int = 0
     bearing_rms_1s: float = float("nan")  # RMS bearing innovation over the frames of the last second [rad]
     converged: bool = False
-    # the HPL's parts (``hpl_m`` = hpl_at(the current range)): the filter's covariance and, growing with the range,
-    # the calibration's constant error (``DeckNavigator._survey_sigma_per_m``)
-    hpl_noise_m: float | None = None  # (None: not split, ``hpl_at`` is ``hpl_m``)
+    # the HPL's parts: hpl_m = hypot(hpl_noise_m, hpl_bias_per_m x range), the filter's covariance and, growing
+    # with the range, the calibration's constant error (``DeckNavigator._survey_sigma_per_m``)
+    hpl_noise_m: float | None = None  # (None: not split)
     hpl_bias_per_m: float = 0.0
-
-    def hpl_at(self, range_m: float) -> float:
-        """The protection level the fix would have at ``range_m`` from the lights with the filter's covariance as it
-        is now (the mission's commit rules take it at the contact range: the calibration's share shrinks with the
-        range as the vehicle closes on the deck)."""
-        if self.hpl_noise_m is None:
-            return float(self.hpl_m)
-        return float(np.hypot(self.hpl_noise_m, self.hpl_bias_per_m * range_m))
 
 
 @dataclass
