@@ -82,6 +82,7 @@ class DeckNavStats:
     lights_used_last: int = 0
     reties: int = 0  # gate lock-outs undone (``DeckNavConfig.retie_after_frames``)
     bias_steps: int = 0  # accelerometer-bias variance widened by the NIS test (``DeckNavigator._bias_test``)
+    relocks: int = 0  # the filter lost on a wrong solution, started again from the deck's prior (``_relock``)
 
 
 @dataclass
@@ -148,6 +149,12 @@ class DeckNavConfig:
     bias_step_sigma: float = 0.2
     bias_test_rest_s: float = 1.0
     bias_test_reacquire_rest_s: float = 3.0  # ... and for this long after a re-acquisition
+    # lost: the bias test would widen for the lost_widenings-th time within lost_window_s (a bias step's widening
+    # brings the NIS back within a rest or two; a filter fitting the lights on a wrong solution fires it at every
+    # rest for good) -> the deck attitude from its prior, position / velocity widened, the bias back to its prior
+    # (``_relock``); 0: never
+    lost_widenings: int = 3
+    lost_window_s: float = 6.0
 
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
@@ -309,6 +316,7 @@ class DeckNavigator(CommandDispatch):
         self._widen_until = -np.inf  # accelerometer noise widened in Q until then (after a re-tie)
         self._bias_rest_until = -np.inf  # the bias test rests until then (after a widening)
         self._nis_window: deque = deque(maxlen=max(1, config.bias_test_frames))  # (NIS, dof) of whole updates
+        self._widened: deque = deque()  # times of the bias test's widenings (``lost``)
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -428,6 +436,7 @@ class DeckNavigator(CommandDispatch):
         return np.r_[x0, np.zeros(var.size)], P
 
     def _start(self, t, x0, P0, sigmas, source) -> None:
+        self._widened.clear()
         x0, P0 = self._augment(x0, P0)
         if self.ukf is None:
             c = self.cfg
@@ -873,16 +882,52 @@ class DeckNavigator(CommandDispatch):
         if total <= q:
             return
         w.clear()
+        while self._widened and self._widened[0] < self._t - self.cfg.lost_window_s:
+            self._widened.popleft()
+        if 0 < self.cfg.lost_widenings <= len(self._widened) + 1:
+            return self._relock(f"accelerometer-bias test: NIS {total:.0f} over {k} dof, the "
+                                f"{len(self._widened) + 1}th time in {self.cfg.lost_window_s:g} s")
         self._bias_rest_until = self._t + self.cfg.bias_test_rest_s
         P = self.ukf.P.copy()
         i = np.arange(dm.BIAS.start, dm.BIAS.stop)
         P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)  # (only the diagonal grows: P stays positive)
         self.ukf.P = P
         self.stats.bias_steps += 1
+        self._widened.append(self._t)
         if self.recorder is not None:
             self._log_init(self._t, self.ukf.x, np.diag(P),
                            f"accelerometer-bias test: NIS {total:.0f} over {k} dof of the last {w.maxlen} "
                            f"frames above {q:.0f}: bias variance widened")
+
+    def _relock(self, why: str) -> None:
+        """The filter is lost: it fits the lights on a wrong solution (the near-planar layout's pose ambiguity:
+        after a re-acquisition on the realistic deck, relative pitch 10-17 deg and position 0.5-0.9 m off with
+        a 5 cm sigma, the bias test widening every 1.2 s for 50 s, static blur seed 7). Start it again from
+        where it is as a re-tie does: the deck's relative roll, pitch and rates from their sea-state prior (the
+        level deck breaks the ambiguity), ``retie_sigmas`` added to the position and velocity variances, the
+        bias back to zero at its prior sigma; the bias test rests ``bias_test_reacquire_rest_s``. Logged in
+        ``nav_init``, counted in ``stats.relocks``."""
+        x, P = self.ukf.x.copy(), self.ukf.P.copy()
+        sp, sv = self.cfg.retie_sigmas
+        rp = self._rp if self._rp is not None else x[3:5]
+        ii = np.array([3, 4, 9, 10, 11])
+        x[3:5], x[9:12] = rp, 0.0
+        P[ii, :], P[:, ii] = 0.0, 0.0
+        P[ii, ii] = np.asarray(self.cfg.deck_prior_var, float)
+        P[0:3, 0:3] += np.eye(3) * sp**2
+        P[6:9, 6:9] += np.eye(3) * sv**2
+        if self._bias_on:
+            i = np.arange(dm.BIAS.start, dm.BIAS.stop)
+            x[i] = 0.0
+            P[i, :], P[:, i] = 0.0, 0.0
+            P[i, i] = self.cfg.accel_bias_sigma**2
+        self.ukf.x, self.ukf.P = x, P
+        self._widened.clear()
+        self._nis_window.clear()
+        self._bias_rest_until = self._t + self.cfg.bias_test_reacquire_rest_s
+        self.stats.relocks += 1
+        if self.recorder is not None:
+            self._log_init(self._t, x, np.diag(P), f"{why}: lost, re-locked from the deck's sea-state prior")
 
     def _lockout(self, n_blobs: int, replay: bool) -> bool:
         """A frame with ``n_blobs`` blobs had every light rejected. After ``retie_after_frames`` such frames in
@@ -919,6 +964,8 @@ class DeckNavigator(CommandDispatch):
             P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)
         self.ukf.x, self.ukf.P = x, P
         self._widen_until = self._t + self.cfg.retie_hold_s
+        self._nis_window.clear()  # the widened filter's own NIS is no bias step (_bias_test)
+        self._bias_rest_until = self._t + self.cfg.bias_test_reacquire_rest_s
         self.stats.reties += 1
         if self.recorder is not None:
             self._log_init(self._t, x, np.diag(P),
