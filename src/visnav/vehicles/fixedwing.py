@@ -28,7 +28,7 @@ import numpy as np
 
 from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
 from visnav.vehicles.base import Environment
-from visnav.vehicles.kernels import fixedwing_rk4
+from visnav.vehicles.kernels import fixedwing_constants, fixedwing_derivatives, fixedwing_rk4
 from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
 G = 9.81
@@ -165,6 +165,7 @@ class FixedWingModel:
 
     def __post_init__(self) -> None:
         self._gam = self.params.gammas()
+        self._k = fixedwing_constants(self.params, self._gam)
         self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
         self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
         self._state_x: np.ndarray | None = None  # the x and t ``state`` was built for
@@ -176,7 +177,12 @@ class FixedWingModel:
         evaluated when first read (a loop that reads it at its control rate skips the rest)."""
         if self._air_at is not None:
             x1, uc, w = self._air_at
-            self._air = derivatives(self.params, x1, uc, w, self._gam)[1]
+            if self.kernel:
+                u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
+                Va, alpha, beta, f = fixedwing_derivatives(self._k, x1.tolist(), u4, w.tolist(), air=True)[1]
+                self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(f)}
+            else:
+                self._air = derivatives(self.params, x1, uc, w, self._gam)[1]
             self._air_at = None
         return self._air
 
@@ -212,7 +218,7 @@ class FixedWingModel:
         x = self.x
         if self.kernel:
             u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
-            x1 = np.array(fixedwing_rk4(self.params, self._gam, _lift_drag, x.tolist(), u4, w.tolist(), dt))
+            x1 = np.array(fixedwing_rk4(self._k, x.tolist(), u4, w.tolist(), dt))
         else:
             k1 = f(x)
             k2 = f(x + 0.5 * dt * k1)
