@@ -209,7 +209,7 @@ class FixedWingModel:
         if not isinstance(environment, Environment):
             raise TypeError(f"FixedWingModel.step takes a vehicles.base.Environment, got {type(environment).__name__}")
         w = np.asarray(environment.wind_ned, float)
-        if not np.isfinite(w).all():
+        if not all(map(math.isfinite, w.tolist())):
             raise ValueError(f"wind must be finite, got {environment.wind_ned}")
 
         def f(x):
@@ -218,17 +218,17 @@ class FixedWingModel:
         x = self.x
         if self.kernel:
             u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
-            x1 = np.array(fixedwing_rk4(self._k, x.tolist(), u4, w.tolist(), dt))
+            x1 = fixedwing_rk4(self._k, x.tolist(), u4, w.tolist(), dt)
         else:
             k1 = f(x)
             k2 = f(x + 0.5 * dt * k1)
             k3 = f(x + 0.5 * dt * k2)
             k4 = f(x + dt * k3)
-            x1 = x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            x1 = (x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)).tolist()
         x1[8] = (x1[8] + math.pi) % (2 * math.pi) - math.pi
-        if not np.isfinite(x1).all():
+        if not all(map(math.isfinite, x1)):
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
-        self.x = x1
+        self.x = x1 = np.array(x1)
         self.t += dt
         self._air_at = (x1, uc, w)
 
