@@ -56,7 +56,7 @@ def matrix3(rows) -> np.ndarray:
 
 def wrap_angle(a):
     """Wrap angle(s) in radians to the interval (-pi, pi] (a float stays a float: one number without numpy)."""
-    a = a if isinstance(a, float) else np.asarray(a, dtype=float)
+    a = float(a) if isinstance(a, float) else np.asarray(a, dtype=float)
     w = math.pi - (math.pi - a) % (2.0 * math.pi)
     w = w + 2.0 * math.pi * (w <= -math.pi)
     return w if isinstance(w, float) or w.ndim else float(w)

@@ -100,7 +100,7 @@ class DistortionLUT:
 
 def _cell(g: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The grid cell of ``x`` on the ascending grid ``g`` (the first or last outside it) and ``x``'s place in it."""
-    i = np.clip(np.searchsorted(g, x, side="right") - 1, 0, len(g) - 2)
+    i = np.minimum(np.maximum(np.searchsorted(g, x, side="right") - 1, 0), len(g) - 2)
     return i, (x - g[i]) / (g[i + 1] - g[i])
 
 

@@ -70,9 +70,10 @@ def altimeter_correction(h_bar, t_outside_c, c0: float = 0.004, c1: float = 0.00
     """Temperature-corrected barometric height AGL, seed 004 eq. 2.1:
     ``h = h_bar (1 - (c0 + (15 - t_O) c1) h_bar)`` with the printed c0 = 0.004, c1 = 0.00005 (which
     would take 40 % off at 100 m; the simulation's altimeter uses a tenth of both, docs/condor.md)."""
-    h_bar, t_o = np.asarray(h_bar, float), np.asarray(t_outside_c, float)
-    h = h_bar * (1.0 - (c0 + (15.0 - t_o) * c1) * h_bar)  # eq. 2.1
-    return h if h.ndim else float(h)
+    if not (isinstance(h_bar, float) and isinstance(t_outside_c, (float, int))):  # (numbers stay numbers)
+        h_bar, t_outside_c = np.asarray(h_bar, float), np.asarray(t_outside_c, float)
+    h = h_bar * (1.0 - (c0 + (15.0 - t_outside_c) * c1) * h_bar)  # eq. 2.1
+    return h if isinstance(h, float) or h.ndim else float(h)
 
 
 def roll_correct(X, Y, roll, method: str = "exact"):
