@@ -39,7 +39,8 @@ def _fixedwing(k, x, u, wind, dt: float, rk4: bool):
     (M, a0, CL0, CLa, CDp, piEAR, hrhoS, CDq, CLq, CDde, CLde, c, b, m, kprop, kmot,
      y0, yb, yp, yr, yda, ydr, l0, lb, lp, lr, lda, ldr, m0, ma, mq, mde, n0, nb, np_, nr, nda, ndr, Jy,
      g1, g2, g3, g4, g5, g6, g7, g8) = k
-    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
+    _, _, _, u0, v0, w0, phi0, th0, psi0, P0, Q0, R0 = x
+    uu, vv, ww, phi, th, psi, P, Q, R = u0, v0, w0, phi0, th0, psi0, P0, Q0, R0
     da, de, dr, thr = u
     wn, we, wd = wind
     thrust0 = (kmot * thr) ** 2
@@ -93,7 +94,9 @@ def _fixedwing(k, x, u, wind, dt: float, rk4: bool):
         else:
             w = dt / 6.0
             return [a + w * (b1 + b2) for a, b1, b2 in zip(x, s, d)]
-        _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = [a + h * b_ for a, b_ in zip(x, d)]  # the next stage
+        # the next stage, x + h d (what d reads of it)
+        uu, vv, ww, phi, th, psi = u0 + h * d[3], v0 + h * d[4], w0 + h * d[5], phi0 + h * d[6], th0 + h * d[7], psi0 + h * d[8]
+        P, Q, R = P0 + h * d[9], Q0 + h * d[10], R0 + h * d[11]
 
 
 def fixedwing_derivatives(k, x, u, wind, air: bool = False):
