@@ -28,6 +28,7 @@ import numpy as np
 
 from visnav.estimation.kernels import ins_propagate_flat
 from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm, matrix3
+from visnav.scalar import finite
 
 __all__ = [
     "OMEGA_EARTH",
@@ -230,7 +231,7 @@ class NavState:
 
 def _check_finite(x, what: str) -> np.ndarray:
     a = np.asarray(x, dtype=float)
-    if a.shape != (3,) or not np.isfinite(a).all():
+    if a.shape != (3,) or not finite(a):
         raise ValueError(f"{what} must be 3 finite numbers, got {x!r}")
     return a
 
