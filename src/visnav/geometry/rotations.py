@@ -46,12 +46,14 @@ def _vec3(x, name: str) -> np.ndarray:
 
 def matrix3(rows) -> np.ndarray:
     """A (..., 3, 3) array of nine entries given row by row: numbers, or arrays of one batch shape."""
-    flat = [x for row in rows for x in row]
-    shape = next((np.shape(x) for x in flat if np.ndim(x)), ())
+    shape = next((np.shape(x) for row in rows for x in row if np.ndim(x)), ())
     if not shape:
         return np.array(rows, dtype=float)
-    entries = np.array([x if np.ndim(x) else np.full(shape, x) for x in flat])  # (9, ...)
-    return entries.reshape(9, -1).T.reshape(shape + (3, 3))
+    out = np.empty(shape + (3, 3))
+    for i, row in enumerate(rows):
+        for j, x in enumerate(row):
+            out[..., i, j] = x
+    return out
 
 
 def wrap_angle(a):
