@@ -26,6 +26,7 @@ from scipy.interpolate import LinearNDInterpolator
 from scipy.spatial import Delaunay, cKDTree
 
 from visnav.geometry.camera import PinholeCamera
+from visnav.vision import kernels
 from visnav.vision.rectification import CameraGeometry
 
 __all__ = ["Board", "synthetic_board", "DistortionLUT", "thesis_lut", "full_lut"]
@@ -78,6 +79,7 @@ class DistortionLUT:
 
     def __post_init__(self) -> None:
         self._tables = np.stack([self.table_x, self.table_y], axis=-1)  # (len(gx), len(gy), 2)
+        self._lists = tuple(np.asarray(a, float).tolist() for a in (self.gx, self.gy, self.table_x, self.table_y))
 
     def _lookup(self, a, b) -> np.ndarray:
         """Eq. 3.7: both tables interpolated bilinearly at normalised (a, b) (the end cells extrapolated); (..., 2)."""
@@ -90,6 +92,13 @@ class DistortionLUT:
     def correct(self, Xm, Ym):
         """Corrected image coordinates (X_tgt, Y_tgt) of measured (X_tgtm, Y_tgtm) [px]."""
         Xm, Ym = np.asarray(Xm, float), np.asarray(Ym, float)
+        if kernels.ENABLED and Xm.size == 1 and Ym.size == 1:  # one point: vision/kernels on floats
+            a, b = Xm.item() / (self.width / 2.0), Ym.item() / (self.height / 2.0)
+            if self.kind == "factor":
+                cx, cy = kernels.bilinear1(*self._lists, abs(a), abs(b))
+                return Xm * cx, Ym * cy
+            cx, cy = kernels.bilinear1(*self._lists, a, b)
+            return Xm + cx, Ym + cy
         nx, ny = np.broadcast_arrays(Xm / (self.width / 2.0), Ym / (self.height / 2.0))
         if self.kind == "factor":  # eq. 3.7-3.8: the quadrant's table at (|X_m|, |Y_m|), a factor
             c = self._lookup(np.abs(nx), np.abs(ny))

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from visnav.vision import kernels
+
 __all__ = ["CameraGeometry", "RangeEstimate", "altimeter_correction", "roll_correct", "tilt_rectification",
            "ground_range", "estimate_range", "vision_bearing"]
 
@@ -176,7 +178,8 @@ def estimate_range(X: float, Y: float, h: float, tilt: float, roll: float, geom:
         return RangeEstimate(False, reason=f"no estimate: target ({X:.0f}, {Y:.0f}) px outside the image")
     if method not in ("exact", "thesis"):
         raise ValueError(f"method must be 'exact' or 'thesis', got {method!r}")
-    D_T, L_T, D_X, D_Y = ground_range(float(X), float(Y), float(h), float(tilt), float(roll), geom, method)
+    chain = kernels.ground_range1 if kernels.ENABLED else ground_range  # (one pixel: floats, vision/kernels)
+    D_T, L_T, D_X, D_Y = chain(float(X), float(Y), float(h), float(tilt), float(roll), geom, method)
     if not (math.isfinite(D_T) and math.isfinite(L_T)):
         return RangeEstimate(False, reason="no estimate: target ray at or above the horizon")
     return RangeEstimate(True, float(D_T), float(L_T), float(vision_bearing(D_X, D_Y)[0]))
