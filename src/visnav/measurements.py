@@ -103,8 +103,7 @@ def read_only(obj):
     """``obj`` with every numpy array among its dataclass fields made read-only, and ``obj`` returned: for an
     output a cache hands out again, so that a caller writing into it raises instead of changing what the
     next caller gets."""
-    for f in getattr(obj, "__dataclass_fields__", {}):
-        v = getattr(obj, f)
+    for v in getattr(obj, "__dict__", {}).values():  # (a dataclass's fields are its instance attributes)
         if isinstance(v, np.ndarray):
             v.setflags(write=False)
     return obj

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.stats import binom, chi2, rayleigh
 
-from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, horizontal_protection_level
+from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, chi2_2_quantile, horizontal_protection_level
 
 
 def test_window_bounds_are_scipy_chi2_quantiles():
@@ -176,3 +176,15 @@ def test_hpl_of_an_unbounded_or_unknown_covariance():
     (and ``assess`` then no alert from it)."""
     assert horizontal_protection_level(np.diag([np.inf, np.inf])) == math.inf
     assert math.isnan(horizontal_protection_level(np.array([[np.nan, 0.0], [0.0, 1.0]])))
+
+
+def test_hpl_is_the_largest_eigenvalue_of_the_symmetric_part():
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        A = rng.normal(0, 3, (2, 2))
+        P = A @ A.T + np.diag(rng.uniform(0, 1, 2)) + np.array([[0.0, 1e-3], [0.0, 0.0]])  # a little asymmetric
+        lam = float(np.linalg.eigvalsh(0.5 * (P + P.T))[-1])
+        assert horizontal_protection_level(P, 0.99, 2.0) == pytest.approx(math.sqrt(2.0 * chi2_2_quantile(0.99) * lam),
+                                                                         rel=1e-12)
+    assert math.isnan(horizontal_protection_level(np.array([[np.nan, 0.0], [0.0, np.inf]])))
+    assert horizontal_protection_level(np.array([[np.inf, 0.0], [0.0, 1.0]])) == math.inf

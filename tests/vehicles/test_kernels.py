@@ -6,8 +6,8 @@ import numpy as np
 
 from visnav.measurements import Controls
 from visnav.vehicles.base import Environment
-from visnav.vehicles.fixedwing import FixedWingModel, FixedWingParams, _lift_drag, derivatives
-from visnav.vehicles.kernels import fixedwing_derivatives
+from visnav.vehicles.fixedwing import FixedWingModel, FixedWingParams, derivatives
+from visnav.vehicles.kernels import fixedwing_constants, fixedwing_derivatives
 
 
 def _draws(n=300, seed=0):
@@ -20,13 +20,17 @@ def _draws(n=300, seed=0):
 
 
 def test_fixedwing_derivatives_equal_the_readable_model():
+    """State derivative and air data (Va, alpha, beta, specific force) at 1e-12 relative."""
     p = FixedWingParams()
     gam = p.gammas()
+    k = fixedwing_constants(p, gam)
     worst = 0.0
     for x, u, w in _draws():
-        ref = derivatives(p, x, u, w, gam)[0]
-        got = np.array(fixedwing_derivatives(p, gam, _lift_drag, x.tolist(), (u.aileron, u.elevator, u.rudder,
-                                                                                 u.throttle), w.tolist()))
+        ref, ref_air = derivatives(p, x, u, w, gam)
+        got, got_air = fixedwing_derivatives(k, x.tolist(), (u.aileron, u.elevator, u.rudder, u.throttle),
+                                             w.tolist(), air=True)
+        ref = np.r_[ref, ref_air["Va"], ref_air["alpha"], ref_air["beta"], ref_air["specific_force"]]
+        got = np.r_[got, got_air[:3], got_air[3]]
         worst = max(worst, float(np.max(np.abs(got - ref) / np.maximum(np.abs(ref), 1e-9))))
     assert worst < 1e-12, worst
 
@@ -43,6 +47,8 @@ def test_a_flight_on_the_kernel_is_the_readable_flight():
         a.step(u, 0.01, env)
         b.step(u, 0.01, env)
         np.testing.assert_allclose(a.x, b.x, rtol=1e-12, atol=1e-12 * 100.0)
+        np.testing.assert_allclose(a.state.specific_force, b.state.specific_force, rtol=1e-12, atol=1e-12)
+        assert abs(a.air["Va"] - b.air["Va"]) <= 1e-12 * b.air["Va"]
     assert np.linalg.norm(a.x[0:3] - x0[0:3]) > 40.0  # it flew
 
 
@@ -59,8 +65,8 @@ def test_rmax_derivatives_equal_the_readable_model():
                       rng.normal(0, 1)]
             att = (*rng.uniform(-0.4, 0.4, 2), *rng.normal(0, 0.5, 3), rng.normal(0, 0.2))
             w = rng.normal(0, 5, 3)
-            ref = m._deriv(y, att, w)[0]
-            got = np.array(rmax_derivatives(m.params, y.tolist(), att, w.tolist()))
+            ref = np.r_[m._deriv(y, att, w)]
+            got = np.r_[rmax_derivatives(m.params, y.tolist(), att, w.tolist(), force=True)]
             worst = max(worst, float(np.max(np.abs(got - ref) / np.maximum(np.abs(ref), 1e-9))))
         assert worst < 1e-12, (damping, worst)
 
@@ -80,5 +86,6 @@ def test_an_rmax_flight_on_the_kernel_is_the_readable_flight():
         sa, sb = a.step(cmd, environment=env), b.step(cmd, environment=env)
         np.testing.assert_allclose(sa.position, sb.position, rtol=1e-12, atol=1e-11)
         np.testing.assert_allclose(sa.velocity, sb.velocity, rtol=1e-12, atol=1e-11)
+        np.testing.assert_allclose(sa.specific_force, sb.specific_force, rtol=1e-12, atol=1e-11)
         assert a.on_ground == b.on_ground
     assert np.linalg.norm(sa.position) > 1.0  # it flew

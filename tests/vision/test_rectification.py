@@ -7,7 +7,7 @@ import pytest
 
 from visnav.geometry.camera import PinholeCamera
 from visnav.sensors.gimbal import centred_coords, project_points
-from visnav.vision.distortion_lut import full_lut, synthetic_board, thesis_lut
+from visnav.vision.distortion_lut import DistortionLUT, full_lut, synthetic_board, thesis_lut
 from visnav.vision.rectification import (CameraGeometry, altimeter_correction, estimate_range, ground_range,
                                          roll_correct, tilt_rectification, vision_bearing)
 from visnav.vision.rectification_errors import error_maps, radius_chain, radius_partials
@@ -205,3 +205,25 @@ def test_one_pixel_estimate_is_the_true_range_of_projected_targets():
     np.testing.assert_allclose(altimeter_correction(hb, 20.0, 0.0004, 5e-06), want, rtol=1e-15)
     assert all(altimeter_correction(float(v), 20.0, 0.0004, 5e-06) == pytest.approx(w, rel=1e-15)
                for v, w in zip(hb, want))
+
+
+def test_lut_interpolation_is_scipys_regular_grid_interpolator():
+    """DistortionLUT's own bilinear look-up (eq. 3.7) against scipy's RegularGridInterpolator, inside and
+    outside the grid (extrapolated), at 1e-12."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    rng = np.random.default_rng(4)
+    for kind in ("factor", "offset"):
+        g0 = 0.0 if kind == "factor" else -1.0
+        gx, gy = np.linspace(g0, 1.0, 9), np.linspace(g0, 1.0, 7)
+        lut = DistortionLUT(kind, gx, gy, rng.normal(1, 0.1, (9, 7)), rng.normal(1, 0.1, (9, 7)), 640, 480)
+        X, Y = rng.uniform(-400, 400, 300), rng.uniform(-300, 300, 300)
+        got = lut.correct(X, Y)
+        nx, ny = X / 320.0, Y / 240.0
+        q = np.c_[np.abs(nx), np.abs(ny)] if kind == "factor" else np.c_[nx, ny]
+        cx, cy = (RegularGridInterpolator((gx, gy), t, bounds_error=False, fill_value=None)(q)
+                  for t in (lut.table_x, lut.table_y))
+        ref = (X * cx, Y * cy) if kind == "factor" else (X + cx, Y + cy)
+        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-9)
+        one = lut.correct(np.array([X[0]]), np.array([Y[0]]))
+        assert one[0].shape == (1,) and abs(one[0][0] - got[0][0]) <= 1e-12 * abs(got[0][0])

@@ -26,7 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from visnav.estimation.kernels import ins_propagate_flat
 from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm, matrix3
+from visnav.scalar import finite
 
 __all__ = [
     "OMEGA_EARTH",
@@ -229,7 +231,7 @@ class NavState:
 
 def _check_finite(x, what: str) -> np.ndarray:
     a = np.asarray(x, dtype=float)
-    if a.shape != (3,) or not np.isfinite(a).all():
+    if a.shape != (3,) or not finite(a):
         raise ValueError(f"{what} must be 3 finite numbers, got {x!r}")
     return a
 
@@ -255,6 +257,9 @@ class StrapdownINS:
         self._g_const = None if gravity is None else np.array([0.0, 0.0, float(gravity)])
         if self._g_const is not None:
             self._g_const.flags.writeable = False
+        #: flat Earth, constant gravity: ``propagate`` through ``estimation/kernels.ins_propagate_flat`` (the same
+        #: steps on floats, held to the readable path at 1e-12 by tests/estimation/test_kernels.py)
+        self.kernel = True
 
     # geodetic position of a local NED point
     def lat_h(self, position) -> tuple[float, float]:
@@ -283,6 +288,10 @@ class StrapdownINS:
             raise ValueError(f"IMU interval dt must be positive and finite, got {dt}")
         f = _check_finite(accel, "accel") - s.accel_bias
         w = _check_finite(gyro, "gyro") - s.gyro_bias
+        if self.kernel and not self.earth_rotation and self._g_const is not None:
+            q, v, p = ins_propagate_flat(s.quat.tolist(), s.velocity.tolist(), s.position.tolist(), f.tolist(),
+                                         w.tolist(), self._g_const.tolist(), dt)
+            return NavState(s.t + dt, np.array(p), np.array(v), np.array(q), s.accel_bias.copy(), s.gyro_bias.copy())
         if self.earth_rotation:
             w_ie, w_en = self.rates_at(s.position, s.velocity)
             # attitude: C' = C [w_ib x] - [w_in x] C, i.e. the body increment w_ib - C^T w_in

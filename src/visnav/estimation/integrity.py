@@ -39,10 +39,10 @@ def horizontal_protection_level(P_h: np.ndarray, probability: float = 0.999, inf
     scaled by ``inflation`` = k^2)."""
     if not 0.0 < probability < 1.0:
         raise ValueError(f"probability must be in (0, 1), got {probability}")
-    P = np.asarray(P_h, float)[:2, :2]
-    if not np.all(np.isfinite(P)):
-        return math.nan if np.any(np.isnan(P)) else math.inf
-    lam = float(np.linalg.eigvalsh(0.5 * (P + P.T))[-1])  # lambda_max of the symmetric part
+    (a, b), (c, d) = np.asarray(P_h, float)[:2, :2].tolist()
+    if not math.isfinite(a + b + c + d):
+        return math.nan if any(map(math.isnan, (a, b, c, d))) else math.inf
+    lam = 0.5 * (a + d) + math.hypot(0.5 * (a - d), 0.5 * (b + c))  # lambda_max of the symmetric part
     return math.sqrt(max(inflation, 0.0) * chi2_2_quantile(probability) * max(lam, 0.0))
 
 

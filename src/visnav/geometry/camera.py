@@ -43,6 +43,11 @@ def _pair(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def _any(a) -> bool:
+    """``np.any`` of an array, the truth of a number."""
+    return bool(a.any()) if isinstance(a, np.ndarray) else bool(a)
+
+
 @dataclass(frozen=True)
 class PinholeCamera:
     """Intrinsics ``K`` = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] plus rational distortion ``dist``."""
@@ -160,7 +165,7 @@ class PinholeCamera:
         for _ in range(_UNDISTORT_ITERS):
             xd, yd = self._distort_xy(x, y)
             rx, ry = tx - xd, ty - yd
-            if not (np.any(np.abs(rx) > _UNDISTORT_TOL) or np.any(np.abs(ry) > _UNDISTORT_TOL)):
+            if not (_any(abs(rx) > _UNDISTORT_TOL) or _any(abs(ry) > _UNDISTORT_TOL)):
                 break
             a, b, d = self._distortion_jacobian(x, y)
             det = a * d - b * b
@@ -169,7 +174,9 @@ class PinholeCamera:
         a, b, d = self._distortion_jacobian(x, y)
         lim = 1e-9 / max(self.fx, self.fy)
         ok = (abs(tx - xd) < lim) & (abs(ty - yd) < lim) & (a * d - b * b > 0)
-        return np.where(ok, x, np.nan), np.where(ok, y, np.nan)
+        if isinstance(ok, np.ndarray):
+            return np.where(ok, x, np.nan), np.where(ok, y, np.nan)
+        return (x, y) if ok else (math.nan, math.nan)  # (numbers stay numbers)
 
     # --- projection ------------------------------------------------------------------------
 

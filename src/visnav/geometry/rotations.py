@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from visnav.geometry.kernels import dcm_to_euler3
+
 __all__ = [
     "euler_to_dcm",
     "euler_to_dcm3",
@@ -31,6 +33,8 @@ __all__ = [
 ]
 
 _GIMBAL_EPS = 1e-12
+#: one matrix through ``geometry/kernels`` (the same formulas on floats, held to the batch path by the tests)
+KERNELS = True
 
 
 def _vec3(x, name: str) -> np.ndarray:
@@ -42,20 +46,22 @@ def _vec3(x, name: str) -> np.ndarray:
 
 def matrix3(rows) -> np.ndarray:
     """A (..., 3, 3) array of nine entries given row by row: numbers, or arrays of one batch shape."""
-    flat = [x for row in rows for x in row]
-    shape = next((np.shape(x) for x in flat if np.ndim(x)), ())
+    shape = next((np.shape(x) for row in rows for x in row if np.ndim(x)), ())
     if not shape:
         return np.array(rows, dtype=float)
-    entries = np.array([x if np.ndim(x) else np.full(shape, x) for x in flat])  # (9, ...)
-    return entries.reshape(9, -1).T.reshape(shape + (3, 3))
+    out = np.empty(shape + (3, 3))
+    for i, row in enumerate(rows):
+        for j, x in enumerate(row):
+            out[..., i, j] = x
+    return out
 
 
 def wrap_angle(a):
-    """Wrap angle(s) in radians to the interval (-pi, pi]."""
-    a = np.asarray(a, dtype=float)
-    w = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
-    w = np.where(w <= -np.pi, w + 2.0 * np.pi, w)
-    return w if w.ndim else float(w)
+    """Wrap angle(s) in radians to the interval (-pi, pi] (a float stays a float: one number without numpy)."""
+    a = float(a) if isinstance(a, float) else np.asarray(a, dtype=float)
+    w = math.pi - (math.pi - a) % (2.0 * math.pi)
+    w = w + 2.0 * math.pi * (w <= -math.pi)
+    return w if isinstance(w, float) or w.ndim else float(w)
 
 
 # ---------------------------------------------------------------- cross products
@@ -167,6 +173,8 @@ def dcm_to_euler(C) -> np.ndarray:
     Pitch is in [-pi/2, pi/2]; at gimbal lock (pitch = +-pi/2) roll is set to 0.
     """
     C = np.asarray(C, dtype=float)
+    if KERNELS and C.shape == (3, 3):
+        return np.array(dcm_to_euler3(C.tolist()))
     if C.ndim < 2 or C.shape[-2:] != (3, 3):
         raise ValueError(f"C must have shape (..., 3, 3), got shape {C.shape}")
     # Read the angles off eq. 3.2: C31 = -sinθ, C32 = sinφ cosθ, C33 = cosφ cosθ,
@@ -186,6 +194,13 @@ def body_rates_to_euler_rates(euler, pqr) -> np.ndarray:
     """Euler angle rates (φ̇, θ̇, ψ̇) = E(e) (p, q, r), seed 002 eq. 3.7."""
     e = _vec3(euler, "euler")
     w = _vec3(pqr, "pqr")
+    if e.shape == w.shape == (3,):  # one vector: E's entries on floats
+        phi, theta, _ = e.tolist()
+        if abs(math.cos(theta)) < _GIMBAL_EPS:
+            raise ValueError(f"euler pitch is +-pi/2 (gimbal lock), Euler rates undefined: euler={e}")
+        p, q, r = w.tolist()
+        E = _rate_rows(math.cos(phi), math.sin(phi), math.cos(theta), math.tan(theta))
+        return np.array([a * p + b * q + c * r for a, b, c in E])
     if np.any(np.abs(np.cos(e[..., 1])) < _GIMBAL_EPS):
         raise ValueError(f"euler pitch is +-pi/2 (gimbal lock), Euler rates undefined: euler={e}")
     return (euler_rate_matrix(e) @ w[..., None])[..., 0]

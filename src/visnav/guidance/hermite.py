@@ -102,10 +102,9 @@ class HermiteSegment:
     def frame_at(self, s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """p(s), t(s) and k(s) (eq. 4.2-4.5) at one scalar s: the guidance's per-step call."""
         s = float(s)
-        A, B, C, D = self.coeffs
-        p = ((A * s + B) * s + C) * s + D  # eq. 4.2
-        t = (3.0 * A * s + 2.0 * B) * s + C  # eq. 4.3
-        q = 6.0 * A * s + 2.0 * B  # eq. 4.4
+        # eq. 4.2-4.4: p, t, q = (s^3, s^2, s, 1), its first and its second derivative times (A, B, C, D)
+        p, t, q = np.array([[s * s * s, s * s, s, 1.0], [3.0 * s * s, 2.0 * s, 1.0, 0.0], [6.0 * s, 2.0, 0.0, 0.0]]) \
+            @ self.coeffs
         n2 = t @ t
         k = (q * n2 - t * (t @ q)) / (n2 * n2)  # eq. 4.5: (t × q) × t = q (t·t) − t (t·q)
         return p, t, k

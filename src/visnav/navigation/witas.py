@@ -42,6 +42,7 @@ from visnav.navigation.integrity import (HandoverCheck, NavIntegrity, TiltCheck,
 from visnav.vision.odometry import OdometryStep, VisualOdometry
 from visnav.vision.registration import MapRegistration
 from visnav.log_schema import register_stream
+from visnav.scalar import finite
 from visnav.estimation.eskf import BA_
 from visnav.estimation.eskf import EskfConfig, ErrorStateKF
 from visnav.estimation.ins import NavState, StrapdownINS, euler_to_quat
@@ -231,7 +232,7 @@ class WitasNavigator(CommandDispatch):
         if isinstance(m, ImuSample):
             self._on_imu(m)
         elif isinstance(m, AttitudeSample):
-            if np.isfinite(np.asarray(m.euler, float)).all():
+            if finite(np.asarray(m.euler, float)):
                 self.att.push(m.t, m.euler)
             else:
                 self.h.rejected_samples += 1
@@ -286,7 +287,7 @@ class WitasNavigator(CommandDispatch):
         return self.att.newest()
 
     def _on_imu(self, m: ImuSample) -> None:
-        if not (np.isfinite(np.asarray(m.accel, float)).all() and np.isfinite(np.asarray(m.gyro, float)).all()) or (
+        if not finite(np.asarray(m.accel, float), np.asarray(m.gyro, float)) or (
                 self._last_imu is not None and m.t <= self._last_imu.t):
             self.h.rejected_samples += 1
             return

@@ -28,7 +28,7 @@ import numpy as np
 
 from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
 from visnav.vehicles.base import Environment
-from visnav.vehicles.kernels import fixedwing_rk4
+from visnav.vehicles.kernels import fixedwing_constants, fixedwing_derivatives, fixedwing_rk4
 from visnav.measurements import Controls, VehicleState  # noqa: F401  (Controls re-exported: the command type lives in measurements)
 
 G = 9.81
@@ -165,6 +165,7 @@ class FixedWingModel:
 
     def __post_init__(self) -> None:
         self._gam = self.params.gammas()
+        self._k = fixedwing_constants(self.params, self._gam)
         self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
         self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
         self._state_x: np.ndarray | None = None  # the x and t ``state`` was built for
@@ -176,7 +177,12 @@ class FixedWingModel:
         evaluated when first read (a loop that reads it at its control rate skips the rest)."""
         if self._air_at is not None:
             x1, uc, w = self._air_at
-            self._air = derivatives(self.params, x1, uc, w, self._gam)[1]
+            if self.kernel:
+                u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
+                Va, alpha, beta, f = fixedwing_derivatives(self._k, x1.tolist(), u4, w.tolist(), air=True)[1]
+                self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(f)}
+            else:
+                self._air = derivatives(self.params, x1, uc, w, self._gam)[1]
             self._air_at = None
         return self._air
 
@@ -203,7 +209,7 @@ class FixedWingModel:
         if not isinstance(environment, Environment):
             raise TypeError(f"FixedWingModel.step takes a vehicles.base.Environment, got {type(environment).__name__}")
         w = np.asarray(environment.wind_ned, float)
-        if not np.isfinite(w).all():
+        if not all(map(math.isfinite, w.tolist())):
             raise ValueError(f"wind must be finite, got {environment.wind_ned}")
 
         def f(x):
@@ -212,17 +218,17 @@ class FixedWingModel:
         x = self.x
         if self.kernel:
             u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
-            x1 = np.array(fixedwing_rk4(self.params, self._gam, _lift_drag, x.tolist(), u4, w.tolist(), dt))
+            x1 = fixedwing_rk4(self._k, x.tolist(), u4, w.tolist(), dt)
         else:
             k1 = f(x)
             k2 = f(x + 0.5 * dt * k1)
             k3 = f(x + 0.5 * dt * k2)
             k4 = f(x + dt * k3)
-            x1 = x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            x1 = (x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)).tolist()
         x1[8] = (x1[8] + math.pi) % (2 * math.pi) - math.pi
-        if not np.isfinite(x1).all():
+        if not all(map(math.isfinite, x1)):
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
-        self.x = x1
+        self.x = x1 = np.array(x1)
         self.t += dt
         self._air_at = (x1, uc, w)
 

@@ -4,7 +4,8 @@ The models are written once, in the form of their equations (``vehicles/fixedwin
 McLain eq. 3.14-3.17 and 4.6-4.19). A simulation steps the fixed wing 100 times a second through four
 evaluations of those equations; on 3-vectors numpy's per-call overhead is most of the cost (~27 us per
 evaluation against ~6 us on floats), which halved CONDOR's real-time factor. This module evaluates the same
-equations, term for term and in the same order, on Python floats. It is not the model: a change to the physics
+equations on Python floats (the fixed wing's four RK4 stages in one frame, its parameters read once per
+model, the sums of constants and controls once per step). It is not the model: a change to the physics
 is made in ``fixedwing.derivatives`` and then here, and ``tests/vehicles/test_kernels.py`` holds every kernel to
 its readable reference at 1e-12 relative (random states, controls and winds, and a whole flight).
 ``FixedWingModel(kernel=False)`` flies the readable path.
@@ -13,71 +14,108 @@ its readable reference at 1e-12 relative (random states, controls and winds, and
 from __future__ import annotations
 
 import math
+from math import asin, atan2, copysign, cos, exp, sin, sqrt
 
 from visnav.geometry.rotations import _dcm_rows
 
 G = 9.81
 
 
-def fixedwing_derivatives(p, gam, lift_drag, x, u, wind) -> list[float]:
-    """``fixedwing.derivatives(p, x, u, wind, gam)[0]`` on floats: ``x`` 12 floats, ``u`` (aileron, elevator,
-    rudder, throttle), ``wind`` (n, e, d); ``lift_drag`` is ``fixedwing._lift_drag``."""
-    _, _, _, uu, vv, ww, phi, th, psi, P, Q, R = x
-    da, de, dr, dt = u
+def fixedwing_constants(p, gam) -> tuple:
+    """What the fixed-wing kernel reads of ``FixedWingParams`` ``p`` and its Gamma terms ``gam``, once per model (a
+    parameter's attribute lookup, and ``p.AR``'s division, cost as much as its use)."""
+    return (p.M, p.alpha0, p.C_L_0, p.C_L_alpha, p.C_D_p, math.pi * p.e * p.AR, 0.5 * p.rho * p.S,
+            p.C_D_q, p.C_L_q, p.C_D_de, p.C_L_de, p.c, p.b, p.mass, 0.5 * p.rho * p.S_prop * p.C_prop, p.k_motor,
+            p.C_Y_0, p.C_Y_beta, p.C_Y_p, p.C_Y_r, p.C_Y_da, p.C_Y_dr,
+            p.C_l_0, p.C_l_beta, p.C_l_p, p.C_l_r, p.C_l_da, p.C_l_dr,
+            p.C_m_0, p.C_m_alpha, p.C_m_q, p.C_m_de,
+            p.C_n_0, p.C_n_beta, p.C_n_p, p.C_n_r, p.C_n_da, p.C_n_dr, p.Jy, *gam)
+
+
+def _fixedwing(k, x, u, wind, dt: float, rk4: bool):
+    """Beard & McLain eq. 3.14-3.17 with eq. 4.6-4.19 (``fixedwing.derivatives`` with ``_lift_drag``) on floats: the
+    state derivative and air data at ``x`` (``rk4`` False), or one classic RK4 step over ``dt`` (True) with its four
+    evaluations in this one frame. The sums of a constant and the controls' terms are formed once per call."""
+    (M, a0, CL0, CLa, CDp, piEAR, hrhoS, CDq, CLq, CDde, CLde, c, b, m, kprop, kmot,
+     y0, yb, yp, yr, yda, ydr, l0, lb, lp, lr, lda, ldr, m0, ma, mq, mde, n0, nb, np_, nr, nda, ndr, Jy,
+     g1, g2, g3, g4, g5, g6, g7, g8) = k
+    _, _, _, u0, v0, w0, phi0, th0, psi0, P0, Q0, R0 = x
+    uu, vv, ww, phi, th, psi, P, Q, R = u0, v0, w0, phi0, th0, psi0, P0, Q0, R0
+    da, de, dr, thr = u
     wn, we, wd = wind
-    cf, sf, ct, st = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th)
-    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _dcm_rows(cf, sf, ct, st, math.cos(psi), math.sin(psi))
-    ur = uu - (c00 * wn + c10 * we + c20 * wd)  # eq. 2.7: body velocity minus C^T wind
-    vr = vv - (c01 * wn + c11 * we + c21 * wd)
-    wr = ww - (c02 * wn + c12 * we + c22 * wd)
-    Va = math.sqrt(ur * ur + vr * vr + wr * wr)  # eq. 2.8
-    Va_s = max(Va, 1.0)
-    alpha = math.atan2(wr, ur)
-    beta = math.asin(max(-1.0, min(1.0, vr / Va_s)))
-    qbar = 0.5 * p.rho * Va_s * Va_s * p.S
-    cl, cd = lift_drag(p, alpha)
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    cx, cxq, cxde = -cd * ca + cl * sa, -p.C_D_q * ca + p.C_L_q * sa, -p.C_D_de * ca + p.C_L_de * sa  # eq. 4.19
-    cz, czq, czde = -cd * sa - cl * ca, -p.C_D_q * sa - p.C_L_q * ca, -p.C_D_de * sa - p.C_L_de * ca
-    c2v, b2v = p.c / (2.0 * Va_s), p.b / (2.0 * Va_s)
-    m = p.mass
-    thrust = 0.5 * p.rho * p.S_prop * p.C_prop * ((p.k_motor * dt) ** 2 - Va * Va)  # eq. 4.18
-    fx = -m * G * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
-    fy = m * G * ct * sf + qbar * (p.C_Y_0 + p.C_Y_beta * beta + p.C_Y_p * b2v * P + p.C_Y_r * b2v * R
-                                   + p.C_Y_da * da + p.C_Y_dr * dr)
-    fz = m * G * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
-    l_m = qbar * p.b * (p.C_l_0 + p.C_l_beta * beta + p.C_l_p * b2v * P + p.C_l_r * b2v * R
-                        + p.C_l_da * da + p.C_l_dr * dr)
-    m_m = qbar * p.c * (p.C_m_0 + p.C_m_alpha * alpha + p.C_m_q * c2v * Q + p.C_m_de * de)
-    n_m = qbar * p.b * (p.C_n_0 + p.C_n_beta * beta + p.C_n_p * b2v * P + p.C_n_r * b2v * R
-                        + p.C_n_da * da + p.C_n_dr * dr)
-    g1, g2, g3, g4, g5, g6, g7, g8 = gam
-    tt = st / ct
-    return [c00 * uu + c01 * vv + c02 * ww, c10 * uu + c11 * vv + c12 * ww, c20 * uu + c21 * vv + c22 * ww,  # 3.14
-            R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m,  # eq. 3.15
-            P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct,  # eq. 3.16
-            g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,  # eq. 3.17
-            g5 * P * R - g6 * (P * P - R * R) + m_m / p.Jy,
-            g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m]
+    thrust0 = (kmot * thr) ** 2
+    mG = m * G
+    Yc, Lc, Mc, Nc = y0 + yda * da + ydr * dr, l0 + lda * da + ldr * dr, m0 + mde * de, n0 + nda * da + ndr * dr
+    s = None
+    for i in range(4 if rk4 else 1):
+        cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(th), sin(th), cos(psi), sin(psi)
+        c00, c01, c02 = ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp  # eq. 3.2 (rotations._dcm_rows)
+        c10, c11, c12 = ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp
+        c20, c21, c22 = -st, sf * ct, cf * ct
+        ur = uu - (c00 * wn + c10 * we + c20 * wd)  # eq. 2.7: body velocity minus C^T wind
+        vr = vv - (c01 * wn + c11 * we + c21 * wd)
+        wr = ww - (c02 * wn + c12 * we + c22 * wd)
+        Va = sqrt(ur * ur + vr * vr + wr * wr)  # eq. 2.8
+        Va_s = Va if Va > 1.0 else 1.0
+        alpha = atan2(wr, ur)
+        sb = vr / Va_s
+        beta = asin(-1.0 if sb < -1.0 else (1.0 if sb > 1.0 else sb))
+        qbar = hrhoS * Va_s * Va_s
+        ca, sa = cos(alpha), sin(alpha)
+        ea, eb = exp(-M * (alpha - a0)), exp(M * (alpha + a0))  # eq. 4.9-4.11 (_lift_drag)
+        sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
+        cl_lin = CL0 + CLa * alpha
+        cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * copysign(1.0, alpha) * sa * sa * ca
+        cd = CDp + cl_lin * cl_lin / piEAR
+        cx, cxq, cxde = -cd * ca + cl * sa, -CDq * ca + CLq * sa, -CDde * ca + CLde * sa  # eq. 4.19
+        cz, czq, czde = -cd * sa - cl * ca, -CDq * sa - CLq * ca, -CDde * sa - CLde * ca
+        c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
+        thrust = kprop * (thrust0 - Va * Va)  # eq. 4.18
+        fx = -mG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+        fy = mG * ct * sf + qbar * (Yc + yb * beta + (yp * P + yr * R) * b2v)
+        fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
+        qb = qbar * b
+        l_m = qb * (Lc + lb * beta + (lp * P + lr * R) * b2v)
+        m_m = qbar * c * (Mc + ma * alpha + mq * c2v * Q)
+        n_m = qb * (Nc + nb * beta + (np_ * P + nr * R) * b2v)
+        tt = st / ct
+        d = [c00 * uu + c01 * vv + c02 * ww, c10 * uu + c11 * vv + c12 * ww, c20 * uu + c21 * vv + c22 * ww,  # 3.14
+             R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m,  # eq. 3.15
+             P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct,  # eq. 3.16
+             g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,  # eq. 3.17
+             g5 * P * R - g6 * (P * P - R * R) + m_m / Jy,
+             g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m]
+        if not rk4:
+            return d, (Va, alpha, beta, (fx / m - c20 * G, fy / m - c21 * G, fz / m - c22 * G))
+        if i == 0:  # k1; then the sum k1 + 2 k2 + 2 k3, and x + dt / 6 (that + k4)
+            s, h = d, 0.5 * dt
+        elif i < 3:
+            s, h = [a + 2.0 * b_ for a, b_ in zip(s, d)], 0.5 * dt if i == 1 else dt
+        else:
+            w = dt / 6.0
+            return [a + w * (b1 + b2) for a, b1, b2 in zip(x, s, d)]
+        # the next stage, x + h d (what d reads of it)
+        uu, vv, ww, phi, th, psi = u0 + h * d[3], v0 + h * d[4], w0 + h * d[5], phi0 + h * d[6], th0 + h * d[7], psi0 + h * d[8]
+        P, Q, R = P0 + h * d[9], Q0 + h * d[10], R0 + h * d[11]
 
 
-def fixedwing_rk4(p, gam, lift_drag, x, u, wind, dt: float) -> list[float]:
+def fixedwing_derivatives(k, x, u, wind, air: bool = False):
+    """``fixedwing.derivatives(p, x, u, wind, gam)[0]`` on floats: ``k`` from :func:`fixedwing_constants`, ``x`` 12
+    floats, ``u`` (aileron, elevator, rudder, throttle), ``wind`` (n, e, d). ``air``: also (Va, alpha, beta, specific
+    force), ``derivatives(...)[1]``'s values."""
+    dx, air_data = _fixedwing(k, x, u, wind, 0.0, False)
+    return (dx, air_data) if air else dx
+
+
+def fixedwing_rk4(k, x, u, wind, dt: float) -> list[float]:
     """One classic RK4 step of :func:`fixedwing_derivatives` (``FixedWingModel.step``'s, without the yaw wrap)."""
-    def f(s):
-        return fixedwing_derivatives(p, gam, lift_drag, s, u, wind)
-
-    h = 0.5 * dt
-    k1 = f(x)
-    k2 = f([a + h * b for a, b in zip(x, k1)])
-    k3 = f([a + h * b for a, b in zip(x, k2)])
-    k4 = f([a + dt * b for a, b in zip(x, k3)])
-    w = dt / 6.0
-    return [a + w * (b1 + 2.0 * b2 + 2.0 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4)]
+    return _fixedwing(k, x, u, wind, dt, True)
 
 
-def rmax_derivatives(P, y, att, wind) -> list[float]:
+def rmax_derivatives(P, y, att, wind, force: bool = False):
     """``rmax.RmaxModel._deriv(y, att, wind)[0]`` on floats (seed 002 eq. 3.9 with the thrust of eq. 3.10):
-    d/dt of (u v w N E D ψ w_yacs); ``P`` the model's ``RmaxParams``, ``att`` (φ, θ, p, q, r, ΔaZ)."""
+    d/dt of (u v w N E D ψ w_yacs); ``P`` the model's ``RmaxParams``, ``att`` (φ, θ, p, q, r, ΔaZ).
+    ``force``: also the specific force (``_deriv(...)[1]``)."""
     u, v, w, _, _, _, psi, w_yacs = y
     phi, theta, p, q, r, az = att
     wn, we, wd = wind
@@ -88,12 +126,13 @@ def rmax_derivatives(P, y, att, wind) -> list[float]:
     wa = w - (c02 * wn + c12 * we + c22 * wd)
     w_hold = w_yacs if P.heave_damping == "yacs" else 0.0
     fx, fy, fz = P.Xu * ua, P.Yv * va, P.Zw * (wa - w_hold) - P.g * (1.0 + az)
-    return [fx - (q * w - r * v) + P.g * c20,  # eq. 3.9: f − ω × v + C_nb (0, 0, g)
-            fy - (r * u - p * w) + P.g * c21,
-            fz - (p * v - q * u) + P.g * c22,
-            c00 * u + c01 * v + c02 * w, c10 * u + c11 * v + c12 * w, c20 * u + c21 * v + c22 * w,
-            (q * sf + r * cf) / ct,  # ψ̇, eq. 3.7
-            -P.g * az]
+    dy = [fx - (q * w - r * v) + P.g * c20,  # eq. 3.9: f − ω × v + C_nb (0, 0, g)
+          fy - (r * u - p * w) + P.g * c21,
+          fz - (p * v - q * u) + P.g * c22,
+          c00 * u + c01 * v + c02 * w, c10 * u + c11 * v + c12 * w, c20 * u + c21 * v + c22 * w,
+          (q * sf + r * cf) / ct,  # ψ̇, eq. 3.7
+          -P.g * az]
+    return (dy, (fx, fy, fz)) if force else dy
 
 
 def rmax_rk4(P, y, a0, ah, a1, wind, dt: float) -> list[float]:

@@ -32,7 +32,7 @@ from scipy import signal
 from visnav.geometry.rotations import cross3, euler_to_dcm3
 from visnav.measurements import VehicleState, YacsCommand
 from visnav.vehicles.base import Environment
-from visnav.vehicles.kernels import rmax_rk4
+from visnav.vehicles.kernels import rmax_derivatives, rmax_rk4
 
 #: channel -> (numerator, denominator), highest power first; units in the module docstring.
 RMAX_TRANSFER_FUNCTIONS: dict[str, tuple[np.ndarray, np.ndarray]] = {
@@ -280,9 +280,7 @@ class RmaxModel:
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
         w = np.zeros(3) if wind_ned is None else np.asarray(wind_ned, dtype=float)
-        if w.shape != (3,):
-            raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
-        if not np.all(np.isfinite(w)):
+        if w.shape != (3,) or not all(map(math.isfinite, w.tolist())):
             raise ValueError(f"wind_ned must be 3 finite NED values [m/s], got {wind_ned}")
         Ad, Bd, _, _, Ah, Bh = self._matrices(dt)
         u = self._saturate(command)
@@ -333,6 +331,8 @@ class RmaxModel:
         C = euler_to_dcm3(phi, theta, y[6])
         if self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
             f = -self.params.g * C[2]
+        elif self.kernel:  # the same on floats (vehicles/kernels)
+            f = np.array(rmax_derivatives(self.params, y.tolist(), att, np.asarray(wind, float).tolist(), True)[1])
         else:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
             f = self._deriv(y, att, np.asarray(wind, float))[1]
         psi = (y[6] + math.pi) % (2 * math.pi) - math.pi

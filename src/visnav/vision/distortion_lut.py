@@ -13,7 +13,8 @@ the pixel back into a board distance with the nominal field of view,
   as an additive pixel offset, so that an image centre that is not the optical centre (the
   asymmetric crop of §7.1, Fig. 7.2) is corrected too.
 
-Both tables are interpolated linearly (eq. 3.7), with scipy's ``RegularGridInterpolator``.
+Both tables are interpolated linearly (eq. 3.7) on their regular grid, the end cells extrapolated (the values of
+scipy's ``RegularGridInterpolator(..., fill_value=None)``, without its per-call set-up).
 """
 
 from __future__ import annotations
@@ -21,10 +22,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import LinearNDInterpolator, RegularGridInterpolator
+from scipy.interpolate import LinearNDInterpolator
 from scipy.spatial import Delaunay, cKDTree
 
 from visnav.geometry.camera import PinholeCamera
+from visnav.vision import kernels
 from visnav.vision.rectification import CameraGeometry
 
 __all__ = ["Board", "synthetic_board", "DistortionLUT", "thesis_lut", "full_lut"]
@@ -76,19 +78,39 @@ class DistortionLUT:
     height: int
 
     def __post_init__(self) -> None:
-        # eq. 3.7: linear interpolation of both tables at once (values (len(gx), len(gy), 2)), extrapolated
-        self._interp = RegularGridInterpolator((self.gx, self.gy), np.stack([self.table_x, self.table_y], axis=-1),
-                                               bounds_error=False, fill_value=None)
+        self._tables = np.stack([self.table_x, self.table_y], axis=-1)  # (len(gx), len(gy), 2)
+        self._lists = tuple(np.asarray(a, float).tolist() for a in (self.gx, self.gy, self.table_x, self.table_y))
+
+    def _lookup(self, a, b) -> np.ndarray:
+        """Eq. 3.7: both tables interpolated bilinearly at normalised (a, b) (the end cells extrapolated); (..., 2)."""
+        i, u = _cell(self.gx, a)
+        j, v = _cell(self.gy, b)
+        t, u, v = self._tables, u[..., None], v[..., None]
+        return (t[i, j] * (1 - u) * (1 - v) + t[i, j + 1] * (1 - u) * v
+                + t[i + 1, j] * u * (1 - v) + t[i + 1, j + 1] * u * v)
 
     def correct(self, Xm, Ym):
         """Corrected image coordinates (X_tgt, Y_tgt) of measured (X_tgtm, Y_tgtm) [px]."""
         Xm, Ym = np.asarray(Xm, float), np.asarray(Ym, float)
-        nx, ny = Xm / (self.width / 2.0), Ym / (self.height / 2.0)
+        if kernels.ENABLED and Xm.size == 1 and Ym.size == 1:  # one point: vision/kernels on floats
+            a, b = Xm.item() / (self.width / 2.0), Ym.item() / (self.height / 2.0)
+            if self.kind == "factor":
+                cx, cy = kernels.bilinear1(*self._lists, abs(a), abs(b))
+                return Xm * cx, Ym * cy
+            cx, cy = kernels.bilinear1(*self._lists, a, b)
+            return Xm + cx, Ym + cy
+        nx, ny = np.broadcast_arrays(Xm / (self.width / 2.0), Ym / (self.height / 2.0))
         if self.kind == "factor":  # eq. 3.7-3.8: the quadrant's table at (|X_m|, |Y_m|), a factor
-            c = self._interp(np.stack(np.broadcast_arrays(np.abs(nx), np.abs(ny)), axis=-1))
+            c = self._lookup(np.abs(nx), np.abs(ny))
             return Xm * c[..., 0], Ym * c[..., 1]
-        c = self._interp(np.stack(np.broadcast_arrays(nx, ny), axis=-1))
+        c = self._lookup(nx, ny)
         return Xm + c[..., 0], Ym + c[..., 1]
+
+
+def _cell(g: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The grid cell of ``x`` on the ascending grid ``g`` (the first or last outside it) and ``x``'s place in it."""
+    i = np.minimum(np.maximum(np.searchsorted(g, x, side="right") - 1, 0), len(g) - 2)
+    return i, (x - g[i]) / (g[i + 1] - g[i])
 
 
 def _to_grid(px, py, values, gx, gy) -> list[np.ndarray]:

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from visnav.vision import kernels
+
 __all__ = ["CameraGeometry", "RangeEstimate", "altimeter_correction", "roll_correct", "tilt_rectification",
            "ground_range", "estimate_range", "vision_bearing"]
 
@@ -70,9 +72,10 @@ def altimeter_correction(h_bar, t_outside_c, c0: float = 0.004, c1: float = 0.00
     """Temperature-corrected barometric height AGL, seed 004 eq. 2.1:
     ``h = h_bar (1 - (c0 + (15 - t_O) c1) h_bar)`` with the printed c0 = 0.004, c1 = 0.00005 (which
     would take 40 % off at 100 m; the simulation's altimeter uses a tenth of both, docs/condor.md)."""
-    h_bar, t_o = np.asarray(h_bar, float), np.asarray(t_outside_c, float)
-    h = h_bar * (1.0 - (c0 + (15.0 - t_o) * c1) * h_bar)  # eq. 2.1
-    return h if h.ndim else float(h)
+    if not (isinstance(h_bar, float) and isinstance(t_outside_c, (float, int))):  # (numbers stay numbers)
+        h_bar, t_outside_c = np.asarray(h_bar, float), np.asarray(t_outside_c, float)
+    h = h_bar * (1.0 - (c0 + (15.0 - t_outside_c) * c1) * h_bar)  # eq. 2.1
+    return h if isinstance(h, float) or h.ndim else float(h)
 
 
 def roll_correct(X, Y, roll, method: str = "exact"):
@@ -175,7 +178,8 @@ def estimate_range(X: float, Y: float, h: float, tilt: float, roll: float, geom:
         return RangeEstimate(False, reason=f"no estimate: target ({X:.0f}, {Y:.0f}) px outside the image")
     if method not in ("exact", "thesis"):
         raise ValueError(f"method must be 'exact' or 'thesis', got {method!r}")
-    D_T, L_T, D_X, D_Y = ground_range(float(X), float(Y), float(h), float(tilt), float(roll), geom, method)
+    chain = kernels.ground_range1 if kernels.ENABLED else ground_range  # (one pixel: floats, vision/kernels)
+    D_T, L_T, D_X, D_Y = chain(float(X), float(Y), float(h), float(tilt), float(roll), geom, method)
     if not (math.isfinite(D_T) and math.isfinite(L_T)):
         return RangeEstimate(False, reason="no estimate: target ray at or above the horizon")
     return RangeEstimate(True, float(D_T), float(L_T), float(vision_bearing(D_X, D_Y)[0]))

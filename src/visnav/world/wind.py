@@ -84,8 +84,7 @@ def to_ned(gust_uvw, wind_from_deg: float) -> np.ndarray:
         raise ValueError(f"gust_uvw must have shape (..., 3), got {g.shape}")
     psi = math.radians(_finite("wind_from_deg", wind_from_deg)) + math.pi  # downwind heading
     c, s = math.cos(psi), math.sin(psi)
-    u, v, w = g[..., 0], g[..., 1], g[..., 2]
-    return np.stack([c * u - s * v, s * u + c * v, w], axis=-1)
+    return g @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]).T  # the rotation about down by psi
 
 
 def _sigma_w_from_intensity(intensity) -> float:
