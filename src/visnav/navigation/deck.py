@@ -885,8 +885,8 @@ class DeckNavigator(CommandDispatch):
         while self._widened and self._widened[0] < self._t - self.cfg.lost_window_s:
             self._widened.popleft()
         if 0 < self.cfg.lost_widenings <= len(self._widened) + 1:
-            return self._relock(f"accelerometer-bias test: NIS {total:.0f} over {k} dof, the "
-                                f"{len(self._widened) + 1}th time in {self.cfg.lost_window_s:g} s")
+            return self._relock(f"accelerometer-bias test: NIS {total:.0f} over {k} dof, widening "
+                                f"{len(self._widened) + 1} within {self.cfg.lost_window_s:g} s")
         self._bias_rest_until = self._t + self.cfg.bias_test_rest_s
         P = self.ukf.P.copy()
         i = np.arange(dm.BIAS.start, dm.BIAS.stop)
