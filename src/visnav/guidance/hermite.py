@@ -23,11 +23,14 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
+from visnav.guidance import kernels
+
 #: eq. 4.2 Hermite basis: rows give the coefficients A, B, C, D of s³, s², s, 1
 HERMITE_BASIS = np.array([[2.0, -2.0, 1.0, 1.0], [-3.0, 3.0, -2.0, -1.0], [0.0, 0.0, 1.0, 0.0],
                           [1.0, 0.0, 0.0, 0.0]])
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 _GL_X, _GL_W = 0.5 * (_GL_X + 1.0), 0.5 * _GL_W  # nodes and weights on [0, 1]
+_GL_XW = tuple(zip(_GL_X.tolist(), _GL_W.tolist()))  # (the kernel's floats)
 
 
 def _vec(x: ArrayLike, name: str) -> np.ndarray:
@@ -52,6 +55,7 @@ class HermiteSegment:
     t1: np.ndarray
     name: str = "segment"
     coeffs: np.ndarray = field(init=False, repr=False)  # (4, 3): A, B, C, D
+    _tangent_rows: tuple = field(init=False, repr=False, compare=False)  # (3A, 2B, C) as floats (the kernel's)
 
     def __post_init__(self) -> None:
         vals = {k: _vec(getattr(self, k), f"{self.name} {k}") for k in ("p0", "p1", "t0", "t1")}
@@ -66,6 +70,7 @@ class HermiteSegment:
         c = HERMITE_BASIS @ G
         c.setflags(write=False)
         object.__setattr__(self, "coeffs", c)
+        object.__setattr__(self, "_tangent_rows", tuple(map(tuple, (c[:3] * [[3.0], [2.0], [1.0]]).tolist())))
         s = np.linspace(0.0, 1.0, 257)
         t = self.tangent(s)
         speed = np.linalg.norm(t, axis=-1)
@@ -112,6 +117,8 @@ class HermiteSegment:
     def arc_length(self, s: ArrayLike = 1.0, s0: ArrayLike = 0.0) -> np.ndarray | float:
         """Arc length from s0 to s [m]: the integral of |t(u)| (eq. 4.3) by 16-point Gauss-Legendre,
         vectorized over s."""
+        if kernels.ENABLED and isinstance(s, float) and isinstance(s0, float):  # the guidance's per-step call
+            return kernels.arc_length_1(self._tangent_rows, s, s0, _GL_XW)
         s, s0 = np.asarray(s, float), np.asarray(s0, float)
         h = s - s0
         u = s0[..., None] + h[..., None] * _GL_X  # (..., 16)
