@@ -1,10 +1,11 @@
 """Interleaved before/after real-time factors of the closed-loop scenarios.
 
-    python benchmarks/compare.py BEFORE_SRC AFTER_SRC [--rounds 3] [--scenarios a,b] [--seed 1]
+    python benchmarks/compare.py BEFORE_SRC AFTER_SRC [--rounds 3] [--scenarios a,b] [--seed 1] [--after-set K=V ...]
 
 Each round runs every scenario once per checkout (a fresh process each, ``benchmarks/rtf.py`` with
 that checkout's ``src`` on ``PYTHONPATH``), before and after back to back, so both see the same
-load. Prints one JSON line per run and a markdown table of min / median per checkout (the machine is
+load. ``--after-set`` overrides keys of the after checkout's scenario only (the same flight on a checkout whose
+defaults moved: e.g. deck-moving with the ideal sensors the before checkout flew). Prints one JSON line per run and a markdown table of min / median per checkout (the machine is
 shared: the minimum is the least disturbed run) with the load average seen.
 """
 
@@ -22,9 +23,10 @@ HERE = Path(__file__).resolve().parent
 SCENARIOS = ("palace-landing", "witas-homing", "deck-moving", "condor-orbit")
 
 
-def one(src: str, scenario: str, seed: int) -> dict:
+def one(src: str, scenario: str, seed: int, overrides=()) -> dict:
     env = {**os.environ, "PYTHONPATH": str(Path(src).resolve())}
-    out = subprocess.run([sys.executable, str(HERE / "rtf.py"), scenario, "--seed", str(seed)], env=env,
+    sets = [x for o in overrides for x in ("--set", o)]
+    out = subprocess.run([sys.executable, str(HERE / "rtf.py"), scenario, "--seed", str(seed), *sets], env=env,
                          capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -36,13 +38,14 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--scenarios", default=",".join(SCENARIOS))
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--after-set", action="append", default=[], help="override a key of the after run (KEY=VALUE)")
     a = ap.parse_args()
     rows: dict[tuple[str, str], list[dict]] = {}
     for r in range(a.rounds):
         for sc in a.scenarios.split(","):
             order = (("before", a.before), ("after", a.after)) if r % 2 == 0 else (("after", a.after), ("before", a.before))
             for tag, src in order:
-                res = one(src, sc, a.seed)
+                res = one(src, sc, a.seed, a.after_set if tag == "after" else ())
                 res["which"], res["round"] = tag, r
                 print(json.dumps(res), flush=True)
                 rows.setdefault((sc, tag), []).append(res)

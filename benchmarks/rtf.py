@@ -1,6 +1,6 @@
 """Real-time factor of one closed-loop scenario; optionally dump its metrics and log for diffing.
 
-    PYTHONPATH=src python benchmarks/rtf.py SCENARIO [--seed N] [--dump FILE.npz] [--profile] [--cv2-threads N]
+    PYTHONPATH=src python benchmarks/rtf.py SCENARIO [--seed N] [--set KEY=VALUE ...] [--dump FILE.npz] [--profile] [--cv2-threads N]
 
 Prints one JSON line: simulated time, wall and CPU time of ``run()`` (process CPU, so the render
 thread counts), main-thread CPU and the real-time factors. Run it with another checkout's
@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 
-def run(name: str, seed: int = 1, dump: str | None = None, profile: bool = False) -> dict:
+def run(name: str, seed: int = 1, dump: str | None = None, profile: bool = False, overrides=()) -> dict:
     from visnav.scenarios.schema import load_scenario
 
     try:
@@ -27,7 +27,7 @@ def run(name: str, seed: int = 1, dump: str | None = None, profile: bool = False
 
     from visnav.sensors import camera
 
-    sc = load_scenario(name, seed=seed)
+    sc = load_scenario(name, list(overrides), seed=seed)
     sim = make_simulation(sc)
     waited = [0.0, 0]
     result = camera.PendingFrame.result
@@ -79,9 +79,10 @@ if __name__ == "__main__":
     ap.add_argument("--dump")
     ap.add_argument("--profile", action="store_true")
     ap.add_argument("--cv2-threads", type=int, help="cv2.setNumThreads before the run (default: OpenCV's own)")
+    ap.add_argument("--set", action="append", default=[], help="override a scenario key (KEY=VALUE), repeatable")
     a = ap.parse_args()
     if a.cv2_threads is not None:
         import cv2
 
         cv2.setNumThreads(a.cv2_threads)
-    print(json.dumps(run(a.scenario, a.seed, a.dump, a.profile)))
+    print(json.dumps(run(a.scenario, a.seed, a.dump, a.profile, a.set)))
