@@ -41,3 +41,9 @@ def ins_propagate_flat(q, v, p, f, w, g, dt: float):
     f0, f1, f2 = f
     v1 = [vi + (c0 * f0 + c1 * f1 + c2 * f2 + gi) * dt for vi, (c0, c1, c2), gi in zip(v, C, g)]  # eq. A.1
     return [x / n for x in q1], v1, [pi + 0.5 * (a + b) * dt for pi, a, b in zip(p, v, v1)]
+
+
+def quat_step(q, w, dt: float) -> tuple:
+    """``ins.quat_mult(q, ins.quat_from_rotvec(w dt))`` on floats: the quaternion ``q`` (w, x, y, z) turned by the body
+    rates ``w`` (three floats) held over ``dt``."""
+    return _hamilton(*q, *_quat_exp(w[0] * dt, w[1] * dt, w[2] * dt))

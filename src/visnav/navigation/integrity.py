@@ -19,6 +19,7 @@ from scipy.stats import chi2
 
 from visnav.estimation.integrity import IntegrityMonitor
 from visnav.estimation.ins import quat_conj, quat_from_rotvec, quat_mult, quat_to_dcm, rotvec_from_dcm
+from visnav.estimation.kernels import quat_step
 from visnav.geometry.rotations import euler_to_dcm
 from visnav.log_schema import register_stream
 from visnav.measurements import Health
@@ -251,6 +252,8 @@ class GyroAttitudeCheck:
     A heading offset between the two attitudes cancels: only rotations over the window are compared.
     """
 
+    kernel = True  # gyro(): the quaternion product on floats (``estimation/kernels.quat_step``); False: readable
+
     def __init__(self, alpha: float = 1e-7, window_s: float = 1.0, att_sigma_rad: float = math.radians(0.05),
                  gyro_noise: float = 2e-3, gyro_bias: float = 1e-3, dt: float = 0.02,
                  att_bias_rad: float = math.radians(0.2)):
@@ -258,7 +261,7 @@ class GyroAttitudeCheck:
         self.window_s = float(window_s)
         self.sigma2 = 2 * att_sigma_rad**2 + gyro_noise**2 * dt * window_s + (gyro_bias * window_s) ** 2
         self.att_bias = float(att_bias_rad)
-        self._R = np.array([1.0, 0.0, 0.0, 0.0])
+        self._R = (1.0, 0.0, 0.0, 0.0)
         self._q: deque = deque()  # (t, cumulative gyro rotation at t: a quaternion)
         self.last_stat = 0.0
         self.detected_t: float | None = None
@@ -269,7 +272,10 @@ class GyroAttitudeCheck:
     def gyro(self, t: float, w, dt: float) -> None:
         """One propagation step of the filter: body rates ``w`` [rad/s] held over ``dt`` ending at ``t``."""
         # the cumulative rotation as a quaternion (w, x, y, z): R <- R (x) exp(w dt) (body rates: right product)
-        self._R = quat_mult(self._R, quat_from_rotvec(np.asarray(w, float) * dt))
+        if self.kernel:  # (estimation/kernels: the same product on floats, at the IMU rate)
+            self._R = quat_step(self._R, np.asarray(w, float).tolist(), float(dt))
+        else:
+            self._R = quat_mult(self._R, quat_from_rotvec(np.asarray(w, float) * dt))
         self._q.append((float(t), self._R))
         while len(self._q) > 2 and self._q[1][0] <= t - 2.0 * self.window_s:
             self._q.popleft()
