@@ -899,14 +899,9 @@ class DeckNavigator(CommandDispatch):
                            f"accelerometer-bias test: NIS {total:.0f} over {k} dof of the last {w.maxlen} "
                            f"frames above {q:.0f}: bias variance widened")
 
-    def _relock(self, why: str) -> None:
-        """The filter is lost: it fits the lights on a wrong solution (the near-planar layout's pose ambiguity:
-        after a re-acquisition on the realistic deck, relative pitch 10-17 deg and position 0.5-0.9 m off with
-        a 5 cm sigma, the bias test widening every 1.2 s for 50 s, static blur seed 7). Start it again from
-        where it is as a re-tie does: the deck's relative roll, pitch and rates from their sea-state prior (the
-        level deck breaks the ambiguity), ``retie_sigmas`` added to the position and velocity variances, the
-        bias back to zero at its prior sigma; the bias test rests ``bias_test_reacquire_rest_s``. Logged in
-        ``nav_init``, counted in ``stats.relocks``."""
+    def _retied(self):
+        """(x, P) of a re-tie: the deck's relative roll, pitch and rates from their sea-state prior (as
+        ``_reacquire``), ``retie_sigmas`` added to the position and velocity variances; copies."""
         x, P = self.ukf.x.copy(), self.ukf.P.copy()
         sp, sv = self.cfg.retie_sigmas
         rp = self._rp if self._rp is not None else x[3:5]
@@ -916,6 +911,17 @@ class DeckNavigator(CommandDispatch):
         P[ii, ii] = np.asarray(self.cfg.deck_prior_var, float)
         P[0:3, 0:3] += np.eye(3) * sp**2
         P[6:9, 6:9] += np.eye(3) * sv**2
+        return x, P
+
+    def _relock(self, why: str) -> None:
+        """The filter is lost: it fits the lights on a wrong solution (the near-planar layout's pose ambiguity:
+        after a re-acquisition on the realistic deck, relative pitch 10-17 deg and position 0.5-0.9 m off with
+        a 5 cm sigma, the bias test widening every 1.2 s for 50 s, static blur seed 7). Start it again from
+        where it is as a re-tie does: the deck's relative roll, pitch and rates from their sea-state prior (the
+        level deck breaks the ambiguity), ``retie_sigmas`` added to the position and velocity variances, the
+        bias back to zero at its prior sigma; the bias test rests ``bias_test_reacquire_rest_s``. Logged in
+        ``nav_init``, counted in ``stats.relocks``."""
+        x, P = self._retied()
         if self._bias_on:
             i = np.arange(dm.BIAS.start, dm.BIAS.stop)
             x[i] = 0.0
@@ -950,15 +956,7 @@ class DeckNavigator(CommandDispatch):
         if self._locked < n:
             return False
         self._locked = 0
-        x, P = self.ukf.x.copy(), self.ukf.P.copy()
-        sp, sv = self.cfg.retie_sigmas
-        rp = self._rp if self._rp is not None else x[3:5]
-        ii = np.array([3, 4, 9, 10, 11])
-        x[3:5], x[9:12] = rp, 0.0
-        P[ii, :], P[:, ii] = 0.0, 0.0
-        P[ii, ii] = np.asarray(self.cfg.deck_prior_var, float)
-        P[0:3, 0:3] += np.eye(3) * sp**2
-        P[6:9, 6:9] += np.eye(3) * sv**2
+        x, P = self._retied()
         if self._bias_on:  # the bias states: a lock-out is what an accelerometer-bias step looks like
             i = np.arange(dm.BIAS.start, dm.BIAS.stop)
             P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)
