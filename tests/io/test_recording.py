@@ -175,3 +175,18 @@ def test_frames_from_one_video_file(tmp_path):
     for f, k in zip(got, (0, 1, 2, 4, 5, 3)):
         assert f.t == t[k]
         np.testing.assert_array_equal(f.image, imgs[k])
+
+
+def test_two_range_finders_in_one_file_are_in_order_each_not_together(tmp_path):
+    """range.csv holds the laser and the sonar (one link message for both): the bridge's clock mapping once put a
+    sonar sample 2 us before the laser sample written just before it, and the replay of its own recording was
+    refused. Each sensor's stamps must be in order; the file's need not be. A sensor going back is still refused."""
+    from visnav.io.recording import STREAMS, read_csv
+
+    p = tmp_path / "range.csv"
+    p.write_text("t_s,range_m,sensor\n1.0,5.0,laser\n1.000002260,5.0,laser\n1.000002258,5.1,sonar\n1.1,5.0,laser\n")
+    out = read_csv(p, STREAMS["range"])
+    assert list(out["sensor"]) == ["laser", "laser", "sonar", "laser"]
+    p.write_text("t_s,range_m,sensor\n1.0,5.0,laser\n1.2,5.1,sonar\n1.1,5.0,laser\n1.15,5.1,sonar\n")
+    with pytest.raises(RecordingError, match=r"range\.csv: line 5: timestamps out of order \(t_s 1\.15 after 1\.2\)"):
+        read_csv(p, STREAMS["range"])

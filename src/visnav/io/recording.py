@@ -8,7 +8,7 @@ A recording is a folder a user can fill from their own vehicle without our code:
     attitude.csv     t_s, roll_rad, pitch_rad, yaw_rad
     baro.csv         t_s, altitude_m
     magnetometer.csv t_s, heading_rad
-    range.csv        t_s, range_m, sensor [, beam_offset_rad]
+    range.csv        t_s, range_m, sensor [, beam_offset_rad]   (t_s in order per sensor)
     gps.csv          t_s, n_m, e_m, d_m, vn_mps, ve_mps, vd_mps [, sigma_m]
     airspeed.csv     t_s, airspeed_mps                          (CONDOR: pitot)
     camera_attitude.csv  t_s, roll_rad, tilt_rad                (CONDOR: the gimbal camera's AHRS)
@@ -58,6 +58,7 @@ class Stream:
     alternatives: tuple[tuple[str, ...], ...] = ()  # other column sets accepted instead of ``required``
     written: tuple[str, ...] = ()  # what ``RecordingWriter`` writes (before t_recv_s, seq); default all
     consumed: bool = True  # False: read and kept (a log's other sensors), never delivered to a navigator
+    per: str = ""  # a text column whose values are separate sensors: ``t_s`` non-decreasing within each
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -71,7 +72,9 @@ STREAMS: dict[str, Stream] = {
     "attitude": Stream("attitude.csv", ("t_s", "roll_rad", "pitch_rad", "yaw_rad")),
     "gps": Stream("gps.csv", ("t_s", "n_m", "e_m", "d_m", "vn_mps", "ve_mps", "vd_mps"), ("sigma_m",),
                   alternatives=(("t_s", "n_m", "e_m", "d_m"), ("t_s", "lat_deg", "lon_deg", "alt_m"))),
-    "range": Stream("range.csv", ("t_s", "range_m", "sensor"), ("beam_offset_rad",), text=("sensor",)),
+    # two range finders (laser, sonar) share a file and a link message: each sensor's stamps in order, not the file's
+    # (the bridge's clock mapping put a sonar sample 2 us before the laser's just written, palace SIL)
+    "range": Stream("range.csv", ("t_s", "range_m", "sensor"), ("beam_offset_rad",), text=("sensor",), per="sensor"),
     "baro": Stream("baro.csv", ("t_s", "altitude_m")),
     "magnetometer": Stream("magnetometer.csv", ("t_s", "heading_rad"), alternatives=(("t_s", "mx", "my", "mz"),)),
     "frames": Stream("frames.csv", ("t_s", "file"), ("index", "video_frame"), text=("file",),
@@ -175,11 +178,14 @@ def read_csv(path: Path, spec: Stream, allow_truncated: bool = False, notes: lis
         if not np.all(np.isfinite(t)):
             bad = int(np.flatnonzero(~np.isfinite(t))[0])
             raise RecordingError(f"{path}: line {bad + 2}: {name} is not finite")
-        back = np.flatnonzero(np.diff(t) < 0)
-        if back.size:
-            i = int(back[0]) + 1
-            raise RecordingError(f"{path}: line {i + 2}: timestamps out of order ({name} {float(t[i])!r} after "
-                                 f"{float(t[i - 1])!r})")
+        groups = [np.arange(len(t))] if not (spec.per and name == "t_s" and spec.per in out) else \
+            [np.flatnonzero(out[spec.per] == g) for g in np.unique(out[spec.per])]
+        for rows in groups:
+            back = np.flatnonzero(np.diff(t[rows]) < 0)
+            if back.size:
+                i, j = int(rows[back[0] + 1]), int(rows[back[0]])
+                raise RecordingError(f"{path}: line {i + 2}: timestamps out of order ({name} {float(t[i])!r} after "
+                                     f"{float(t[j])!r})")
     return out
 
 
