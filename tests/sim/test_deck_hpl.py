@@ -45,3 +45,21 @@ def test_realistic_deck_fault_free_error_stays_inside_the_protection_level():
     assert res.metrics["outcome"] == "safe", res.metrics["outcome_reason"]
     td = sim.log.get("touchdown")
     assert len(td["t"]) == 1 and bool(td["on_deck"][0])
+
+
+def test_health_splits_its_hpl_into_the_filter_share_and_the_survey_share():
+    """hpl_m = hypot(hpl_noise_m, hpl_bias_per_m x range): lambda_max(P_h + (s r)^2 I) = lambda_max(P_h) + (s r)^2;
+    the mission's rules take hpl_noise_m, the HPL of P_h alone."""
+    from visnav.estimation.integrity import horizontal_protection_level
+    from visnav.measurements import NavInit
+    from visnav.navigation.deck import DeckNavConfig, DeckNavigator
+
+    sc = load_scenario("deck-static")
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc, 1.0 / 30.0))
+    nav.initialize(NavInit(t=0.0, source="static"))
+    h = nav.health(0.0)
+    r = float(np.linalg.norm(nav.x[0:3]))
+    assert r > 1.0 and h.hpl_bias_per_m > 0.2
+    assert math.isclose(math.hypot(h.hpl_noise_m, h.hpl_bias_per_m * r), h.hpl_m, rel_tol=1e-9)
+    k2 = h.consistency_k2
+    assert math.isclose(h.hpl_noise_m, horizontal_protection_level(nav.P[0:2, 0:2], 0.999, k2), rel_tol=1e-9)

@@ -267,6 +267,8 @@ class DeckNavigator(CommandDispatch):
     def __init__(self, config: DeckNavConfig, recorder=None):
         self.cfg = config
         self.lights = np.asarray(config.lights, float)
+        b = self.lights - self.lights.mean(axis=0)
+        self._spread = float((b * b).sum())  # S = sum |b_i - b_mean|^2 of the layout (the survey's tilt, 1 / S)
         self.cam = config.cam
         c = config
         self._bias_on = c.accel_bias_sigma > 0.0
@@ -741,8 +743,7 @@ class DeckNavigator(CommandDispatch):
         c = self.cfg
         if self._consider or c.light_survey_sigma == 0.0:
             return 0.0
-        b = self.lights - self.lights.mean(axis=0)
-        return c.light_survey_sigma * math.sqrt(2.0 / float((b * b).sum()))
+        return c.light_survey_sigma * math.sqrt(2.0 / self._spread)
 
     def _calibration_floor(self) -> None:
         """Keep the position and attitude variances at least at the calibration's share (a constant error that
@@ -756,11 +757,9 @@ class DeckNavigator(CommandDispatch):
         if not c.calibration_floor or self._consider or (c.calibration_bearing_sigma == 0.0
                                                          and c.light_survey_sigma == 0.0):
             return
-        b = self.lights - self.lights.mean(axis=0)
         rng = float(np.linalg.norm(self.ukf.x[dm.POS]))
-        spread = float((b * b).sum())  # sum |b_i - b_mean|^2
-        pos = (rng * c.calibration_bearing_sigma) ** 2 + c.light_survey_sigma**2 / len(b)
-        att = c.calibration_bearing_sigma**2 + 2.0 * c.light_survey_sigma**2 / spread
+        pos = (rng * c.calibration_bearing_sigma) ** 2 + c.light_survey_sigma**2 / len(self.lights)
+        att = c.calibration_bearing_sigma**2 + 2.0 * c.light_survey_sigma**2 / self._spread
         P = self.ukf.P
         add = np.maximum(np.repeat([pos, att], 3) - np.diag(P)[0:6], 0.0)
         if add.any():
