@@ -89,3 +89,41 @@ def test_an_rmax_flight_on_the_kernel_is_the_readable_flight():
         np.testing.assert_allclose(sa.specific_force, sb.specific_force, rtol=1e-12, atol=1e-11)
         assert a.on_ground == b.on_ground
     assert np.linalg.norm(sa.position) > 1.0  # it flew
+
+
+def test_the_kernel_is_compiled_where_numba_is_installed():
+    """``make install`` installs the ``fast`` extra: the fixed wing steps through numba's compiled kernel."""
+    import importlib.util
+
+    from visnav.vehicles import kernels
+
+    if importlib.util.find_spec("numba") is None:
+        import pytest
+
+        pytest.skip("numba is not installed (the `fast` extra): the kernels run on Python floats")
+    import os
+
+    if os.environ.get("VISNAV_JIT") == "0":
+        assert kernels.njit is None
+    else:
+        assert hasattr(kernels._fixedwing, "py_func")  # a numba dispatcher, not the plain function
+
+
+def test_the_kernel_on_python_floats_equals_the_readable_model():
+    """VISNAV_JIT=0 (or no numba): the same kernel source on floats, in a fresh interpreter, at 1e-12."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import numpy as np\n"
+            "from visnav.vehicles import kernels\n"
+            "assert kernels.njit is None and not hasattr(kernels._fixedwing, 'py_func')\n"
+            "import tests.vehicles.test_kernels as t\n"
+            "t.test_fixedwing_derivatives_equal_the_readable_model()\n"
+            "t.test_a_flight_on_the_kernel_is_the_readable_flight()\n"
+            "print('ok')\n")
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "VISNAV_JIT": "0", "PYTHONPATH": os.pathsep.join([str(root / "src"), str(root)])}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]

@@ -168,6 +168,7 @@ class FixedWingModel:
         self._k = fixedwing_constants(self.params, self._gam)
         self._air = {"Va": 0.0, "alpha": 0.0, "beta": 0.0, "specific_force": np.zeros(3)}
         self._air_at: tuple | None = None  # (state, controls, wind) of the last step: air data on demand
+        self._air_raw: tuple | None = None  # the kernel step's air data at its new state, not yet read
         self._state_x: np.ndarray | None = None  # the x and t ``state`` was built for
         self._state_t = math.nan
 
@@ -179,16 +180,19 @@ class FixedWingModel:
             x1, uc, w = self._air_at
             if self.kernel:
                 u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
-                Va, alpha, beta, f = fixedwing_derivatives(self._k, x1.tolist(), u4, w.tolist(), air=True)[1]
-                self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(f)}
+                self._air_raw = fixedwing_derivatives(self._k, x1.tolist(), u4, w.tolist(), air=True)[1]
             else:
                 self._air = derivatives(self.params, x1, uc, w, self._gam)[1]
             self._air_at = None
+        if self._air_raw is not None:  # the kernel's step evaluated them at the new state
+            Va, alpha, beta, f = self._air_raw
+            self._air = {"Va": Va, "alpha": alpha, "beta": beta, "specific_force": np.array(f)}
+            self._air_raw = None
         return self._air
 
     def hold_air_data(self, u: Controls, wind_ned) -> None:
         """The air data ``air`` reports before the first step: those of the current state under ``u`` and the wind."""
-        self._air_at = (self.x.copy(), self._clip(u), np.asarray(wind_ned, float))
+        self._air_at, self._air_raw = (self.x.copy(), self._clip(u), np.asarray(wind_ned, float)), None
 
     @classmethod
     def from_trim(cls, params: FixedWingParams, trim: "Trim", position_ned, heading: float) -> "FixedWingModel":
@@ -216,9 +220,10 @@ class FixedWingModel:
             return derivatives(self.params, x, uc, w, self._gam)[0]
 
         x = self.x
-        if self.kernel:
+        air = None
+        if self.kernel:  # the air data at the new state come with the step (before the yaw wrap: the same to rounding)
             u4 = (uc.aileron, uc.elevator, uc.rudder, uc.throttle)
-            x1 = fixedwing_rk4(self._k, x.tolist(), u4, w.tolist(), dt)
+            x1, air = fixedwing_rk4(self._k, x.tolist(), u4, w.tolist(), dt, air=True)
         else:
             k1 = f(x)
             k2 = f(x + 0.5 * dt * k1)
@@ -230,7 +235,7 @@ class FixedWingModel:
             raise FloatingPointError(f"fixed-wing state diverged at t={self.t:.2f}s")
         self.x = x1 = np.array(x1)
         self.t += dt
-        self._air_at = (x1, uc, w)
+        self._air_at, self._air_raw = (None, air) if air is not None else ((x1, uc, w), None)
 
     def euler_rates(self) -> np.ndarray:
         return derivatives(self.params, self.x, Controls(), np.zeros(3), self._gam)[0][6:9]

@@ -4,10 +4,12 @@ The models are written once, in the form of their equations (``vehicles/fixedwin
 McLain eq. 3.14-3.17 and 4.6-4.19). A simulation steps the fixed wing 100 times a second through four
 evaluations of those equations; on 3-vectors numpy's per-call overhead is most of the cost (~27 us per
 evaluation against ~6 us on floats), which halved CONDOR's real-time factor. This module evaluates the same
-equations on Python floats (the fixed wing's four RK4 stages in one frame, its parameters read once per
-model, the sums of constants and controls once per step). It is not the model: a change to the physics
-is made in ``fixedwing.derivatives`` and then here, and ``tests/vehicles/test_kernels.py`` holds every kernel to
-its readable reference at 1e-12 relative (random states, controls and winds, and a whole flight).
+equations on floats: where numba is installed (the ``fast`` extra, which ``make install`` installs) the fixed
+wing's RK4 step is compiled (``cache=True``: once per installation, ~1 s; loading it costs ~0.2 s per process,
+and a step then ~3 us against ~20 us on Python floats); without numba, or with ``VISNAV_JIT=0``, the very same
+functions run on Python floats. It is not the model: a change to the physics is made in
+``fixedwing.derivatives`` and then here, and ``tests/vehicles/test_kernels.py`` holds every kernel, compiled and
+on floats, to its readable reference at 1e-12 relative (random states, controls and winds, and a whole flight).
 ``FixedWingModel(kernel=False)`` flies the readable path.
 """
 
@@ -18,98 +20,119 @@ from math import asin, atan2, copysign, cos, exp, sin, sqrt
 
 from visnav.geometry.rotations import _dcm_rows
 
+import os
+
+try:  # optional (the ``fast`` extra): compiles the fixed wing's kernel; without it the same code runs on floats
+    from numba import njit
+except ImportError:  # exercised by tests/vehicles/test_kernels.py with VISNAV_JIT=0
+    njit = None
+if os.environ.get("VISNAV_JIT", "1") == "0":  # the kernels on Python floats even where numba is installed
+    njit = None
+
 G = 9.81
 
 
 def fixedwing_constants(p, gam) -> tuple:
     """What the fixed-wing kernel reads of ``FixedWingParams`` ``p`` and its Gamma terms ``gam``, once per model (a
     parameter's attribute lookup, and ``p.AR``'s division, cost as much as its use)."""
-    return (p.M, p.alpha0, p.C_L_0, p.C_L_alpha, p.C_D_p, math.pi * p.e * p.AR, 0.5 * p.rho * p.S,
+    return _floats((p.M, p.alpha0, p.C_L_0, p.C_L_alpha, p.C_D_p, math.pi * p.e * p.AR, 0.5 * p.rho * p.S,
             p.C_D_q, p.C_L_q, p.C_D_de, p.C_L_de, p.c, p.b, p.mass, 0.5 * p.rho * p.S_prop * p.C_prop, p.k_motor,
             p.C_Y_0, p.C_Y_beta, p.C_Y_p, p.C_Y_r, p.C_Y_da, p.C_Y_dr,
             p.C_l_0, p.C_l_beta, p.C_l_p, p.C_l_r, p.C_l_da, p.C_l_dr,
             p.C_m_0, p.C_m_alpha, p.C_m_q, p.C_m_de,
-            p.C_n_0, p.C_n_beta, p.C_n_p, p.C_n_r, p.C_n_da, p.C_n_dr, p.Jy, *gam)
+            p.C_n_0, p.C_n_beta, p.C_n_p, p.C_n_r, p.C_n_da, p.C_n_dr, p.Jy, *gam))
 
 
-def _fixedwing(k, x, u, wind, dt: float, rk4: bool):
+def _fixedwing_eval(k, x, u, wind):
     """Beard & McLain eq. 3.14-3.17 with eq. 4.6-4.19 (``fixedwing.derivatives`` with ``_lift_drag``) on floats: the
-    state derivative and air data at ``x`` (``rk4`` False), or one classic RK4 step over ``dt`` (True) with its four
-    evaluations in this one frame. The sums of a constant and the controls' terms are formed once per call."""
+    state derivative (12) and the air data (Va, alpha, beta, specific force) at ``x``."""
     (M, a0, CL0, CLa, CDp, piEAR, hrhoS, CDq, CLq, CDde, CLde, c, b, m, kprop, kmot,
      y0, yb, yp, yr, yda, ydr, l0, lb, lp, lr, lda, ldr, m0, ma, mq, mde, n0, nb, np_, nr, nda, ndr, Jy,
      g1, g2, g3, g4, g5, g6, g7, g8) = k
-    _, _, _, u0, v0, w0, phi0, th0, psi0, P0, Q0, R0 = x
-    uu, vv, ww, phi, th, psi, P, Q, R = u0, v0, w0, phi0, th0, psi0, P0, Q0, R0
+    uu, vv, ww, phi, th, psi, P, Q, R = x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11]
     da, de, dr, thr = u
     wn, we, wd = wind
-    thrust0 = (kmot * thr) ** 2
-    mG = m * G
-    Yc, Lc, Mc, Nc = y0 + yda * da + ydr * dr, l0 + lda * da + ldr * dr, m0 + mde * de, n0 + nda * da + ndr * dr
-    s = None
-    for i in range(4 if rk4 else 1):
-        cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(th), sin(th), cos(psi), sin(psi)
-        c00, c01, c02 = ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp  # eq. 3.2 (rotations._dcm_rows)
-        c10, c11, c12 = ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp
-        c20, c21, c22 = -st, sf * ct, cf * ct
-        ur = uu - (c00 * wn + c10 * we + c20 * wd)  # eq. 2.7: body velocity minus C^T wind
-        vr = vv - (c01 * wn + c11 * we + c21 * wd)
-        wr = ww - (c02 * wn + c12 * we + c22 * wd)
-        Va = sqrt(ur * ur + vr * vr + wr * wr)  # eq. 2.8
-        Va_s = Va if Va > 1.0 else 1.0
-        alpha = atan2(wr, ur)
-        sb = vr / Va_s
-        beta = asin(-1.0 if sb < -1.0 else (1.0 if sb > 1.0 else sb))
-        qbar = hrhoS * Va_s * Va_s
-        ca, sa = cos(alpha), sin(alpha)
-        ea, eb = exp(-M * (alpha - a0)), exp(M * (alpha + a0))  # eq. 4.9-4.11 (_lift_drag)
-        sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
-        cl_lin = CL0 + CLa * alpha
-        cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * copysign(1.0, alpha) * sa * sa * ca
-        cd = CDp + cl_lin * cl_lin / piEAR
-        cx, cxq, cxde = -cd * ca + cl * sa, -CDq * ca + CLq * sa, -CDde * ca + CLde * sa  # eq. 4.19
-        cz, czq, czde = -cd * sa - cl * ca, -CDq * sa - CLq * ca, -CDde * sa - CLde * ca
-        c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
-        thrust = kprop * (thrust0 - Va * Va)  # eq. 4.18
-        fx = -mG * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
-        fy = mG * ct * sf + qbar * (Yc + yb * beta + (yp * P + yr * R) * b2v)
-        fz = mG * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
-        qb = qbar * b
-        l_m = qb * (Lc + lb * beta + (lp * P + lr * R) * b2v)
-        m_m = qbar * c * (Mc + ma * alpha + mq * c2v * Q)
-        n_m = qb * (Nc + nb * beta + (np_ * P + nr * R) * b2v)
-        tt = st / ct
-        d = [c00 * uu + c01 * vv + c02 * ww, c10 * uu + c11 * vv + c12 * ww, c20 * uu + c21 * vv + c22 * ww,  # 3.14
-             R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m,  # eq. 3.15
-             P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct,  # eq. 3.16
-             g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,  # eq. 3.17
-             g5 * P * R - g6 * (P * P - R * R) + m_m / Jy,
-             g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m]
-        if not rk4:
-            return d, (Va, alpha, beta, (fx / m - c20 * G, fy / m - c21 * G, fz / m - c22 * G))
-        if i == 0:  # k1; then the sum k1 + 2 k2 + 2 k3, and x + dt / 6 (that + k4)
-            s, h = d, 0.5 * dt
-        elif i < 3:
-            s, h = [a + 2.0 * b_ for a, b_ in zip(s, d)], 0.5 * dt if i == 1 else dt
-        else:
-            w = dt / 6.0
-            return [a + w * (b1 + b2) for a, b1, b2 in zip(x, s, d)]
-        # the next stage, x + h d (what d reads of it)
-        uu, vv, ww, phi, th, psi = u0 + h * d[3], v0 + h * d[4], w0 + h * d[5], phi0 + h * d[6], th0 + h * d[7], psi0 + h * d[8]
-        P, Q, R = P0 + h * d[9], Q0 + h * d[10], R0 + h * d[11]
+    cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(th), sin(th), cos(psi), sin(psi)
+    c00, c01, c02 = ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp  # eq. 3.2 (rotations._dcm_rows)
+    c10, c11, c12 = ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp
+    c20, c21, c22 = -st, sf * ct, cf * ct
+    ur = uu - (c00 * wn + c10 * we + c20 * wd)  # eq. 2.7: body velocity minus C^T wind
+    vr = vv - (c01 * wn + c11 * we + c21 * wd)
+    wr = ww - (c02 * wn + c12 * we + c22 * wd)
+    Va = sqrt(ur * ur + vr * vr + wr * wr)  # eq. 2.8
+    Va_s = Va if Va > 1.0 else 1.0
+    alpha = atan2(wr, ur)
+    sb = vr / Va_s
+    beta = asin(-1.0 if sb < -1.0 else (1.0 if sb > 1.0 else sb))
+    qbar = hrhoS * Va_s * Va_s
+    ca, sa = cos(alpha), sin(alpha)
+    ea, eb = exp(-M * (alpha - a0)), exp(M * (alpha + a0))  # eq. 4.9-4.11 (_lift_drag)
+    sigma = (1.0 + ea + eb) / ((1.0 + ea) * (1.0 + eb))
+    cl_lin = CL0 + CLa * alpha
+    cl = (1.0 - sigma) * cl_lin + sigma * 2.0 * copysign(1.0, alpha) * sa * sa * ca
+    cd = CDp + cl_lin * cl_lin / piEAR
+    cx, cxq, cxde = -cd * ca + cl * sa, -CDq * ca + CLq * sa, -CDde * ca + CLde * sa  # eq. 4.19
+    cz, czq, czde = -cd * sa - cl * ca, -CDq * sa - CLq * ca, -CDde * sa - CLde * ca
+    c2v, b2v = c / (2.0 * Va_s), b / (2.0 * Va_s)
+    thrust = kprop * ((kmot * thr) ** 2 - Va * Va)  # eq. 4.18
+    fx = -m * G * st + qbar * (cx + cxq * c2v * Q + cxde * de) + thrust
+    fy = m * G * ct * sf + qbar * (y0 + yb * beta + (yp * P + yr * R) * b2v + yda * da + ydr * dr)
+    fz = m * G * ct * cf + qbar * (cz + czq * c2v * Q + czde * de)
+    l_m = qbar * b * (l0 + lb * beta + (lp * P + lr * R) * b2v + lda * da + ldr * dr)
+    m_m = qbar * c * (m0 + ma * alpha + mq * c2v * Q + mde * de)
+    n_m = qbar * b * (n0 + nb * beta + (np_ * P + nr * R) * b2v + nda * da + ndr * dr)
+    tt = st / ct
+    d = (c00 * uu + c01 * vv + c02 * ww, c10 * uu + c11 * vv + c12 * ww, c20 * uu + c21 * vv + c22 * ww,  # 3.14
+         R * vv - Q * ww + fx / m, P * ww - R * uu + fy / m, Q * uu - P * vv + fz / m,  # eq. 3.15
+         P + sf * tt * Q + cf * tt * R, cf * Q - sf * R, (sf * Q + cf * R) / ct,  # eq. 3.16
+         g1 * P * Q - g2 * Q * R + g3 * l_m + g4 * n_m,  # eq. 3.17
+         g5 * P * R - g6 * (P * P - R * R) + m_m / Jy,
+         g7 * P * Q - g1 * Q * R + g4 * l_m + g8 * n_m)
+    return d, (Va, alpha, beta, (fx / m - c20 * G, fy / m - c21 * G, fz / m - c22 * G))
+
+
+def _axpy(x, h, d):
+    """x + h d on 12-tuples (the RK4's stage state)."""
+    return (x[0] + h * d[0], x[1] + h * d[1], x[2] + h * d[2], x[3] + h * d[3], x[4] + h * d[4], x[5] + h * d[5],
+            x[6] + h * d[6], x[7] + h * d[7], x[8] + h * d[8], x[9] + h * d[9], x[10] + h * d[10], x[11] + h * d[11])
+
+
+def _fixedwing(k, x, u, wind, dt):
+    """One classic RK4 step of :func:`_fixedwing_eval` over ``dt`` (none for ``dt`` 0), controls and wind held
+    (``FixedWingModel.step``'s), and the state derivative and air data at the new state: (x, dx, air)."""
+    if dt != 0.0:
+        k1 = _fixedwing_eval(k, x, u, wind)[0]
+        k2 = _fixedwing_eval(k, _axpy(x, 0.5 * dt, k1), u, wind)[0]
+        k3 = _fixedwing_eval(k, _axpy(x, 0.5 * dt, k2), u, wind)[0]
+        k4 = _fixedwing_eval(k, _axpy(x, dt, k3), u, wind)[0]
+        x = _axpy(x, dt / 6.0, _axpy(_axpy(_axpy(k1, 2.0, k2), 2.0, k3), 1.0, k4))  # x + dt/6 (k1 + 2k2 + 2k3 + k4)
+    d, air = _fixedwing_eval(k, x, u, wind)
+    return x, d, air
+
+
+if njit is not None:  # compiled once per installation (numba's cache); the same functions on floats otherwise
+    _fixedwing_eval = njit(cache=True)(_fixedwing_eval)
+    _axpy = njit(cache=True)(_axpy)
+    _fixedwing = njit(cache=True)(_fixedwing)
+
+
+def _floats(v) -> tuple:
+    return tuple(map(float, v))
 
 
 def fixedwing_derivatives(k, x, u, wind, air: bool = False):
     """``fixedwing.derivatives(p, x, u, wind, gam)[0]`` on floats: ``k`` from :func:`fixedwing_constants`, ``x`` 12
     floats, ``u`` (aileron, elevator, rudder, throttle), ``wind`` (n, e, d). ``air``: also (Va, alpha, beta, specific
     force), ``derivatives(...)[1]``'s values."""
-    dx, air_data = _fixedwing(k, x, u, wind, 0.0, False)
-    return (dx, air_data) if air else dx
+    _, dx, air_data = _fixedwing(k, _floats(x), _floats(u), _floats(wind), 0.0)
+    return (list(dx), air_data) if air else list(dx)
 
 
-def fixedwing_rk4(k, x, u, wind, dt: float) -> list[float]:
-    """One classic RK4 step of :func:`fixedwing_derivatives` (``FixedWingModel.step``'s, without the yaw wrap)."""
-    return _fixedwing(k, x, u, wind, dt, True)
+def fixedwing_rk4(k, x, u, wind, dt: float, air: bool = False):
+    """One classic RK4 step of :func:`fixedwing_derivatives` (``FixedWingModel.step``'s, without the yaw wrap): the new
+    state (12 floats); ``air``: also the air data at it (what ``fixedwing_derivatives(..., air=True)[1]`` gives)."""
+    x1, _, air_data = _fixedwing(k, _floats(x), _floats(u), _floats(wind), float(dt))
+    return (list(x1), air_data) if air else list(x1)
 
 
 def rmax_derivatives(P, y, att, wind, force: bool = False):
