@@ -87,3 +87,36 @@ def test_rot_z_with_math_trig_equals_numpys_bit_for_bit():
     yaws = [0.0, -0.0, np.pi, -np.pi, 1e-300] + rng.uniform(-4, 4, 20000).tolist() + rng.normal(0, 1e3, 2000).tolist()
     for a in yaws:
         assert np.array_equal(rot_z(a).view(np.int64), reference(a).view(np.int64))
+
+
+@pytest.mark.parametrize("euler_deg,along", [((0, 0, 0), (-1.0, 0.0, -1.0)), ((4, -6, 20), (-0.5, 0.3, -1.0)),
+                                             ((-7, 3, 0), (0.2, -0.9, -0.6))])
+def test_the_final_path_meets_the_deck_plane_at_the_landing_point(euler_deg, along):
+    """With the overshoot along the final path, the line through the target along that path crosses the plane the
+    gear must meet (``gear_offset`` above the deck along its normal) exactly above the landing point; with the
+    overshoot along the normal (the thesis' static approach) it crosses it ``overshoot tan(gamma)`` short."""
+    from visnav.guidance.deck_approach import touchdown_target
+
+    C = euler_to_dcm(np.radians(euler_deg))
+    lp, gear, over = np.array([-0.2, 0.05, 0.0]), 0.17, 0.04
+    contact = C @ lp + gear * (-C[:, 2])  # psi_d = 0: the level-deck frame is the deck's heading-free frame
+    u = np.asarray(along) / np.linalg.norm(along)
+    c, n_up = touchdown_target(C, np.zeros(3), 0.0, 0.0, lp, gear, over, False, along=u)
+    np.testing.assert_allclose(n_up, -C[:, 2], atol=1e-12)
+    assert n_up @ (c - contact) == pytest.approx(-over, abs=1e-12)  # overshoot below the plane
+    s = (n_up @ (contact - c)) / (n_up @ u)  # where the line c + s u meets the plane
+    np.testing.assert_allclose(c + s * u, contact, atol=1e-12)
+    c_n, _ = touchdown_target(C, np.zeros(3), 0.0, 0.0, lp, gear, over, False)  # along the normal
+    s_n = (n_up @ (contact - c_n)) / (n_up @ u)
+    gamma = np.arccos(n_up @ u)
+    assert np.linalg.norm(c_n + s_n * u - contact) == pytest.approx(over * np.tan(gamma), rel=1e-9)
+
+
+def test_a_nearly_level_final_path_moves_the_target_at_most_overshoot_over_cos_60():
+    from visnav.guidance.deck_approach import MAX_ALONG_DEG, touchdown_target
+
+    C = np.eye(3)
+    c, n_up = touchdown_target(C, np.zeros(3), 0.0, 0.0, np.zeros(3), 0.17, 0.04, False,
+                               along=np.array([-1.0, 0.0, -0.01]))
+    contact = np.array([0.0, 0.0, -0.17])
+    assert np.linalg.norm(c - contact) == pytest.approx(0.04 / np.cos(np.radians(MAX_ALONG_DEG)), rel=1e-12)

@@ -215,8 +215,8 @@ def test_truth_start_uses_the_sensor_noise_from_the_first_frame():
 
 def test_go_around_when_the_trajectory_ends_without_contact():
     """Deck motion 1.3x the preset (the filter tuned for the nominal one), seed 7: the first trajectory ends with
-    the gear above the deck. Without a go-around the descend mode holds the matched tilt and touches down 5.7 deg
-    off; with it the vehicle climbs back to the start point and lands on the second approach within the targets."""
+    the gear above the deck. Without a go-around the descend mode holds the matched tilt and touches down 4.8 deg
+    off, 0.14 m from the point; with it the vehicle climbs back to the start point and lands on the second approach within the targets."""
     # (the manual hover on the IMU alone, as when the test was written: with its vertical damping, issue 30, the
     # first trajectory of this seed touches down)
     sets = ("world.deck.motion_scale=1.3", "mission.start.level_damping_per_s=0")
@@ -226,4 +226,6 @@ def test_go_around_when_the_trajectory_ends_without_contact():
     assert "go-around 1" in sim.log.get("mode")["reason"][3]
     assert m["touchdown_rel_speed_mps"] <= 0.5 and m["touchdown_attitude_mismatch_deg"] <= 5.0
     _, m0 = _run("deck-moving", 7, *sets, "mission.guidance.go_arounds=0")
-    assert m0["descend_s"] > 0.2 and m0["touchdown_attitude_mismatch_deg"] > 5.0
+    # (5.7 deg off before the overshoot lay along the final path, issue 30 round 10; 4.8 deg and 0.14 m after)
+    assert m0["descend_s"] > 0.2 and m0["touchdown_attitude_mismatch_deg"] > 1.5 * m["touchdown_attitude_mismatch_deg"]
+    assert m0["touchdown_position_error_m"] > 1.5 * m["touchdown_position_error_m"]

@@ -142,7 +142,7 @@ class DeckContact:
         pos_err = float(np.hypot(*(g_d[:2] - self.landing_point[:2])))  # from the desired landing location
         on = bool(np.all(np.abs(g_d[:2]) <= self.world.size_m / 2))  # on the square plate
         speed = float(np.linalg.norm(rel))
-        self.record("touchdown", t, rel_speed=speed, pos_err=pos_err, on_deck=on,
+        self.record("touchdown", t, rel_speed=speed, pos_err=pos_err, on_deck=on, gear_deck_m=g_d[:2].copy(),
                     att_mismatch=float(np.degrees(np.arccos(np.clip(zb @ zd, -1, 1)))))
         self.mission.on_touchdown(t, on, f"gear contact at {speed:.2f} m/s")
         return True

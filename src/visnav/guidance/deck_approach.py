@@ -164,15 +164,29 @@ _LEVEL_LAST: list = [None]
 
 
 def touchdown_target(Cd0: np.ndarray, wd: np.ndarray, psi_d: float, t_go: float, landing_point: np.ndarray,
-                     gear_offset: float, overshoot: float, moving: bool):
+                     gear_offset: float, overshoot: float, moving: bool, along: np.ndarray | None = None):
     """Touchdown target (body origin, level-deck frame) and the predicted upward deck normal there.
 
-    The deck attitude is predicted ``t_go`` ahead (eq. 4.4-4.9) when ``moving``; the target lies
-    ``gear_offset`` above the landing point along the normal, ``overshoot`` lower (so that contact comes
-    before the trajectory's end).
+    The deck attitude is predicted ``t_go`` ahead (eq. 4.4-4.9) when ``moving``; the body at contact lies
+    ``gear_offset`` above the landing point along the normal, and the target ``overshoot`` below the deck plane
+    beyond it (so that contact comes before the trajectory's end). Below it along the normal (``along`` None),
+    or along the final path: ``along`` the direction from the deck to the vehicle on it (the tau approach's a_td,
+    the straight approach's start), so that the path meets the deck plane at the landing point, not short of it
+    (along the normal a path at angle gamma from it met the plane ``overshoot tan(gamma)`` short: the static
+    deck's 35-45 deg approach 4-6 cm, seed 003 §5.3.3 "the vehicle never reaches (0,0)"). The path's angle from
+    the normal is taken at most ``MAX_ALONG_DEG`` (a nearly level path would move the target far).
     """
     Cp = predict_deck_attitude(Cd0, wd, t_go) if moving else Cd0
     Rz = rot_z(psi_d)
     n_up = Rz.T @ (-Cp[:, 2])
     land = Rz.T @ (Cp @ landing_point)  # the desired landing location (§2.3), level-deck frame
-    return land + (gear_offset - overshoot) * n_up, n_up
+    contact = land + gear_offset * n_up
+    if along is None:
+        return contact - overshoot * n_up, n_up
+    u = np.asarray(along, float) / np.linalg.norm(along)
+    cos_a = max(float(n_up @ u), math.cos(math.radians(MAX_ALONG_DEG)))
+    return contact - overshoot / cos_a * u, n_up
+
+
+#: the largest angle between the final path and the deck normal :func:`touchdown_target` moves the target along
+MAX_ALONG_DEG = 60.0

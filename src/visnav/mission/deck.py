@@ -111,10 +111,11 @@ class DeckMission:
             self.recorder("mode", t, mode=mode, previous=self.mode, reason=reason)
         self.mode, self.t_mode = mode, t
 
-    def target(self, Cd0, wd, psi_d, t_go):
+    def target(self, Cd0, wd, psi_d, t_go, along=None):
+        """The touchdown target and the deck normal (``touchdown_target``); ``along``: the final path's direction."""
         g = self.cfg.guidance
         return touchdown_target(Cd0, wd, psi_d, t_go, self.landing_point, self.gear_offset,
-                                g.overshoot_moving_m if self.moving else g.overshoot_m, self.moving)
+                                g.overshoot_moving_m if self.moving else g.overshoot_m, self.moving, along)
 
     def step(self, t: float, est, health) -> tuple[DeckReference, str]:
         cfg, g = self.cfg, self.cfg.guidance
@@ -158,7 +159,8 @@ class DeckMission:
         if mode == "approach":
             n_up = None
             if tau:
-                c, n_up = self.target(Cd0, wd, psi_d, max(self.approach.T - tm, 0.0))
+                # the overshoot along the final path (the last aim's a_td): contact at the landing point
+                c, n_up = self.target(Cd0, wd, psi_d, max(self.approach.T - tm, 0.0), along=self._a_td)
                 try:
                     a_td, _, _ = touchdown_acceleration(n_up, g.touchdown_accel_mps2)
                     # the prediction is noisy (deck rates x time to go): re-aim through a first-order filter
@@ -352,7 +354,8 @@ class DeckMission:
     def _straight(self, t, p_ld, Cd0, wd, psi_d, why: str) -> None:
         """Static deck: the straight tau approach from where the vehicle is to the landing point."""
         g = self.cfg.guidance
-        self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
+        c, _ = self.target(Cd0, wd, psi_d, 0.0)
+        self._c0, _ = self.target(Cd0, wd, psi_d, 0.0, along=p_ld - c)  # the overshoot along the straight path
         self.approach = StraightApproach(p_ld - self._c0, g.duration_s, self.gains.k_static)
         self._set_mode(t, "approach", why)
 

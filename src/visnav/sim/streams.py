@@ -102,6 +102,7 @@ DECK_STREAMS = {
     "touchdown": {"rel_speed": ("m/s", "", "true speed of the gear relative to the deck point it meets"),
                   "pos_err": ("m", "deck plane", "true gear distance from the desired landing location"),
                   "on_deck": ("bool", "", "the gear is on the square plate"),
+                  "gear_deck_m": ("m", "deck x, y", "true gear contact point on the plate (x forward, y right)"),
                   "att_mismatch": ("deg", "", "angle between the vehicle's and the deck's z axes")},
     "retarget_skipped": {"reason": ("text", "", "why the touchdown point was not re-aimed")},
     "status": _status("vehicle body FRD x, y (of the relative position: the UKF's P[0:2, 0:2])"),
