@@ -354,8 +354,10 @@ class DeckMission:
     def _straight(self, t, p_ld, Cd0, wd, psi_d, why: str) -> None:
         """Static deck: the straight tau approach from where the vehicle is to the landing point."""
         g = self.cfg.guidance
-        c, _ = self.target(Cd0, wd, psi_d, 0.0)
-        self._c0, _ = self.target(Cd0, wd, psi_d, 0.0, along=p_ld - c)  # the overshoot along the straight path
+        # the overshoot along the normal, as the thesis: the straight path meets the deck 4-6 cm short of the
+        # landing point, but along the path (the moving deck's) it meets it at the deck origin, where the camera
+        # of eq. 5.9 loses every light: seed 11 lost them 2.8 s before contact and never landed (issue 30 round 10)
+        self._c0, _ = self.target(Cd0, wd, psi_d, 0.0)
         self.approach = StraightApproach(p_ld - self._c0, g.duration_s, self.gains.k_static)
         self._set_mode(t, "approach", why)
 
