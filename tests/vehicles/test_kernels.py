@@ -91,22 +91,17 @@ def test_an_rmax_flight_on_the_kernel_is_the_readable_flight():
     assert np.linalg.norm(sa.position) > 1.0  # it flew
 
 
-def test_the_kernel_is_compiled_where_numba_is_installed():
-    """``make install`` installs the ``fast`` extra: the fixed wing steps through numba's compiled kernel."""
+def test_the_kernel_is_compiled_exactly_where_numba_is_installed_and_not_switched_off():
+    """``make install`` installs the ``fast`` extra: the fixed wing then steps through numba's compiled kernel (a
+    dispatcher with ``py_func``); without numba, or with VISNAV_JIT=0, through the plain function."""
     import importlib.util
+    import os
 
     from visnav.vehicles import kernels
 
-    if importlib.util.find_spec("numba") is None:
-        import pytest
-
-        pytest.skip("numba is not installed (the `fast` extra): the kernels run on Python floats")
-    import os
-
-    if os.environ.get("VISNAV_JIT") == "0":
-        assert kernels.njit is None
-    else:
-        assert hasattr(kernels._fixedwing, "py_func")  # a numba dispatcher, not the plain function
+    compiled = importlib.util.find_spec("numba") is not None and os.environ.get("VISNAV_JIT", "1") != "0"
+    assert (kernels.njit is not None) == compiled
+    assert hasattr(kernels._fixedwing, "py_func") == compiled
 
 
 def test_the_kernel_on_python_floats_equals_the_readable_model():

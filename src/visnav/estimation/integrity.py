@@ -87,10 +87,6 @@ class IntegrityConfig:
     # streams whose NIS inflates the HPL (k^2): the horizontal position streams; None: every stream
     inflation_streams: tuple[str, ...] | None = None
     short_window: int = 0  # > 0: k^2 also from each inflation stream's last this-many accepted updates
-    # after a windowed test said degraded, ``ok`` again only once the windows have been clean this long [s] (0: at
-    # once). A filter fitting its measurements on a wrong solution fails the NIS test, passes it for a second, fails
-    # it again: without a hold each pass is an ``ok`` whose error the HPL does not bound (deck-static, issue 30)
-    recover_s: float = 0.0
 
     def __post_init__(self):
         if self.window < 1:
@@ -117,7 +113,6 @@ class IntegrityMonitor:
         self._tests: dict[str, StreamTest] = {}
         self._k2: float | None = None
         self._base: dict[str, list[float]] = {}  # stream -> [sum of NIS/dof, count] of its usual updates
-        self._failed_at = -math.inf  # the last time the windows alone said degraded (``recover_s``)
 
     def clear(self) -> None:
         """Empty every stream's window (a filter re-initialised: its predecessor's innovations say nothing)."""
@@ -225,11 +220,6 @@ class IntegrityMonitor:
         c = self.config
         k2, state, reason, nis, rejected, _ = self._windows()
         hpl = horizontal_protection_level(P_h, c.probability, k2) if P_h is not None else math.inf
-        if state == "degraded":
-            self._failed_at = float(t)
-        elif t - self._failed_at < c.recover_s:
-            state, reason = "degraded", (f"recovering: a windowed test failed {t - self._failed_at:.1f} s ago "
-                                         f"(ok after {c.recover_s:g} s clean)")
         if t - self._last_accept > c.stale_s:
             state, reason = "unusable", f"no accepted update for {t - self._last_accept:.1f} s"
         elif hpl > c.alert_limit_m:

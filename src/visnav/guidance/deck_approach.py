@@ -169,12 +169,11 @@ def touchdown_target(Cd0: np.ndarray, wd: np.ndarray, psi_d: float, t_go: float,
 
     The deck attitude is predicted ``t_go`` ahead (eq. 4.4-4.9) when ``moving``; the body at contact lies
     ``gear_offset`` above the landing point along the normal, and the target ``overshoot`` below the deck plane
-    beyond it (so that contact comes before the trajectory's end). Below it along the normal (``along`` None),
-    or along the final path: ``along`` the direction from the deck to the vehicle on it (the tau approach's a_td,
-    the straight approach's start), so that the path meets the deck plane at the landing point, not short of it
-    (along the normal a path at angle gamma from it met the plane ``overshoot tan(gamma)`` short: the static
-    deck's 35-45 deg approach 4-6 cm, seed 003 §5.3.3 "the vehicle never reaches (0,0)"). The path's angle from
-    the normal is taken at most ``MAX_ALONG_DEG`` (a nearly level path would move the target far).
+    beyond it (so that contact comes before the trajectory's end). Below it along the normal (``along`` None: the
+    thesis' static deck, whose straight path then meets the plane ``overshoot tan(gamma)`` short, §5.3.3 "the
+    vehicle never reaches (0,0)"), or along the final path, ``along`` the direction from the deck to the vehicle
+    on it (the tau approach's a_td), so that the path meets the deck plane above the landing point. The path's
+    angle from the normal is taken at most ``MAX_ALONG_DEG`` (a nearly level path would move the target far).
     """
     Cp = predict_deck_attitude(Cd0, wd, t_go) if moving else Cd0
     Rz = rot_z(psi_d)

@@ -199,7 +199,7 @@ class DeckNavConfig:
                    acquisition_sigmas=acq, tracking_sigmas=(float(sig_b), float(sig_r)), imu_period_s=period,
                    gate=f.gate, alpha=f.alpha, beta=f.beta, kappa=f.kappa, blob_threshold=c.blob_threshold,
                    converged_bearing_rms=np.radians(f.converged_bearing_rms_deg),
-                   integrity=IntegrityConfig(stale_s=f.integrity_stale_s, recover_s=f.integrity_recover_s),
+                   integrity=IntegrityConfig(stale_s=f.integrity_stale_s),
                    lost_nis_failures=(f.lost_nis_failures if f.lost_nis_failures is not None
                                       else 0 if sc.world.deck.motion == "moving" else 3),
                    reject_repeated_frames=f.reject_repeated_frames,

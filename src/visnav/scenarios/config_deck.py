@@ -173,10 +173,6 @@ class DeckFilterConfig(_M):
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
     integrity_stale_s: float = Field(0.5, gt=0, le=60, description="integrity unusable when no frame was fused "
                                      "for this long (15 frames at 30 Hz; issue #18)")
-    integrity_recover_s: float = Field(0.0, ge=0, le=60, description="after the windowed NIS or rejection test said "
-                                       "degraded, ok again only once the windows have been clean this long (a "
-                                       "filter on a wrong solution passes the test for a second between failures; "
-                                       "issue 30)")
     lost_nis_failures: int | None = Field(None, ge=0, le=100, description="the windowed NIS test failing this many "
                                           "times within 6 s -> the filter is lost on a wrong solution and re-locked "
                                           "(deck attitude from its prior, position and velocity widened); 0: never; "
