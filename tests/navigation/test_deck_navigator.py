@@ -481,3 +481,28 @@ def test_a_lock_out_widens_the_bias_states():
     np.testing.assert_allclose(b[-1], step, atol=0.03)
     # what the IMU-only holds take off the specific force: clipped at 4 prior sigmas (0.2 m/s^2)
     np.testing.assert_allclose(nav.estimate(5.0).accel_bias, np.clip(b[-1], -0.2, 0.2), atol=1e-12)
+
+
+def test_the_third_nis_failure_within_the_window_relocks_the_filter():
+    """``lost_nis_failures`` = 3 in ``lost_window_s`` = 6 s: a failing windowed NIS test counts once per onset (a
+    pass, then a fail); the third onset within 6 s re-locks the filter (nav_init source says why), onsets 6 s
+    apart or a test that stays failing never do, and 0 turns the check off."""
+    def drive(n, pattern, dt=0.5):
+        nav, _ = _tied_nav(lost_nis_failures=n)
+        relocks = []
+        nav._relock = relocks.append
+        for k, failing in enumerate(pattern):
+            nav._t = k * dt
+            nav.integrity.window_state = lambda f=failing: ("degraded" if f else "ok", "", f)
+            nav._nis_test()
+        return relocks
+
+    blink = [True, False] * 3  # three onsets within 2.5 s
+    assert drive(3, blink) == ["windowed NIS test failed 3 times within 6 s"]
+    assert drive(3, [True] * 12) == []  # one onset, however long
+    assert drive(3, [True, False] * 2) == []  # two onsets
+    assert drive(3, [True] + [False] * 7 + [True] + [False] * 7 + [True], dt=0.5) == []  # onsets 4 s apart: 8 s
+    assert drive(3, [True] + [False] * 5 + [True] + [False] * 5 + [True], dt=0.5) == ["windowed NIS test failed 3 "
+                                                                                       "times within 6 s"]  # 3 s apart
+    assert drive(0, blink) == []
+    assert drive(3, blink * 2) == ["windowed NIS test failed 3 times within 6 s"] * 2  # counted afresh after one

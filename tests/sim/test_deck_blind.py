@@ -100,9 +100,11 @@ def test_static_deck_realistic_blur_relocks_a_filter_lost_on_a_wrong_solution():
 def test_static_deck_relocks_a_filter_that_keeps_failing_its_nis_test():
     """deck-static seed 2, realistic sensors, 3 s of blur from 9 s (issue 30 round 10): the filter re-acquires on a
     wrong solution and its windowed rate NIS test fails, passes for a second, fails again; each pass is an ``ok``
-    the HPL does not bound (without the re-lock: 62 steps, errors up to 1.2 m). Now the third failure within 6 s
-    re-locks it (``lost_nis_failures``): no ``ok`` step over the HPL. (The re-lock is no cure-all: on black-out
-    seed 2 it re-locks onto wrong solutions that a filter left alone did not take; docs/integrity.md round 10.)"""
+    the HPL does not bound. The third failure within 6 s re-locks it (``lost_nis_failures``): a safe run with no
+    ``ok`` step over the HPL. Without the re-lock the same fault is a branch that last-digit changes decide (on the
+    readable prediction seed 2 then had 62 such steps with errors to 1.2 m, on the compiled one seed 6 had 71 to
+    1.6 m; docs/integrity.md round 11), so the counting itself is held by
+    tests/navigation/test_deck_navigator.py::test_the_third_nis_failure_within_the_window_relocks_the_filter."""
     fault = 'kind = "camera_blur", start_s = 9.0, duration_s = 3.0, blur_px = 9'
     sim, res = _static_seed5(fault, seed=2)
     m = res.metrics
@@ -110,8 +112,3 @@ def test_static_deck_relocks_a_filter_that_keeps_failing_its_nis_test():
     init = [str(s) for s in sim.log.get("nav_init")["source"]]
     assert any("windowed NIS test failed 3 times" in s for s in init)
     assert m["hpl_bound_violations"] == 0 and m["worst_error_while_ok_m"] < 1.0
-    from visnav.scenarios.schema import load_scenario
-
-    sc = load_scenario("deck-static", [f"faults=[{{{fault}}}]", "navigation.lost_nis_failures=0"], 2)
-    m0 = make_simulation(sc).run().metrics  # without the re-lock
-    assert m0["hpl_bound_violations"] > 20 and m0["worst_error_while_ok_m"] > 1.0

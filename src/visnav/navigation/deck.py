@@ -46,6 +46,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from visnav.estimation import deck as dm
+from visnav.estimation import kernels as ek
 from visnav.estimation.association import associate
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, chi2_2_quantile
 from visnav.estimation.ukf import UnscentedKalmanFilter
@@ -270,6 +271,11 @@ class _Step:
 
 
 class DeckNavigator(CommandDispatch):
+    #: predict through ``estimation/kernels``' compiled eq. 3.1-3.5 and 3.8 where ``visnav.jit`` has numba (the
+    #: readable ``estimation/deck.process_model`` / ``process_noise`` otherwise, or with ``kernel = False``; the
+    #: tests hold them equal at 1e-12)
+    kernel: ClassVar[bool] = True
+
     def __init__(self, config: DeckNavConfig, recorder=None):
         self.cfg = config
         self.lights = np.asarray(config.lights, float)
@@ -292,6 +298,8 @@ class DeckNavigator(CommandDispatch):
                     [cam_sig[1] ** 2], np.full(2, cam_sig[2] ** 2), [c.time_offset_sigma**2]]
         self._augmented_var = np.concatenate(var) if var else np.zeros(0)
         self.imu_cov, self.ship_cov = config.imu_cov, config.ship_cov
+        self._compiled = self.kernel and ek.njit is not None
+        self._process_model = ek.deck_process_model if self._compiled else dm.process_model
         self.gate = config.gate
         self.tracker = BearingTracker(config.camera, threshold=config.blob_threshold)
         self.recorder = recorder
@@ -450,7 +458,7 @@ class DeckNavigator(CommandDispatch):
         x0, P0 = self._augment(x0, P0)
         if self.ukf is None:
             c = self.cfg
-            self.ukf = UnscentedKalmanFilter(x0, P0, partial(dm.process_model, bias=self._bias_on), alpha=c.alpha, beta=c.beta, kappa=c.kappa,
+            self.ukf = UnscentedKalmanFilter(x0, P0, partial(self._process_model, bias=self._bias_on), alpha=c.alpha, beta=c.beta, kappa=c.kappa,
                                              residual_x=dm.residual_x, state_add=dm.state_add)
         else:
             self.ukf.x, self.ukf.P = np.array(x0, float), np.array(P0, float)
@@ -527,14 +535,15 @@ class DeckNavigator(CommandDispatch):
         imu_cov = self.imu_cov
         if self._t is not None and self._t < self._widen_until:  # after a re-tie: the velocity follows the lights
             imu_cov = imu_cov + np.diag([self.cfg.retie_accel_sigma**2] * 3 + [0.0] * 3)
-        Q = dm.process_noise(self.ukf.x, dt, u, imu_cov * scale if scale != 1.0 else imu_cov,
-                             self.ship_cov * scale if scale != 1.0 else self.ship_cov)
-        if self.ukf.n > dm.N_STATE:  # the bias's random walk; the consider parameters are constant
-            Qa = np.zeros((self.ukf.n, self.ukf.n))
-            Qa[:dm.N_STATE, :dm.N_STATE] = Q
-            if self._bias_on:
-                Qa[dm.BIAS, dm.BIAS] = np.eye(3) * self.cfg.accel_bias_walk**2 * dt
-            Q = Qa
+        imu_cov, ship_cov = (imu_cov * scale, self.ship_cov * scale) if scale != 1.0 else (imu_cov, self.ship_cov)
+        n = self.ukf.n
+        if self._compiled:  # eq. 3.8 in the (n, n) matrix, zero beyond the 12 states
+            Q = ek.deck_process_noise(self.ukf.x, dt, u, imu_cov, ship_cov, n)
+        else:
+            Q = np.zeros((n, n))
+            Q[:dm.N_STATE, :dm.N_STATE] = dm.process_noise(self.ukf.x, dt, u, imu_cov, ship_cov)
+        if self._bias_on:  # the bias's random walk; the consider parameters are constant
+            Q[dm.BIAS, dm.BIAS] += np.eye(3) * self.cfg.accel_bias_walk**2 * dt
         try:
             self.ukf.predict(dt, Q, u=u)
         except np.linalg.LinAlgError as exc:

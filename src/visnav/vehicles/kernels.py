@@ -20,14 +20,7 @@ from math import asin, atan2, copysign, cos, exp, sin, sqrt
 
 from visnav.geometry.rotations import _dcm_rows
 
-import os
-
-try:  # optional (the ``fast`` extra): compiles the fixed wing's kernel; without it the same code runs on floats
-    from numba import njit
-except ImportError:  # exercised by tests/vehicles/test_kernels.py with VISNAV_JIT=0
-    njit = None
-if os.environ.get("VISNAV_JIT", "1") == "0":  # the kernels on Python floats even where numba is installed
-    njit = None
+from visnav.jit import compiled, njit
 
 G = 9.81
 
@@ -110,10 +103,8 @@ def _fixedwing(k, x, u, wind, dt):
     return x, d, air
 
 
-if njit is not None:  # compiled once per installation (numba's cache); the same functions on floats otherwise
-    _fixedwing_eval = njit(cache=True)(_fixedwing_eval)
-    _axpy = njit(cache=True)(_axpy)
-    _fixedwing = njit(cache=True)(_fixedwing)
+# compiled once per installation (numba's cache, visnav.jit); the same functions on floats otherwise
+_fixedwing_eval, _axpy, _fixedwing = compiled(_fixedwing_eval), compiled(_axpy), compiled(_fixedwing)
 
 
 def _floats(v) -> tuple:
