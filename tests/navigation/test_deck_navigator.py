@@ -506,3 +506,39 @@ def test_the_third_nis_failure_within_the_window_relocks_the_filter():
                                                                                        "times within 6 s"]  # 3 s apart
     assert drive(0, blink) == []
     assert drive(3, blink * 2) == ["windowed NIS test failed 3 times within 6 s"] * 2  # counted afresh after one
+
+
+def test_the_level_deck_update_is_the_linear_kalman_update_of_roll_and_pitch():
+    """``level_deck_sigma``: z = the autopilot's (roll, pitch), h(x) = (phi, theta) is linear, so the unscented
+    update is the Kalman filter's closed form x + K (z - Hx), P - K S K^T with K = P H^T S^-1, S = H P H^T + R, at
+    1e-9; the lights' last innovation (which the integrity windows read) is left as it was; sigma 0 is off."""
+    nav, _ = _tied_nav(level_deck_sigma=np.radians(2.0), accel_bias_sigma=0.1)
+    rng = np.random.default_rng(2)
+    A = rng.normal(size=(nav.ukf.n, nav.ukf.n)) * 0.05
+    nav.ukf.P = nav.ukf.P + A @ A.T  # correlated, so that the other states move too
+    nav.ukf.x[3:5] = np.radians([4.0, -12.0])
+    x, P = nav.ukf.x.copy(), nav.ukf.P.copy()
+    nav.ukf.S, nav.ukf.y, nav.ukf.nis = np.eye(4), np.ones(4), 7.0
+    z = np.radians([0.5, 1.0])
+    nav._level(z)
+    H = np.zeros((2, nav.ukf.n))
+    H[0, 3] = H[1, 4] = 1.0
+    S = H @ P @ H.T + np.eye(2) * np.radians(2.0) ** 2
+    K = P @ H.T @ np.linalg.inv(S)
+    np.testing.assert_allclose(nav.ukf.x, x + K @ (z - H @ x), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(nav.ukf.P, P - K @ S @ K.T, rtol=1e-9, atol=1e-12)
+    assert nav.ukf.nis == 7.0 and (nav.ukf.y == 1.0).all()
+    off, _ = _tied_nav()
+    x0 = off.ukf.x.copy()
+    off._level(z)
+    np.testing.assert_array_equal(off.ukf.x, x0)
+
+
+def test_the_level_deck_update_is_on_over_a_static_deck_only():
+    from visnav.scenarios.schema import load_scenario
+
+    for name, want in (("deck-static", 2.0), ("deck-moving", 0.0)):
+        cfg = DeckNavConfig.from_mission(load_scenario(name, [], 1), 1 / 30)
+        assert cfg.level_deck_sigma == pytest.approx(np.radians(want))
+    cfg = DeckNavConfig.from_mission(load_scenario("deck-static", ["navigation.level_deck_sigma_deg=0"], 1), 1 / 30)
+    assert cfg.level_deck_sigma == 0.0

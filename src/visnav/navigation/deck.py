@@ -160,6 +160,9 @@ class DeckNavConfig:
     # times within lost_window_s (a wrong solution fails it, passes for a second, fails again: deck-static blur
     # seed 2, 62 ok steps over the HPL, errors to 1.2 m) -> ``_relock``; 0: never
     lost_nis_failures: int = 0
+    # a static, level deck: the autopilot's roll and pitch fused as the relative ones after each frame, this sigma
+    # per axis [rad] (``_level``); 0: off (a moving deck, and the thesis' filter)
+    level_deck_sigma: float = 0.0
 
     @classmethod
     def from_mission(cls, sc, frame_interval_s: float) -> "DeckNavConfig":
@@ -203,6 +206,8 @@ class DeckNavConfig:
                    integrity=IntegrityConfig(stale_s=f.integrity_stale_s),
                    lost_nis_failures=(f.lost_nis_failures if f.lost_nis_failures is not None
                                       else 0 if sc.world.deck.motion == "moving" else 3),
+                   level_deck_sigma=np.radians(f.level_deck_sigma_deg if f.level_deck_sigma_deg is not None
+                                               else 0.0 if sc.world.deck.motion == "moving" else 2.0),
                    reject_repeated_frames=f.reject_repeated_frames,
                    frame_interval_s=frame_interval_s if f.camera_clock_check else 0.0,
                    reacquire_after_s=f.integrity_stale_s if f.reacquire_after_outage else float("inf"),
@@ -210,6 +215,11 @@ class DeckNavConfig:
                    update_gate_alpha=f.update_gate_alpha, retie_after_frames=f.retie_after_frames,
                    retie_sigmas=(f.retie_sigma_m, f.retie_sigma_mps), retie_accel_sigma=f.retie_accel_sigma_mps2,
                    retie_hold_s=f.retie_hold_s)
+
+
+def _roll_pitch(sig):
+    """h(x) of the level-deck update: the relative roll and pitch of the sigma points."""
+    return sig[:, 3:5]
 
 
 @dataclass(frozen=True)
@@ -597,11 +607,11 @@ class DeckNavigator(CommandDispatch):
                 self._predict(t - self._t, self._u)
                 self._t = t
                 self._hist.append(_Step(t, self.ukf.x.copy(), self.ukf.P.copy(), self._u))
-            used, rejected = self._correct(bf.bearings, bf.rates, self.last_gyro)
+            used, rejected = self._correct(bf.bearings, bf.rates, self.last_gyro, rp=self._rp)
             last = self._hist[-1] if self._hist else None
             if last is not None and abs(last.t - self._t) < 1e-12:
                 last.x, last.P = self.ukf.x.copy(), self.ukf.P.copy()
-                last.fused.append((bf.bearings, bf.rates, self.last_gyro))
+                last.fused.append((bf.bearings, bf.rates, self.last_gyro, self._rp))
         else:
             res = self._fuse_late(t, bf)
             if res is None:
@@ -695,18 +705,18 @@ class DeckNavigator(CommandDispatch):
         if t > base.t + 1e-12 and u is not None:
             self._predict(t - base.t, u)
         gyro = u.gyro if u is not None else self.last_gyro
-        res = self._correct(bf.bearings, bf.rates, gyro)
+        res = self._correct(bf.bearings, bf.rates, gyro, rp=self._rp)
         t_prev = max(t, base.t)
         new = steps[:j]
         if t > base.t + 1e-12:
-            new += [base, _Step(t, self.ukf.x.copy(), self.ukf.P.copy(), u, [(bf.bearings, bf.rates, gyro)])]
+            new += [base, _Step(t, self.ukf.x.copy(), self.ukf.P.copy(), u, [(bf.bearings, bf.rates, gyro, self._rp)])]
         else:
             new.append(_Step(base.t, self.ukf.x.copy(), self.ukf.P.copy(), base.u,
-                             base.fused + [(bf.bearings, bf.rates, gyro)]))
+                             base.fused + [(bf.bearings, bf.rates, gyro, self._rp)]))
         for s in later:  # replay the IMU inputs and the frames fused since
             self._predict(s.t - t_prev, s.u)
             for fb in s.fused:
-                self._correct(*fb, replay=True)
+                self._correct(*fb[:3], replay=True, rp=fb[3])
             t_prev = s.t
             new.append(_Step(s.t, self.ukf.x.copy(), self.ukf.P.copy(), s.u, s.fused))
         self._hist = deque(new, maxlen=self._hist.maxlen)
@@ -788,9 +798,10 @@ class DeckNavigator(CommandDispatch):
         after finding the blobs; this entry is for bearings from elsewhere (tests, other trackers)."""
         return self._correct(bearings, rates, self.last_gyro)[0]
 
-    def _correct(self, bearings, rates, gyro, replay: bool = False) -> tuple[int, int]:
+    def _correct(self, bearings, rates, gyro, replay: bool = False, rp=None) -> tuple[int, int]:
         """Associate and correct; returns (lights used, blobs rejected). ``replay``: re-fusing after a late
-        frame (counters and integrity already have it)."""
+        frame (counters and integrity already have it). ``rp``: the autopilot's roll and pitch at the frame (the
+        level-deck update, ``_level``)."""
         b = np.asarray(bearings, float).reshape(-1, 2)
         r = np.asarray(rates, float).reshape(-1, 2)
         if r.shape != b.shape:
@@ -798,7 +809,10 @@ class DeckNavigator(CommandDispatch):
         ok = np.isfinite(b).all(axis=1)
         b, r = b[ok], r[ok]
         try:
-            return self._correct_checked(b, r, int(ok.sum()), gyro, replay)
+            used = self._correct_checked(b, r, int(ok.sum()), gyro, replay)
+            if used[0]:
+                self._level(rp)
+            return used
         except np.linalg.LinAlgError as exc:
             self._diverged(str(exc))
             self.stats.lights_used_last = 0
@@ -972,6 +986,22 @@ class DeckNavigator(CommandDispatch):
         self.stats.relocks += 1
         if self.recorder is not None:
             self._log_init(self._t, x, np.diag(P), f"{why}: lost, re-locked from the deck's sea-state prior")
+
+    def _level(self, rp) -> None:
+        """A static, level deck (seed 003 §5.3.3; ``level_deck_sigma`` > 0): the deck frame is level, so the
+        relative roll and pitch (phi, theta) of C_h^d are the vehicle's own, which the autopilot measures. After a
+        frame's lights, z = (roll, pitch) is fused with h(x) = (phi, theta) and ``level_deck_sigma`` per axis (the
+        AHRS's error and the deck's departure from level), ungated: the autopilot outranks a fit of the lights.
+        Not in the thesis' filter: there the four near-coplanar lights alone fix the attitude, and after a
+        re-acquisition they also fit a second pose 10-20 deg off in pitch (static blur seed 4: the filter re-locked
+        every 3 s for 40 s and settled on it again each time, then landed 2 m off the plate)."""
+        s = self.cfg.level_deck_sigma
+        if s <= 0.0 or rp is None or self.ukf is None:
+            return
+        ukf = self.ukf
+        keep = ukf.S, ukf.y, ukf.nis  # (the lights' innovation stays the last one: the integrity windows read it)
+        ukf.update(np.asarray(rp, float), np.eye(2) * s * s, hx=_roll_pitch, consider=self._consider_slice)
+        ukf.S, ukf.y, ukf.nis = keep
 
     def _lockout(self, n_blobs: int, replay: bool) -> bool:
         """A frame with ``n_blobs`` blobs had every light rejected. After ``retie_after_frames`` such frames in

@@ -173,6 +173,11 @@ class DeckFilterConfig(_M):
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
     integrity_stale_s: float = Field(0.5, gt=0, le=60, description="integrity unusable when no frame was fused "
                                      "for this long (15 frames at 30 Hz; issue #18)")
+    level_deck_sigma_deg: float | None = Field(None, ge=0, le=30, description="a static, level deck: the "
+                                               "autopilot's roll and pitch fused as the deck's relative ones after "
+                                               "each frame with this sigma (AHRS error and the deck's departure from "
+                                               "level; not in the thesis' filter); 0: off; None: 2 over a static "
+                                               "deck, 0 over a moving one")
     lost_nis_failures: int | None = Field(None, ge=0, le=100, description="the windowed NIS test failing this many "
                                           "times within 6 s -> the filter is lost on a wrong solution and re-locked "
                                           "(deck attitude from its prior, position and velocity widened); 0: never; "
