@@ -142,22 +142,16 @@ def test_the_deck_kernels_are_compiled_exactly_where_numba_is_installed_and_not_
     element loops on Python floats would be slower than numpy)."""
     import importlib.util
     import os
-    import subprocess
-    import sys
-    from pathlib import Path
 
     from visnav.estimation import kernels
+    from tests.jit_off import run_without_jit
     from tests.navigation.test_deck_navigator import _tied_nav
 
     compiled = importlib.util.find_spec("numba") is not None and os.environ.get("VISNAV_JIT", "1") != "0"
     assert (kernels.njit is not None) == compiled == hasattr(kernels._deck_process_model, "py_func")
     assert _tied_nav()[0]._compiled == compiled
-    code = ("from tests.navigation.test_deck_navigator import _tied_nav\n"
-            "from visnav.estimation import deck as dm\n"
-            "nav = _tied_nav()[0]\n"
-            "assert not nav._compiled and nav.ukf.fx.func is dm.process_model\n"
-            "print('ok')\n")
-    root = Path(__file__).resolve().parents[2]
-    env = {**os.environ, "VISNAV_JIT": "0", "PYTHONPATH": os.pathsep.join([str(root / "src"), str(root)])}
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
+    run_without_jit("from tests.navigation.test_deck_navigator import _tied_nav\n"
+                    "from visnav.estimation import deck as dm\n"
+                    "nav = _tied_nav()[0]\n"
+                    "assert not nav._compiled and nav.ukf.fx.func is dm.process_model\n"
+                    "print('ok')\n")

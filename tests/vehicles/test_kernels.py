@@ -106,19 +106,12 @@ def test_the_kernel_is_compiled_exactly_where_numba_is_installed_and_not_switche
 
 def test_the_kernel_on_python_floats_equals_the_readable_model():
     """VISNAV_JIT=0 (or no numba): the same kernel source on floats, in a fresh interpreter, at 1e-12."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
+    from tests.jit_off import run_without_jit
 
-    code = ("import numpy as np\n"
-            "from visnav.vehicles import kernels\n"
-            "assert kernels.njit is None and not hasattr(kernels._fixedwing, 'py_func')\n"
-            "import tests.vehicles.test_kernels as t\n"
-            "t.test_fixedwing_derivatives_equal_the_readable_model()\n"
-            "t.test_a_flight_on_the_kernel_is_the_readable_flight()\n"
-            "print('ok')\n")
-    root = Path(__file__).resolve().parents[2]
-    env = {**os.environ, "VISNAV_JIT": "0", "PYTHONPATH": os.pathsep.join([str(root / "src"), str(root)])}
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
+    run_without_jit("import numpy as np\n"
+                    "from visnav.vehicles import kernels\n"
+                    "assert kernels.njit is None and not hasattr(kernels._fixedwing, 'py_func')\n"
+                    "import tests.vehicles.test_kernels as t\n"
+                    "t.test_fixedwing_derivatives_equal_the_readable_model()\n"
+                    "t.test_a_flight_on_the_kernel_is_the_readable_flight()\n"
+                    "print('ok')\n")

@@ -127,7 +127,7 @@ def _deck_process_noise(x, dt, gyro, imu_cov, ship_cov, n):
     wr = w0 * r0 + w1 * r1 + w2 * r2
     # d vdot / d w: 2 [v]x + 2 r w^T - (w.r) I - w r^T
     D = np.empty((3, 3))
-    rr, vv, ww_ = (r0, r1, r2), (v0, v1, v2), (w0, w1, w2)
+    rr, ww_ = (r0, r1, r2), (w0, w1, w2)
     for i in range(3):
         for j in range(3):
             D[i, j] = 2.0 * rr[i] * ww_[j] - ww_[i] * rr[j] - (wr if i == j else 0.0)
