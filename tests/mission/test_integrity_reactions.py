@@ -349,3 +349,30 @@ def test_the_manual_level_hover_damps_the_vertical_speed_the_filter_sees():
     np.testing.assert_allclose(ref.accel, [0.0, 0.0, 0.6], atol=1e-12)  # z down: 0.6 m/s^2 down
     ref, _ = m.step(0.12, est, DeckHealth(lights_used=2))
     np.testing.assert_allclose(ref.accel, 0.0)
+
+
+@pytest.mark.parametrize("commit_m, goes_around", [(0.15, False), (0.0, True)])
+def test_static_deck_lands_on_in_the_last_centimetres_of_the_planned_path(commit_m, goes_around):
+    """The lights leave the view 7-11 cm above a static deck, with up to 2.8 s of the slow tau end (k = 0.3) to fly:
+    the navigator becoming unusable there, with more than integrity_commit_s to go but within integrity_commit_m of
+    the aim point, lands on (seeds 13 and 20 went around 2-7 mm above the deck, issue 30); farther out (the same
+    outage with integrity_commit_m = 0) it holds, as before."""
+    from visnav.mission.deck import DeckMission
+
+    sc = load_scenario("deck-static", overrides=[f"mission.guidance.integrity_commit_m={commit_m}"])
+    g = sc.mission.guidance
+    log = FlightLog()
+    m = DeckMission(sc.mission, _StubNav(), hold_point=[-1.0, 0.0, -1.5], gear_offset=0.17, period_s=0.02,
+                    recorder=log.record, filter_cfg=sc.navigation, deck=sc.world.deck, gains=sc.control.deck)
+    t = sc.mission.start.manual_s + 0.02
+    m.step(t, _est(), DeckHealth(converged=True, integrity="ok", hpl_m=HPL_OK))
+    assert m.mode == "approach"
+    t0, T = m.t_mode, m.approach.T
+    # the first time on the planned path 0.1 m from the aim (the gaps shrink monotonically)
+    tc = next(s for s in np.arange(0.0, T, 0.01) if np.linalg.norm(m.approach.desired(s)[0]) <= 0.1)
+    assert T - tc > g.integrity_commit_s + 2 * g.integrity_unusable_s  # the time rule alone would go around
+    t = _run(m, t, 0.01, int((t0 + tc - t) / 0.01) + 1, "ok")
+    t = _run(m, t, 0.1, 7, "unusable")
+    assert m.mode == ("hover" if goes_around else "approach")
+    reactions = log.get("integrity_reaction")
+    assert ("go-around" in list(reactions.get("action", []))) == goes_around

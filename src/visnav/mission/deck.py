@@ -31,10 +31,11 @@ over): on a moving deck the navigator ``unusable`` (no frame fused for ``filter.
 is a go-around (back to ``hover``, one of ``guidance.go_arounds``); no approach starts while it is
 unusable (the hover holds). On a static deck (``guidance.static_integrity``) the same unusable mid-approach
 holds (the blind hold) and a new straight approach starts from where the vehicle is once the fix has been
-``ok`` for ``go_around_hover_s``. In the approach's last ``integrity_commit_s`` the landing goes on (the
-lights leave the view near the deck); a trajectory that then ends without contact and without a trusted
-fix lands on (``guidance.blind_end = "land"``: ``descend`` level, the horizontal velocity arrested, sinking
-at ``final_descent_mps`` on the IMU, at most ``blind_land_s``) instead of going around over the heaving deck.
+``ok`` for ``go_around_hover_s``. In the approach's last ``integrity_commit_s``, or its last
+``integrity_commit_m`` of the planned path, the landing goes on (the lights leave the view near the deck); a
+trajectory that then ends without contact and without a trusted fix lands on (``guidance.blind_end = "land"``:
+``descend`` level, the horizontal velocity arrested, sinking at ``final_descent_mps`` on the IMU, at most
+``blind_land_s``) instead of going around over the heaving deck.
 A hover without a fix holds blind (:meth:`DeckMission._blind_hold`): it climbs ``blind_climb_m`` at
 ``blind_climb_mps`` on the IMU with the horizontal velocity arrested, then steers back to the start point on
 the dead-reckoned estimate. Each reaction is logged in ``integrity_reaction``.
@@ -179,8 +180,10 @@ class DeckMission:
             ref = DeckReference(t=t, kind="follow", position=c + pd, velocity=vd,
                                 accel=np.array([a_lead[0], a_lead[1], a_now[2]]), target=c, normal=n_up,
                                 flare_time_left=self.approach.T - tm if tau else None)
-            why = self._no_commit(t, hpl=tau) if (tau or g.static_integrity) and \
-                self.approach.T - tm > g.integrity_commit_s else ""
+            # committed in the last integrity_commit_s or the last integrity_commit_m of the planned path (the
+            # lights leave the view 7-11 cm above the deck, with up to 2.8 s of the slow static tau end to fly)
+            committed = self.approach.T - tm <= g.integrity_commit_s or np.linalg.norm(pd) <= g.integrity_commit_m
+            why = self._no_commit(t, hpl=tau) if (tau or g.static_integrity) and not committed else ""
             if why:
                 # no touchdown without a fix: go around even with the go-arounds used up (the hover holds and
                 # starts again when the fix is good; no landing is safe, a blind one is not)

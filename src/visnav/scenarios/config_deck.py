@@ -244,6 +244,10 @@ class DeckGuidanceConfig(_M):
                                         "approach starts while it is unusable (issue #18)")
     integrity_commit_s: float = Field(1.0, ge=0, le=30, description="... except in the approach's last seconds "
                                       "(the lights leave the view near the deck): there it lands on")
+    integrity_commit_m: float = Field(0.15, ge=0, le=5, description="... or within this distance of the aim point "
+                                      "along the planned path (the aim is overshoot_m below the deck; the lights "
+                                      "leave the view 7-11 cm above it, which on the slow static tau end is up to "
+                                      "2.8 s before its end): there it lands on")
     commit_hpl_m: float = Field(0.15, gt=0, le=10, description="moving deck: no approach starts, and one with more "
                                 "than integrity_commit_s to go goes around, while the navigator's horizontal "
                                 "protection level of the relative position is above this (half the 0.6 m plate "
