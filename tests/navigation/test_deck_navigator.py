@@ -542,3 +542,39 @@ def test_the_level_deck_update_is_on_over_a_static_deck_only():
         assert cfg.level_deck_sigma == pytest.approx(np.radians(want))
     cfg = DeckNavConfig.from_mission(load_scenario("deck-static", ["navigation.level_deck_sigma_deg=0"], 1), 1 / 30)
     assert cfg.level_deck_sigma == 0.0
+
+
+def test_the_reported_covariance_holds_the_calibrations_range_share_as_opencv_pnp_measures_it():
+    """The LED survey's constant error scales the layout's apparent size, so the range (issue 30: the static deck's
+    largest NEES term). The estimate's covariance reports r^2 (sigma_survey^2 / S + sigma_f^2) along the line of
+    sight; held to cv2.solvePnP with the true lights' exact images and the surveyed (perturbed) layout over 400
+    draws, and with a focal length 1 % off (the range 1 % off). The consider model's P has it: no share."""
+    import cv2
+
+    r, sig, f_err = 2.0, 0.01, 0.01
+    nav = _nav(light_survey_sigma=sig, camera_sigmas=(0.0, f_err, 0.0))
+    nav.ukf.x[0:3] = [0.0, 0.0, r]  # the deck straight below: the line of sight is z
+    C = nav._calibration_position_cov()
+    np.testing.assert_allclose(nav.covariance()[0:3, 0:3] - nav.ukf.P[0:3, 0:3], C, atol=1e-15)
+    K = np.array([[420.0, 0, 376], [0, 420.0, 240], [0, 0, 1]])
+    L = np.asarray(LEDS_EQ_5_10, float)
+    rvec, tvec = np.zeros(3), np.array([0.0, 0.0, r])  # camera above the layout's plane, looking down its normal
+    img = cv2.projectPoints(L, rvec, tvec, K, None)[0]
+    rng = np.random.default_rng(3)
+    err = []
+    for _ in range(400):
+        ok, _, t = cv2.solvePnP(L + rng.normal(0.0, sig, L.shape), img, K, None, rvec.copy(), tvec.copy(), True,
+                                cv2.SOLVEPNP_ITERATIVE)
+        assert ok
+        err.append(np.linalg.norm(t) - r)
+    var_survey = np.var(err)
+    ok, _, t = cv2.solvePnP(L, img, np.diag([1 + f_err, 1 + f_err, 1]) @ K, None, rvec.copy(), tvec.copy(), True,
+                            cv2.SOLVEPNP_ITERATIVE)
+    var_focal = (np.linalg.norm(t) - r) ** 2
+    # the similarity fit's share (scale alone): PnP's six degrees of freedom confound the scale with the tilt of
+    # a near-fronto-parallel layout a little, and measure 1.1-1.2x it here
+    assert 0.8 <= np.sqrt(C[2, 2] / (var_survey + var_focal)) <= 1.0
+    assert abs(np.linalg.norm(t) - r) == pytest.approx(f_err * r, rel=0.02)
+    np.testing.assert_allclose(C[0:2, 0:2], np.eye(2) * (nav._survey_sigma_per_m() * r) ** 2, atol=1e-15)
+    assert not _nav(light_survey_sigma=sig, camera_sigmas=(0.0, f_err, 0.0),
+                    calibration_model="consider")._calibration_position_cov().any()
