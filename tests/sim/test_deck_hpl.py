@@ -47,9 +47,11 @@ def test_realistic_deck_fault_free_error_stays_inside_the_protection_level():
     assert len(td["t"]) == 1 and bool(td["on_deck"][0])
 
 
-def test_health_splits_its_hpl_into_the_filter_share_and_the_survey_share():
-    """hpl_m = hypot(hpl_noise_m, hpl_bias_per_m x range): lambda_max(P_h + (s r)^2 I) = lambda_max(P_h) + (s r)^2;
-    the mission's rules take hpl_noise_m, the HPL of P_h alone."""
+def test_health_splits_its_hpl_into_the_filter_share_and_the_calibration_share():
+    """Each part is the HPL of its own covariance: hpl_noise_m of the filter's P (the mission's rules take it),
+    hpl_bias_per_m x range of the calibration's constant share (the survey's tilt, (s r)^2 I, and the layout's
+    apparent size along the line of sight, ``_calibration_position_cov``); hpl_m of their sum lies between the
+    larger and their hypot (lambda_max is subadditive, and the sight line's share is not isotropic)."""
     from visnav.estimation.integrity import horizontal_protection_level
     from visnav.measurements import NavInit
     from visnav.navigation.deck import DeckNavConfig, DeckNavigator
@@ -60,6 +62,11 @@ def test_health_splits_its_hpl_into_the_filter_share_and_the_survey_share():
     h = nav.health(0.0)
     r = float(np.linalg.norm(nav.x[0:3]))
     assert r > 1.0 and h.hpl_bias_per_m > 0.2
-    assert math.isclose(math.hypot(h.hpl_noise_m, h.hpl_bias_per_m * r), h.hpl_m, rel_tol=1e-9)
     k2 = h.consistency_k2
+    C = nav._calibration_position_cov()[0:2, 0:2]
     assert math.isclose(h.hpl_noise_m, horizontal_protection_level(nav.P[0:2, 0:2], 0.999, k2), rel_tol=1e-9)
+    assert math.isclose(h.hpl_bias_per_m * r, horizontal_protection_level(C, 0.999, k2), rel_tol=1e-9)
+    assert math.isclose(h.hpl_m, horizontal_protection_level(nav.P[0:2, 0:2] + C, 0.999, k2), rel_tol=1e-9)
+    assert max(h.hpl_noise_m, h.hpl_bias_per_m * r) <= h.hpl_m <= math.hypot(h.hpl_noise_m, h.hpl_bias_per_m * r)
+    # the sight line's share is there: more than the survey's tilt alone
+    assert h.hpl_bias_per_m > np.sqrt(k2 * -2 * np.log(1e-3)) * nav._survey_sigma_per_m()

@@ -48,7 +48,7 @@ from scipy.stats import chi2
 from visnav.estimation import deck as dm
 from visnav.estimation import kernels as ek
 from visnav.estimation.association import associate
-from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, chi2_2_quantile
+from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, horizontal_protection_level
 from visnav.estimation.ukf import UnscentedKalmanFilter
 from visnav.geometry.rotations import euler_to_dcm3
 from visnav.measurements import AttitudeSample, Estimate, Frame, Health, ImuSample, NavInit
@@ -263,8 +263,9 @@ class DeckHealth(Health):
     min_lights_1s: int = 0
     bearing_rms_1s: float = float("nan")  # RMS bearing innovation over the frames of the last second [rad]
     converged: bool = False
-    # the HPL's parts: hpl_m = hypot(hpl_noise_m, hpl_bias_per_m x range), the filter's covariance and, growing
-    # with the range, the calibration's constant error (``DeckNavigator._survey_sigma_per_m``)
+    # the HPL's parts, each the HPL of its own covariance: the filter's P and, growing with the range, the
+    # calibration's constant error (``DeckNavigator._calibration_position_cov``); hpl_m, the HPL of their sum, lies
+    # between the larger and hypot(hpl_noise_m, hpl_bias_per_m x range)
     hpl_noise_m: float | None = None  # (None: not split)
     hpl_bias_per_m: float = 0.0
 
@@ -403,16 +404,18 @@ class DeckNavigator(CommandDispatch):
         h = DeckHealth(source="camera", tracking=conv, rejected_samples=self.stats.imu_dropped,
                        lights_used=self.stats.lights_used_last, frames_1s=len(recent),
                        min_lights_1s=min(used) if used else 0, bearing_rms_1s=rms_1s, converged=conv)
-        P_h, s_m = None, self._survey_sigma_per_m()
-        rng = 0.0
+        P_h = C_h = None
         if self.ukf is not None:  # the calibration's constant error as a covariance of its own (not in P: no gain)
-            rng = float(np.linalg.norm(self.ukf.x[dm.POS]))
-            P_h = self.ukf.P[0:2, 0:2] + np.eye(2) * (s_m * rng) ** 2
+            C_h = self._calibration_position_cov()[0:2, 0:2]
+            P_h = self.ukf.P[0:2, 0:2] + C_h
         a = self.integrity.assess(t, P_h)
-        per_m = math.sqrt(max(a["consistency_k2"], 0.0) * chi2_2_quantile(a["hpl_probability"])) * s_m
-        h.hpl_bias_per_m = per_m
-        h.hpl_noise_m = math.sqrt(max(a["hpl_m"] ** 2 - (per_m * rng) ** 2, 0.0)) if math.isfinite(a["hpl_m"]) \
-            else a["hpl_m"]
+        if C_h is not None and math.isfinite(a["hpl_m"]):
+            p, k2 = a["hpl_probability"], a["consistency_k2"]
+            rng = float(np.linalg.norm(self.ukf.x[dm.POS]))
+            h.hpl_noise_m = horizontal_protection_level(self.ukf.P[0:2, 0:2], p, k2)
+            h.hpl_bias_per_m = horizontal_protection_level(C_h, p, k2) / rng if rng > 0.0 else 0.0
+        else:
+            h.hpl_noise_m = a["hpl_m"]
         if (self._clock_alarm is not None and a["integrity"] == "ok"
                 and t - self._clock_alarm[0] <= self.cfg.clock_alarm_s):
             a["integrity"], a["integrity_reason"] = "degraded", self._clock_alarm[1]
