@@ -490,7 +490,8 @@ class DeckNavigator(CommandDispatch):
         The numerical angular acceleration telescopes in the velocity (``sum (w_k - w_k-1) x r``), so the
         estimate carries ``-n x r`` with ``n`` the newest gyro sample's noise: a white error that the
         process noise cannot hold (it does not accumulate) and that ``P`` therefore lacks. It adds
-        ``[r]x Sigma_gyro [r]x^T`` to the velocity block (``v = (v + w x r) - w x r``, d/dw = ``[r]x``).
+        ``[r]x Sigma_gyro [r]x^T`` to the velocity block (``v = (v + w x r) - w x r``, d/dw = ``[r]x``), and the
+        calibration's constant share to the position block (``_calibration_position_cov``), which P lacks too.
         """
         r0, r1, r2 = self.ukf.x[0:3].tolist()
         S = np.array([[0.0, -r2, r1], [r2, 0.0, -r0], [-r1, r0, 0.0]])
@@ -510,8 +511,8 @@ class DeckNavigator(CommandDispatch):
         the protection level) and the error of the layout's apparent size along the line of sight: a light off by
         sigma_survey scales the layout by sigma_survey / sqrt(S) (S = sum |b_i - b_mean|^2; the similarity fit's
         share: cv2.solvePnP's six degrees of freedom measure 1.1-1.2x it looking down the layout's normal), the
-        focal length's error sigma_f by as much; both scale the range. The floor (``_calibration_floor``) holds the across-sight
-        share in P. Measured: the range share was the static deck's largest NEES term (z error 7 cm at 1.5-2 m
+        focal length's error sigma_f by as much; both scale the range. The floor (``_calibration_floor``) holds the
+        across-sight share in P. Measured: the range share was the static deck's largest NEES term (z error 7 cm at 1.5-2 m
         against a 2 cm sigma)."""
         c = self.cfg
         p = self.ukf.x[dm.POS]
