@@ -512,8 +512,8 @@ class DeckNavigator(CommandDispatch):
         sigma_survey scales the layout by sigma_survey / sqrt(S) (S = sum |b_i - b_mean|^2; the similarity fit's
         share: cv2.solvePnP's six degrees of freedom measure 1.1-1.2x it looking down the layout's normal), the
         focal length's error sigma_f by as much; both scale the range. The floor (``_calibration_floor``) holds the
-        across-sight share in P. Measured: the range share was the static deck's largest NEES term (z error 7 cm at 1.5-2 m
-        against a 2 cm sigma)."""
+        across-sight share in P. Measured: the range share was the static deck's largest NEES term (z error 7 cm
+        at 1.5-2 m against a 2 cm sigma)."""
         c = self.cfg
         p = self.ukf.x[dm.POS]
         r = float(np.linalg.norm(p))
