@@ -102,6 +102,7 @@ def test_the_kernel_is_compiled_exactly_where_numba_is_installed_and_not_switche
     compiled = importlib.util.find_spec("numba") is not None and os.environ.get("VISNAV_JIT", "1") != "0"
     assert (kernels.njit is not None) == compiled
     assert hasattr(kernels._fixedwing, "py_func") == compiled
+    assert hasattr(kernels._rmax, "py_func") == compiled  # the R-MAX's RK4 step likewise
 
 
 def test_the_kernel_on_python_floats_equals_the_readable_model():
@@ -114,4 +115,6 @@ def test_the_kernel_on_python_floats_equals_the_readable_model():
                     "import tests.vehicles.test_kernels as t\n"
                     "t.test_fixedwing_derivatives_equal_the_readable_model()\n"
                     "t.test_a_flight_on_the_kernel_is_the_readable_flight()\n"
+                    "t.test_rmax_derivatives_equal_the_readable_model()\n"
+                    "t.test_an_rmax_flight_on_the_kernel_is_the_readable_flight()\n"
                     "print('ok')\n")

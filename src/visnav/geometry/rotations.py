@@ -101,9 +101,9 @@ def cross(a, b) -> np.ndarray:
 # ---------------------------------------------------------------- Euler angles <-> DCM
 def _dcm_rows(cf, sf, ct, st, cp, sp):
     """Seed 002 eq. 3.2, C_b^n = Rz(ψ) Ry(θ) Rx(φ), from cos / sin of (φ, θ, ψ)."""
-    return [[ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp],
-            [ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp],
-            [-st, sf * ct, cf * ct]]
+    return ((ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp),
+            (ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp),
+            (-st, sf * ct, cf * ct))
 
 
 def _rate_rows(cf, sf, ct, tt):

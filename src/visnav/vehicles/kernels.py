@@ -10,7 +10,9 @@ and a step then ~3 us against ~20 us on Python floats); without numba, or with `
 functions run on Python floats. It is not the model: a change to the physics is made in
 ``fixedwing.derivatives`` and then here, and ``tests/vehicles/test_kernels.py`` holds every kernel, compiled and
 on floats, to its readable reference at 1e-12 relative (random states, controls and winds, and a whole flight).
-``FixedWingModel(kernel=False)`` flies the readable path.
+``FixedWingModel(kernel=False)`` flies the readable path. The R-MAX's translational RK4 (seed 002 eq. 3.9-3.10,
+``rmax.RmaxModel._deriv``) is compiled likewise: on Python floats it was ~30 us a step, 3 % of a palace campaign's
+time (BENCHMARKS.md round 13); ``RmaxModel.kernel = False`` flies its readable path.
 """
 
 from __future__ import annotations
@@ -46,9 +48,7 @@ def _fixedwing_eval(k, x, u, wind):
     da, de, dr, thr = u
     wn, we, wd = wind
     cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(th), sin(th), cos(psi), sin(psi)
-    c00, c01, c02 = ct * cp, -cf * sp + sf * st * cp, sf * sp + cf * st * cp  # eq. 3.2 (rotations._dcm_rows)
-    c10, c11, c12 = ct * sp, cf * cp + sf * st * sp, -sf * cp + cf * st * sp
-    c20, c21, c22 = -st, sf * ct, cf * ct
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _dcm_rows_c(cf, sf, ct, st, cp, sp)  # eq. 3.2
     ur = uu - (c00 * wn + c10 * we + c20 * wd)  # eq. 2.7: body velocity minus C^T wind
     vr = vv - (c01 * wn + c11 * we + c21 * wd)
     wr = ww - (c02 * wn + c12 * we + c22 * wd)
@@ -126,34 +126,61 @@ def fixedwing_rk4(k, x, u, wind, dt: float, air: bool = False):
     return (list(x1), air_data) if air else list(x1)
 
 
-def rmax_derivatives(P, y, att, wind, force: bool = False):
-    """``rmax.RmaxModel._deriv(y, att, wind)[0]`` on floats (seed 002 eq. 3.9 with the thrust of eq. 3.10):
-    d/dt of (u v w N E D ψ w_yacs); ``P`` the model's ``RmaxParams``, ``att`` (φ, θ, p, q, r, ΔaZ).
-    ``force``: also the specific force (``_deriv(...)[1]``)."""
-    u, v, w, _, _, _, psi, w_yacs = y
+def rmax_constants(P) -> tuple:
+    """What the R-MAX kernel reads of ``RmaxParams`` ``P``: (Xu, Yv, Zw, g, 1.0 where the YACS holds the climb rate
+    (``heave_damping = "yacs"``) else 0.0). Taken at each call (the parameters are a mutable dataclass)."""
+    return (float(P.Xu), float(P.Yv), float(P.Zw), float(P.g), 1.0 if P.heave_damping == "yacs" else 0.0)
+
+
+def _rmax_eval(k, y, att, wind):
+    """Seed 002 eq. 3.9 with the thrust of eq. 3.10 (``rmax.RmaxModel._deriv``) on floats: d/dt of
+    (u v w N E D ψ w_yacs) and the specific force, ``att`` = (φ, θ, p, q, r, ΔaZ)."""
+    Xu, Yv, Zw, g, yacs = k
+    u, v, w, psi, w_yacs = y[0], y[1], y[2], y[6], y[7]
     phi, theta, p, q, r, az = att
     wn, we, wd = wind
-    cf, sf, ct, st = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
-    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _dcm_rows(cf, sf, ct, st, math.cos(psi), math.sin(psi))
+    cf, sf, ct, st = cos(phi), sin(phi), cos(theta), sin(theta)
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _dcm_rows_c(cf, sf, ct, st, cos(psi), sin(psi))  # eq. 3.2
     ua = u - (c00 * wn + c10 * we + c20 * wd)  # body velocity relative to the air
     va = v - (c01 * wn + c11 * we + c21 * wd)
     wa = w - (c02 * wn + c12 * we + c22 * wd)
-    w_hold = w_yacs if P.heave_damping == "yacs" else 0.0
-    fx, fy, fz = P.Xu * ua, P.Yv * va, P.Zw * (wa - w_hold) - P.g * (1.0 + az)
-    dy = [fx - (q * w - r * v) + P.g * c20,  # eq. 3.9: f − ω × v + C_nb (0, 0, g)
-          fy - (r * u - p * w) + P.g * c21,
-          fz - (p * v - q * u) + P.g * c22,
+    fx, fy, fz = Xu * ua, Yv * va, Zw * (wa - yacs * w_yacs) - g * (1.0 + az)
+    dy = (fx - (q * w - r * v) + g * c20,  # eq. 3.9: f − ω × v + C_nb (0, 0, g)
+          fy - (r * u - p * w) + g * c21,
+          fz - (p * v - q * u) + g * c22,
           c00 * u + c01 * v + c02 * w, c10 * u + c11 * v + c12 * w, c20 * u + c21 * v + c22 * w,
           (q * sf + r * cf) / ct,  # ψ̇, eq. 3.7
-          -P.g * az]
-    return (dy, (fx, fy, fz)) if force else dy
+          -g * az)
+    return dy, (fx, fy, fz)
+
+
+def _axpy8(x, h, d):
+    """x + h d on 8-tuples (the R-MAX RK4's stage state)."""
+    return (x[0] + h * d[0], x[1] + h * d[1], x[2] + h * d[2], x[3] + h * d[3], x[4] + h * d[4], x[5] + h * d[5],
+            x[6] + h * d[6], x[7] + h * d[7])
+
+
+def _rmax(k, y, a0, ah, a1, wind, dt):
+    """``RmaxModel.step``'s classic RK4 of :func:`_rmax_eval` over ``dt``, the attitude at t, t + dt/2 and t + dt."""
+    k1 = _rmax_eval(k, y, a0, wind)[0]
+    k2 = _rmax_eval(k, _axpy8(y, 0.5 * dt, k1), ah, wind)[0]
+    k3 = _rmax_eval(k, _axpy8(y, 0.5 * dt, k2), ah, wind)[0]
+    k4 = _rmax_eval(k, _axpy8(y, dt, k3), a1, wind)[0]
+    return _axpy8(y, dt / 6.0, _axpy8(_axpy8(_axpy8(k1, 2.0, k2), 2.0, k3), 1.0, k4))  # y + dt/6 (k1 + 2k2 + 2k3 + k4)
+
+
+# compiled once per installation (numba's cache, visnav.jit); the same functions on floats otherwise
+_dcm_rows_c = compiled(_dcm_rows)
+_rmax_eval, _axpy8, _rmax = compiled(_rmax_eval), compiled(_axpy8), compiled(_rmax)
+
+
+def rmax_derivatives(P, y, att, wind, force: bool = False):
+    """``rmax.RmaxModel._deriv(y, att, wind)[0]`` on floats: d/dt of (u v w N E D ψ w_yacs); ``P`` the model's
+    ``RmaxParams``, ``att`` (φ, θ, p, q, r, ΔaZ). ``force``: also the specific force (``_deriv(...)[1]``)."""
+    dy, f = _rmax_eval(rmax_constants(P), _floats(y), _floats(att), _floats(wind))
+    return (list(dy), f) if force else list(dy)
 
 
 def rmax_rk4(P, y, a0, ah, a1, wind, dt: float) -> list[float]:
     """``RmaxModel.step``'s RK4 of :func:`rmax_derivatives` with the attitude at t, t + dt/2 and t + dt."""
-    h = 0.5 * dt
-    k1 = rmax_derivatives(P, y, a0, wind)
-    k2 = rmax_derivatives(P, [a + h * b for a, b in zip(y, k1)], ah, wind)
-    k3 = rmax_derivatives(P, [a + h * b for a, b in zip(y, k2)], ah, wind)
-    k4 = rmax_derivatives(P, [a + dt * b for a, b in zip(y, k3)], a1, wind)
-    return [a + dt * (b1 + 2.0 * b2 + 2.0 * b3 + b4) / 6.0 for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]
+    return list(_rmax(rmax_constants(P), _floats(y), _floats(a0), _floats(ah), _floats(a1), _floats(wind), float(dt)))
