@@ -183,5 +183,5 @@ def rmax_derivatives(P, y, att, wind, force: bool = False):
 
 
 def rmax_rk4(P, y, a0, ah, a1, wind, dt: float) -> list[float]:
-    """``RmaxModel.step``'s RK4 of :func:`rmax_derivatives` with the attitude at t, t + dt/2 and t + dt."""
+    """``RmaxModel.step``'s RK4 of eq. 3.9 (:func:`_rmax`) with the attitude at t, t + dt/2 and t + dt."""
     return list(_rmax(rmax_constants(P), _floats(y), _floats(a0), _floats(ah), _floats(a1), _floats(wind), float(dt)))

@@ -177,7 +177,8 @@ class RmaxModel:
                  initial: VehicleState | None = None, *, position: ArrayLike = (0.0, 0.0, 0.0),
                  yaw: float = 0.0, t0: float = 0.0) -> None:
         self.params = params if params is not None else RmaxParams()
-        #: step through ``vehicles/kernels.rmax_rk4`` (eq. 3.9 on floats, held to ``_deriv`` at 1e-12 by the tests);
+        #: step through ``vehicles/kernels.rmax_rk4`` (eq. 3.9 compiled where numba is installed, on floats otherwise;
+        #: held to ``_deriv`` at 1e-12 by the tests);
         #: False: the readable RK4 on ``_deriv``
         self.kernel = True
         if not (np.isfinite(dt) and dt > 0):
@@ -293,7 +294,7 @@ class RmaxModel:
         if self.on_ground:  # skids hold the position; attitude still follows eq. 3.4
             y1 = y.copy()
             y1[6] += dt * (_psi_rate(a0) + 4 * _psi_rate(ah) + _psi_rate(a1)) / 6.0
-        elif self.kernel:  # the same RK4 on floats (vehicles/kernels, held to _deriv by tests/vehicles/test_kernels)
+        elif self.kernel:  # the same RK4, compiled (vehicles/kernels, held to _deriv by tests/vehicles/test_kernels)
             y1 = np.array(rmax_rk4(self.params, y.tolist(), a0, ah, a1, w.tolist(), dt))
             vd = float(euler_to_dcm3(a1[0], a1[1], y1[6])[2] @ y1[0:3])
             if y1[5] >= 0.0 and vd > 0.0:
@@ -331,7 +332,7 @@ class RmaxModel:
         C = euler_to_dcm3(phi, theta, y[6])
         if self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
             f = -self.params.g * C[2]
-        elif self.kernel:  # the same on floats (vehicles/kernels)
+        elif self.kernel:  # the same, compiled (vehicles/kernels)
             f = np.array(rmax_derivatives(self.params, y.tolist(), att, np.asarray(wind, float).tolist(), True)[1])
         else:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
             f = self._deriv(y, att, np.asarray(wind, float))[1]
