@@ -6,7 +6,8 @@ Tolerance, per metric: 2 % of the stored value, or an absolute floor in the metr
 changes a closed-loop run in the last digits, and a mode switch or a gate that flips on such a difference moves a
 figure by far less than 2 %; a change of what a result means (a filter that is worse, a controller that overshoots)
 moves it by more. Outcomes (safe / unsafe / ...) and booleans must be equal. A seed whose run flips between two
-branches on last-digit changes stores both (``also``, with ``why``): witas-homing seed 4, deck-moving seed 1. The default run flies three quick
+branches on last-digit changes stores both (``also``, with ``why``): witas-homing seed 4 (deck-moving seed 1 did until the
+reference lead of issue 30 round 14 moved its landing; not re-checked for branches since). The default run flies three quick
 scenarios at seed 1; ``-m slow`` flies every stored scenario and seed.
 """
 

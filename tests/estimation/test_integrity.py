@@ -63,6 +63,18 @@ def test_rejected_share_and_staleness():
     assert a["integrity"] == "unusable" and "no accepted update" in a["integrity_reason"]
 
 
+def test_an_accepted_update_that_is_no_fix_does_not_hold_off_staleness():
+    m = IntegrityMonitor(IntegrityConfig(window=10, stale_s=0.5))
+    m.record(0.0, "bearing", 4.0, 8, True)  # a fix (a deck frame with four lights)
+    for k in range(1, 10):
+        m.record(0.1 * k, "bearing", 1.0, 2, True, fix=False)  # one light: fused, not a fix
+    a = m.assess(0.9)
+    assert a["integrity"] == "unusable" and "no accepted update for 0.9 s" in a["integrity_reason"]
+    assert a["rejected_share"]["bearing"] == 0.0  # accepted all the same: the windows count them
+    m.record(1.0, "bearing", 4.0, 8, True)
+    assert m.assess(1.0)["integrity"] != "unusable"
+
+
 def test_largest_eigenvalue_closed_form_and_isotropic_hpl_is_the_rayleigh_quantile():
     rng = np.random.default_rng(3)
     for _ in range(50):

@@ -295,6 +295,32 @@ def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vect
     return np.arctan(u).reshape(len(sig), -1)  # eq. 2.25
 
 
+def position_from_bearings(bearings: np.ndarray, idx: np.ndarray, e: np.ndarray, lights: np.ndarray,
+                           cam: CameraGeometry, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """The deck's position r given the relative attitude ``e``: eq. 2.25-2.26 solved for r by least squares.
+
+    Bearing i (of light ``idx[i]``) says s_i = T_cam (r + C_d^h b_i - rho) lies along d_i = T_cam^T (tan, tan, 1)
+    (eq. 2.25 inverted), so r satisfies d_i x r = -d_i x (C_d^h b_i - rho): two independent equations per light,
+    linear in r (with the attitude known the range follows from the lights' spread in the image, which is what
+    the UKF's fit can trade against a wrong attitude). Each equation's residual is a distance across the ray
+    [m]; with a bearing sigma ``sigma`` [rad] and the light's range l_i it is weighted by 1 / (sigma l_i), the
+    ranges taken from a first unweighted solve. Returns (r, its covariance (3, 3)); needs two lights or more.
+    """
+    b = np.asarray(bearings, float).reshape(-1, 2)
+    Ct = euler_to_dcm(np.asarray(e, float)).T  # C_d^h
+    q = np.asarray(lights, float)[np.asarray(idx)] @ Ct.T - cam.rho  # C_d^h b_i - rho, (M, 3)
+    d = np.column_stack([np.tan(b), np.ones(len(b))]) @ cam.T_cam  # T_cam^T (tan, tan, 1), body axes
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    A = -skew(d)  # (M, 3, 3): [d]_x r = -[d]_x q  (skew(d) @ x = d x x)
+    y = np.einsum("mij,mj->mi", skew(d), q)
+    A, y = A.reshape(-1, 3), y.reshape(-1)
+    r = np.linalg.lstsq(A, y, rcond=None)[0]
+    w = np.repeat(1.0 / (sigma * np.maximum(np.linalg.norm(r + q, axis=1), 1e-3)), 3)
+    N = (A * w[:, None]).T @ (A * w[:, None])
+    r = np.linalg.solve(N, (A * w[:, None]).T @ (y * w))
+    return r, np.linalg.inv(N)
+
+
 def wrap_state(sig: np.ndarray) -> np.ndarray:
     """Keep the relative Euler angles' roll and yaw in (-pi, pi]."""
     return _wrap_in_place(np.array(sig, dtype=float, copy=True))

@@ -122,8 +122,10 @@ class IntegrityMonitor:
         self._tests.clear()
         self._k2 = None
 
-    def record(self, t: float, stream: str, nis: float, dof: int, accepted: bool) -> None:
-        """One update: its NIS, its dimension, and whether the filter's gate accepted it."""
+    def record(self, t: float, stream: str, nis: float, dof: int, accepted: bool, fix: bool = True) -> None:
+        """One update: its NIS, its dimension, and whether the filter's gate accepted it; ``fix`` False: an
+        accepted update that does not fix the state on its own (a deck frame with one or two lights), which
+        does not hold off ``stale_s``."""
         q = self._streams.get(stream)
         if q is None:
             q = self._streams[stream] = deque(maxlen=self.config.window)
@@ -133,7 +135,7 @@ class IntegrityMonitor:
         only = self.config.inflation_streams
         if only is None or stream in only:
             self._k2 = None
-        if accepted:
+        if accepted and fix:
             self._last_accept = max(self._last_accept, float(t))
             if self.config.short_window > 0 and dof > 0 and (only is None or stream in only):
                 b = self._base.setdefault(stream, [0.0, 0])

@@ -61,9 +61,9 @@ class NavIntegrity:
     def suspicions(self) -> dict[str, str]:
         return {k: r for k, (r, _) in self._suspect.items()}
 
-    def record(self, t: float, stream: str, nis: float, dof: int, accepted: bool) -> None:
+    def record(self, t: float, stream: str, nis: float, dof: int, accepted: bool, fix: bool = True) -> None:
         if math.isfinite(nis) and dof > 0:
-            self.monitor.record(t, stream, nis, dof, accepted)
+            self.monitor.record(t, stream, nis, dof, accepted, fix)
 
     def start(self, t: float) -> None:
         """The filter (re)started at ``t``: the stale clock starts here (no update is owed before)."""

@@ -172,7 +172,20 @@ class DeckFilterConfig(_M):
                                 "(the filter's assumption; world.deck.motion_scale is the world's)")
     imu_noise_scale: float = Field(1.0, ge=0, le=100)
     integrity_stale_s: float = Field(0.5, gt=0, le=60, description="integrity unusable when no frame was fused "
-                                     "for this long (15 frames at 30 Hz; issue #18)")
+                                     "with at least fix_min_lights lights for this long (15 frames at 30 Hz; "
+                                     "issue #18)")
+    range_check_sigmas: float = Field(3.3, ge=0, le=100, description="re-lock when the range the lights give with "
+                                      "the filter's attitude is off the filter's by more than this many sigmas (3.3: "
+                                      "99.9 % of a normal) on range_check_frames frames in a row (0: no check; "
+                                      "issue 30)")
+    range_check_frac: float = Field(0.05, ge=0, le=1, description="the range check's share of the range in its "
+                                    "sigma: the 1 cm survey over lights 0.19-0.2 m apart, the focal error, the "
+                                    "attitude's")
+    range_check_frames: int = Field(3, ge=1, le=100)
+    fix_min_lights: int = Field(3, ge=1, le=4, description="a frame fixes the relative pose with this many lights "
+                                "(three for a pose, P3P); frames with fewer are fused but do not hold off "
+                                "integrity_stale_s (one light kept a filter 'ok' near the deck while its position "
+                                "ran off 0.13-0.22 m past an HPL of 0.12-0.18 m; issue 30)")
     level_deck_sigma_deg: float | None = Field(None, ge=0, le=30, description="a static, level deck: the "
                                                "autopilot's roll and pitch fused as the deck's relative ones after "
                                                "each frame with this sigma (AHRS error and the deck's departure from "
@@ -285,6 +298,10 @@ class DeckControlConfig(_M):
     k_alpha_beta: float = Field(0.45, gt=0, lt=0.5)
     feedforward_lead_s: float = Field(0.18, ge=0, le=1, description="trajectory acceleration taken this far "
                                       "ahead (about 2 zeta / omega of the attitude loop)")
+    reference_lead_s: float = Field(0.1, ge=0, le=1, description="the horizontal position and velocity reference "
+                                    "taken this far ahead (the tilt's lag: with 0 the moving deck landed behind "
+                                    "the point in 19 of 20 seeds, 0.1: 15, 0.18: 7 but one at 1.19 m/s; "
+                                    "docs/results-deck.md round 14)")
     spring_per_s2: float = Field(6.0, gt=0, le=100, description="K of eq. 4.25")
     damper_per_s: float = Field(4.0, gt=0, le=100, description="B of eq. 4.25")
 
