@@ -216,3 +216,16 @@ def test_position_from_bearings_inverts_eq_2_25_2_26_and_its_covariance_is_the_s
     for d in ([0.0, np.radians(10), 0.0], [np.radians(10), 0.0, 0.0]):
         r_off, _ = dm.position_from_bearings(bear, np.arange(4), x[3:6] + d, LIGHTS, CAM, sig)
         assert 0.0 < abs(np.linalg.norm(r_off) / np.linalg.norm(x[0:3]) - 1.0) < 0.035
+
+
+def test_locate_lights_finds_which_light_each_blob_is_and_the_position():
+    x = truth_state(0.7)
+    bear = measured_bearings(0.7)
+    rng = np.random.default_rng(2)
+    for order in (np.array([2, 0, 3, 1]), np.array([3, 1, 0])):  # shuffled, and one light missing
+        idx, r, _, rms = dm.locate_lights(bear[order] + rng.normal(0, 2e-4, (len(order), 2)), x[3:6], LIGHTS, CAM,
+                                          2e-4)
+        np.testing.assert_array_equal(idx, order)
+        np.testing.assert_allclose(r, x[0:3], atol=5e-3)
+        assert rms < 5e-4
+    assert dm.locate_lights(bear[:2], x[3:6], LIGHTS, CAM, 2e-4) is None  # two blobs: no position

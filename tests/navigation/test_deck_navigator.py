@@ -578,3 +578,62 @@ def test_the_reported_covariance_holds_the_calibrations_range_share_as_opencv_pn
     np.testing.assert_allclose(C[0:2, 0:2], np.eye(2) * (nav._survey_sigma_per_m() * r) ** 2, atol=1e-15)
     assert not _nav(light_survey_sigma=sig, camera_sigmas=(0.0, f_err, 0.0),
                     calibration_model="consider")._calibration_position_cov().any()
+
+
+def test_the_range_check_re_locks_a_filter_whose_range_the_lights_contradict():
+    """A filter 30 % short along the sight line with a 3 mm sigma (a wrong solution it is sure of): the lights,
+    solved for the position with the filter's attitude, put the deck 0.4 m further; on the third such frame the
+    filter re-locks there. At the right range the check never fires."""
+    nav, truth = _tied_nav(range_check_sigmas=3.3, range_check_frames=3)
+    b, _ = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    idx = np.arange(len(LEDS_EQ_5_10))
+    assert not any(nav._range_lost(b[0], idx) for _ in range(10))
+    assert nav.stats.range_relocks == 0
+    x = nav.ukf.x.copy()
+    x[0:3] = 0.7 * truth[0:3]
+    nav.ukf.x = x
+    assert [nav._range_lost(b[0], idx) for _ in range(3)] == [False, False, True]
+    assert nav.stats.range_relocks == 1 and nav.stats.relocks == 1
+    # re-locked at the lights' position (the deck attitude from its level prior: the truth's here)
+    np.testing.assert_allclose(nav.x[0:3], truth[0:3], atol=1e-6)
+    assert np.sqrt(nav.P[0, 0]) >= 0.05  # ... and no longer sure of it
+    off = _tied_nav(range_check_sigmas=0.0)[0]
+    x = off.ukf.x.copy()
+    x[0:3] = 0.7 * truth[0:3]
+    off.ukf.x = x
+    assert not any(off._range_lost(b[0], idx) for _ in range(5))  # 0 sigmas: no check
+
+
+@pytest.mark.parametrize("fix_min_lights,unusable", [(3, True), (1, False)])
+def test_frames_of_one_light_are_fused_but_are_no_fix(fix_min_lights, unusable):
+    """One light per frame for 1 s: fused each time (the filter uses it), but with fix_min_lights = 3 no frame
+    holds off integrity_stale_s (0.5 s): the navigator says unusable; with 1, each frame does."""
+    from visnav.estimation.integrity import IntegrityConfig
+
+    nav, truth = _tied_nav(fix_min_lights=fix_min_lights, integrity=IntegrityConfig(stale_s=0.5))
+    b, r = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    used = []
+    for k in range(101):
+        nav.update(ImuSample(k * 0.01, ACC, np.zeros(3)))
+        if k % 3 == 0:
+            used.append(nav.fuse_bearings(b[0][:1], r[0][:1]))
+    assert min(used) == 1
+    assert (nav.health(1.0).integrity == "unusable") is unusable
+
+
+def test_a_lock_out_re_tie_takes_the_position_from_the_frame():
+    """A filter 0.8 m off with a 3 mm sigma rejects every light; the re-tie after 3 such frames assigns the blobs
+    to the lights with the level prior's attitude and starts from the position they give, so the next frame is
+    fused again. Without the relocation (range_check_sigmas = 0) the re-tie's 5 cm leave it locked out."""
+    out = []
+    for sigmas in (3.3, 0.0):
+        nav, truth = _tied_nav(retie_after_frames=3, range_check_sigmas=sigmas)
+        x = nav.ukf.x.copy()
+        x[0:3] = truth[0:3] + np.array([0.5, -0.4, 0.5])
+        nav.ukf.x = x
+        b, r = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+        used = [nav.fuse_bearings(b[0][[2, 0, 3, 1]], r[0][[2, 0, 3, 1]]) for _ in range(4)]
+        out.append((used, nav.stats.relocations, np.linalg.norm(nav.x[0:3] - truth[0:3])))
+    (used, moved, err), (used0, moved0, err0) = out
+    assert used[:2] == [0, 0] and used[2] == 4 and moved == 1 and err < 0.02
+    assert moved0 == 0 and max(used0) < 4 and err0 > 0.3

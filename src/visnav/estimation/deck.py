@@ -321,6 +321,31 @@ def position_from_bearings(bearings: np.ndarray, idx: np.ndarray, e: np.ndarray,
     return r, np.linalg.inv(N)
 
 
+def locate_lights(bearings: np.ndarray, e: np.ndarray, lights: np.ndarray, cam: CameraGeometry, sigma: float):
+    """Which light each of M >= 3 blobs is, and the deck's position, with the relative attitude ``e`` known: every
+    assignment of the blobs to distinct lights (at most 4!/(4-M)! = 24) solved by ``position_from_bearings``, the
+    one whose solved position reprojects closest (eq. 2.25-2.26, the deck in front of the camera) kept.
+    Returns (idx (M,), r (3,), its covariance, RMS bearing residual [rad]) or None."""
+    from itertools import permutations
+
+    b = np.asarray(bearings, float).reshape(-1, 2)
+    if len(b) < 3 or len(b) > len(lights):
+        return None
+    best = None
+    for perm in permutations(range(len(lights)), len(b)):
+        idx = np.asarray(perm)
+        r, C = position_from_bearings(b, idx, e, lights, cam, sigma)
+        x = np.zeros(N_STATE)
+        x[POS], x[ATT] = r, e
+        s, _, _ = light_vectors(x[None], lights[idx], cam)
+        if np.any(s[0, :, 2] <= 0.0):
+            continue
+        rms = float(np.sqrt(np.mean((bearings_only(x[None], lights[idx], cam)[0] - b.ravel()) ** 2)))
+        if best is None or rms < best[3]:
+            best = (idx, r, C, rms)
+    return best
+
+
 def wrap_state(sig: np.ndarray) -> np.ndarray:
     """Keep the relative Euler angles' roll and yaw in (-pi, pi]."""
     return _wrap_in_place(np.array(sig, dtype=float, copy=True))

@@ -64,6 +64,9 @@ RENDER_CENTROID_PX = 0.025
 #: the bias estimate the IMU-only holds take off the specific force (``DeckEstimate.accel_bias``) is clipped at
 #: this many prior sigmas
 BIAS_CLIP_SIGMAS = 4.0
+# a lock-out's frame gives the position (``_relocate``) when its best assignment reprojects within this many bearing
+# sigmas RMS (the re-tie's level-prior attitude off by the deck's tilt leaves about 1 deg at 1.5 m)
+RELOCATE_RMS_SIGMAS = 3.0
 
 
 @dataclass
@@ -85,6 +88,7 @@ class DeckNavStats:
     bias_steps: int = 0  # accelerometer-bias variance widened by the NIS test (``DeckNavigator._bias_test``)
     relocks: int = 0  # the filter lost on a wrong solution, started again from the deck's prior (``_relock``)
     range_relocks: int = 0  # ... of them by the range check (``_range_lost``), at the lights' position
+    relocations: int = 0  # lock-out re-ties that took the position from the frame (``_relocate``)
 
 
 @dataclass
@@ -355,6 +359,7 @@ class DeckNavigator(CommandDispatch):
         self._nis_failures: deque = deque()  # times the windowed NIS test started failing (``lost_nis_failures``)
         self._nis_failing = False
         self._range_off = 0  # frames in a row the range check failed (``_range_lost``)
+        self._locked_blobs: np.ndarray | None = None  # the newest lock-out frame's bearings (``_relocate``)
 
     # --- the interface ---------------------------------------------------------------------
     def initialize(self, init: NavInit) -> None:
@@ -869,7 +874,7 @@ class DeckNavigator(CommandDispatch):
         rejected = int((assign < 0).sum())
         st.blobs_rejected += rejected
         m = (assign >= 0).nonzero()[0]
-        if m.size == 0 and self._lockout(len(b), replay):
+        if m.size == 0 and self._lockout(b, replay):
             return self._refuse(b, r, n_ok, gyro)
         if m.size == 0:
             st.lights_used_last = 0
@@ -898,7 +903,7 @@ class DeckNavigator(CommandDispatch):
                                       rate_idx=ridx[:0], vectors=vec)
             ridx = ridx[:0]
             z = z[:nb]
-        if not applied and self._lockout(len(b), replay):
+        if not applied and self._lockout(b, replay):
             return self._refuse(b, r, n_ok, gyro)
         if not applied:  # the whole frame disagrees with the filter beyond its gate: not fused
             st.lights_used_last = 0
@@ -922,11 +927,12 @@ class DeckNavigator(CommandDispatch):
         self.last_bearing_rms = float(np.sqrt((yb * yb).sum() / yb.size))  # (the mean's own steps)
         # the bearing and rate parts' own NIS (marginal blocks of S) for the integrity monitor
         S_all, y = self.ukf.S, self.ukf.y
-        self.integrity.record(self._t, "bearing", float(yb @ np.linalg.solve(S_all[:nb, :nb], yb)), nb, True,
-                              idx.size >= self.cfg.fix_min_lights)
+        fix = idx.size >= self.cfg.fix_min_lights  # (one or two lights: fused, but no pose from them)
+        self.integrity.record(self._t, "bearing", float(yb @ np.linalg.solve(S_all[:nb, :nb], yb)), nb, True, fix)
         if y.size > nb:
             yr = y[nb:]
-            self.integrity.record(self._t, "rate", float(yr @ np.linalg.solve(S_all[nb:, nb:], yr)), yr.size, True)
+            self.integrity.record(self._t, "rate", float(yr @ np.linalg.solve(S_all[nb:, nb:], yr)), yr.size, True,
+                                  fix)
         self._nis_test()
         return int(idx.size), rejected
 
@@ -1043,8 +1049,8 @@ class DeckNavigator(CommandDispatch):
         ukf.update(np.asarray(rp, float), np.eye(2) * s * s, hx=_roll_pitch, consider=self._consider_slice)
         ukf.S, ukf.y, ukf.nis = keep
 
-    def _lockout(self, n_blobs: int, replay: bool) -> bool:
-        """A frame with ``n_blobs`` blobs had every light rejected. After ``retie_after_frames`` such frames in
+    def _lockout(self, b: np.ndarray, replay: bool) -> bool:
+        """A frame with blobs ``b`` (bearings) had every light rejected. After ``retie_after_frames`` such frames in
         a row (at least 3 blobs each: the lights are in view, the filter has drifted off them) re-tie the
         filter and return True (the caller fuses the frame again, once); False otherwise.
 
@@ -1055,7 +1061,7 @@ class DeckNavigator(CommandDispatch):
         the position and velocity variances, puts the deck's relative roll, pitch and rates back to their
         sea-state prior (as ``_reacquire``) and widens the accelerometer noise in Q for ``retie_hold_s`` so
         that the velocity follows the lights instead of a biased accelerometer. Logged in ``nav_init``."""
-        n = self.cfg.retie_after_frames
+        n, n_blobs = self.cfg.retie_after_frames, len(b)
         if replay or n <= 0 or n_blobs < 3 or self._retying:
             if not replay and n_blobs < 3:
                 self._locked = 0
@@ -1064,7 +1070,9 @@ class DeckNavigator(CommandDispatch):
         if self._locked < n:
             return False
         self._locked = 0
+        self._locked_blobs = np.asarray(b, float)
         x, P = self._retied()
+        moved = self._relocate(x, P)
         if self._bias_on:  # the bias states: a lock-out is what an accelerometer-bias step looks like
             i = np.arange(dm.BIAS.start, dm.BIAS.stop)
             P[i, i] = np.maximum(P[i, i], self.cfg.bias_step_sigma**2)
@@ -1076,8 +1084,32 @@ class DeckNavigator(CommandDispatch):
         if self.recorder is not None:
             self._log_init(self._t, x, np.diag(P),
                            f"re-tie after {n} frames with every light rejected: position, velocity and "
-                           "deck attitude widened, accelerometer noise widened")
+                           f"deck attitude widened, accelerometer noise widened{moved}")
         return True
+
+    def _relocate(self, x, P) -> str:
+        """A lock-out's re-tie (``_lockout``) also takes the position from the frame itself: the lock-out's blobs
+        (``_locked_blobs``) assigned to the lights by ``locate_lights`` with the re-tie's attitude (the deck's
+        level prior); kept when they reproject within ``RELOCATE_RMS_SIGMAS`` bearing sigmas (tracking and
+        calibration), the position sigma the re-tie's plus ``range_check_frac`` of the range. A re-tie adds only
+        5 cm to a filter that may be 1 m off (static IMU-drop seed 4: 31 re-ties in 3 s, every light still
+        rejected, the vehicle flown 3.5 m off the plate). ``x``, ``P`` are changed in place; returns what the log
+        says ('' when the frame gave no position)."""
+        b = self._locked_blobs
+        if b is None or self.cfg.range_check_sigmas <= 0:
+            return ""
+        c = self.cfg
+        sig_b = float(np.hypot(c.tracking_sigmas[0], c.calibration_bearing_sigma))
+        found = dm.locate_lights(b, x[dm.ATT], self.lights, self.cam, float(c.tracking_sigmas[0]))
+        if found is None or found[3] > RELOCATE_RMS_SIGMAS * sig_b:
+            return ""
+        idx, r, _, rms = found
+        rng = float(np.linalg.norm(r))
+        x[dm.POS] = r
+        P[0:3, :], P[:, 0:3] = 0.0, 0.0
+        P[0:3, 0:3] = np.eye(3) * ((c.range_check_frac * rng) ** 2 + c.retie_sigmas[0] ** 2)
+        self.stats.relocations += 1
+        return f"; position from the frame's {len(idx)} lights ({np.degrees(rms):.2f} deg RMS)"
 
     def _range_lost(self, b, idx) -> bool:
         """The range check (issue 30, not in the thesis): with the filter's relative attitude, the frame's lights
