@@ -43,6 +43,7 @@ the rotating-frame derivative, which is the state v itself, so the term is not a
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import permutations
 
 import numpy as np
 
@@ -326,8 +327,6 @@ def locate_lights(bearings: np.ndarray, e: np.ndarray, lights: np.ndarray, cam: 
     assignment of the blobs to distinct lights (at most 4!/(4-M)! = 24) solved by ``position_from_bearings``, the
     one whose solved position reprojects closest (eq. 2.25-2.26, the deck in front of the camera) kept.
     Returns (idx (M,), r (3,), its covariance, RMS bearing residual [rad]) or None."""
-    from itertools import permutations
-
     b = np.asarray(bearings, float).reshape(-1, 2)
     if len(b) < 3 or len(b) > len(lights):
         return None
