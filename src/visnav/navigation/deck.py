@@ -214,7 +214,9 @@ class DeckNavConfig:
                    gate=f.gate, alpha=f.alpha, beta=f.beta, kappa=f.kappa, blob_threshold=c.blob_threshold,
                    converged_bearing_rms=np.radians(f.converged_bearing_rms_deg),
                    integrity=IntegrityConfig(stale_s=f.integrity_stale_s), fix_min_lights=f.fix_min_lights,
-                   range_check_sigmas=f.range_check_sigmas, range_check_frac=f.range_check_frac,
+                   range_check_sigmas=(f.range_check_sigmas if f.range_check_sigmas is not None
+                                       else 0.0 if sc.world.deck.motion == "moving" else 3.3),
+                   range_check_frac=f.range_check_frac,
                    range_check_frames=f.range_check_frames,
                    lost_nis_failures=(f.lost_nis_failures if f.lost_nis_failures is not None
                                       else 0 if sc.world.deck.motion == "moving" else 3),

@@ -174,10 +174,12 @@ class DeckFilterConfig(_M):
     integrity_stale_s: float = Field(0.5, gt=0, le=60, description="integrity unusable when no frame was fused "
                                      "with at least fix_min_lights lights for this long (15 frames at 30 Hz; "
                                      "issue #18)")
-    range_check_sigmas: float = Field(3.3, ge=0, le=100, description="re-lock when the range the lights give with "
-                                      "the filter's attitude is off the filter's by more than this many sigmas (3.3: "
-                                      "99.9 % of a normal) on range_check_frames frames in a row (0: no check; "
-                                      "issue 30)")
+    range_check_sigmas: float | None = Field(None, ge=0, le=100, description="re-lock when the range the lights "
+                                             "give with the filter's attitude is off the filter's by more than this "
+                                             "many sigmas (3.3: 99.9 % of a normal) on range_check_frames frames in a "
+                                             "row, and let a lock-out's re-tie take the position from its frame (0: "
+                                             "neither; None: 3.3 over a static deck, 0 over a moving one, whose "
+                                             "level prior is no attitude to solve with; issue 30)")
     range_check_frac: float = Field(0.05, ge=0, le=1, description="the range check's share of the range in its "
                                     "sigma: the 1 cm survey over lights 0.19-0.2 m apart, the focal error, the "
                                     "attitude's")
