@@ -184,10 +184,12 @@ class DeckFilterConfig(_M):
                                     "sigma: the 1 cm survey over lights 0.19-0.2 m apart, the focal error, the "
                                     "attitude's")
     range_check_frames: int = Field(3, ge=1, le=100)
-    fix_min_lights: int = Field(3, ge=1, le=4, description="a frame fixes the relative pose with this many lights "
-                                "(three for a pose, P3P); frames with fewer are fused but do not hold off "
-                                "integrity_stale_s (one light kept a filter 'ok' near the deck while its position "
-                                "ran off 0.13-0.22 m past an HPL of 0.12-0.18 m; issue 30)")
+    fix_min_lights: int = Field(2, ge=1, le=4, description="a frame holds the fix with this many lights; frames "
+                                "with fewer are fused but do not hold off integrity_stale_s (one light, two "
+                                "equations, kept a filter 'ok' near the deck while its position ran off 0.13-0.22 m "
+                                "past an HPL of 0.12-0.18 m; two give four with the attitude the filter carries; "
+                                "three, a pose on their own, cost static seeds 15, 16 and 20 their landings as the "
+                                "lights left the view one by one; issue 30)")
     level_deck_sigma_deg: float | None = Field(None, ge=0, le=30, description="a static, level deck: the "
                                                "autopilot's roll and pitch fused as the deck's relative ones after "
                                                "each frame with this sigma (AHRS error and the deck's departure from "
