@@ -604,10 +604,11 @@ def test_the_range_check_re_locks_a_filter_whose_range_the_lights_contradict():
     assert not any(off._range_lost(b[0], idx) for _ in range(5))  # 0 sigmas: no check
 
 
-@pytest.mark.parametrize("fix_min_lights,unusable", [(3, True), (1, False)])
+@pytest.mark.parametrize("fix_min_lights,unusable", [(3, True), (2, True), (1, False)])
 def test_frames_of_one_light_are_fused_but_are_no_fix(fix_min_lights, unusable):
     """One light per frame for 1 s: fused each time (the filter uses it), but with fix_min_lights = 3 no frame
-    holds off integrity_stale_s (0.5 s): the navigator says unusable; with 1, each frame does."""
+    holds off integrity_stale_s (0.5 s): the navigator says unusable (with 2, the default, too); with 1, each
+    frame does."""
     from visnav.estimation.integrity import IntegrityConfig
 
     nav, truth = _tied_nav(fix_min_lights=fix_min_lights, integrity=IntegrityConfig(stale_s=0.5))
