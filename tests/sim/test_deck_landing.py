@@ -201,6 +201,13 @@ def test_flare_turns_the_specific_force_onto_the_deck_normal():
     assert f[2] == pytest.approx(a[2] - g)
     half = flare(a, n_up, fs / 2, fs)
     np.testing.assert_allclose(half, (a + full) / 2)
+    # a normal steeper than the approach can match (asin(2.5 / 9.81) = 14.8 deg) is taken at that tilt
+    steep = np.array([np.sin(np.radians(25)) * 0.6, np.sin(np.radians(25)) * 0.8, -np.cos(np.radians(25))])
+    lim = np.arcsin(2.5 / g)
+    f = flare(a, steep, 0.0, fs, lim) - [0.0, 0.0, g]
+    assert np.degrees(np.arccos(-f[2] / np.linalg.norm(f))) == pytest.approx(np.degrees(lim), abs=1e-9)
+    assert np.arctan2(f[1], f[0]) == pytest.approx(np.arctan2(0.8, 0.6), abs=1e-12) and f[2] == pytest.approx(a[2] - g)
+    np.testing.assert_array_equal(flare(a, n_up, 0.0, fs, lim), full)  # 5.6 deg: within the bound, unchanged
 
 
 def test_truth_start_uses_the_sensor_noise_from_the_first_frame():
