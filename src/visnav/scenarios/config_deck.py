@@ -184,6 +184,12 @@ class DeckFilterConfig(_M):
                                     "sigma: the 1 cm survey over lights 0.19-0.2 m apart, the focal error, the "
                                     "attitude's")
     range_check_frames: int = Field(3, ge=1, le=100)
+    tilt_check_sigmas: float | None = Field(None, ge=0, le=100, description="re-lock when the deck's tilt (the "
+                                            "filter's relative attitude with the autopilot's roll and pitch) exceeds "
+                                            "its sea state's bound by more than this many of the filter's attitude "
+                                            "sigmas on range_check_frames frames in a row (0: no check; None: 3 over "
+                                            "a moving deck, 0 over a static one, which the level update holds; "
+                                            "issue 30)")
     fix_min_lights: int = Field(2, ge=1, le=4, description="a frame holds the fix with this many lights; frames "
                                 "with fewer are fused but do not hold off integrity_stale_s (one light, two "
                                 "equations, kept a filter 'ok' near the deck while its position ran off 0.13-0.22 m "
