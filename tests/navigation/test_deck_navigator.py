@@ -638,3 +638,27 @@ def test_a_lock_out_re_tie_takes_the_position_from_the_frame():
     (used, moved, err), (used0, moved0, err0) = out
     assert used[:2] == [0, 0] and used[2] == 4 and moved == 1 and err < 0.02
     assert moved0 == 0 and max(used0) < 4 and err0 > 0.3
+
+
+def test_the_tilt_check_re_locks_a_deck_attitude_its_sea_state_cannot_have():
+    """The filter's relative attitude with the autopilot's level roll and pitch puts the deck 40 deg from level
+    with a 0.2 deg sigma; the sea state bounds it at the prior's amplitude: the third such frame re-locks the
+    filter onto that prior (relative roll and pitch = the autopilot's: level). 8 deg is within the bound."""
+    prior = np.r_[np.full(2, np.radians(6.0) ** 2), np.full(3, np.radians(2.0) ** 2)]
+    nav, truth = _tied_nav(tilt_check_sigmas=3.0, deck_prior_var=prior)
+    bound = np.degrees(np.sqrt(4 * np.radians(6.0) ** 2))  # hypot of the two amplitudes A = sqrt(2) sigma
+    for pitch_deg, relocks in ((8.0, 0), (40.0, 1)):
+        x = nav.ukf.x.copy()
+        x[4] = np.radians(pitch_deg)
+        nav.ukf.x = x
+        for _ in range(3):
+            nav._tilt_lost()
+        assert nav.stats.relocks == relocks, (pitch_deg, bound)
+    np.testing.assert_allclose(nav.x[3:5], 0.0, atol=1e-12)  # the level prior
+    off = _tied_nav(tilt_check_sigmas=0.0, deck_prior_var=prior)[0]
+    x = off.ukf.x.copy()
+    x[4] = np.radians(40.0)
+    off.ukf.x = x
+    for _ in range(5):
+        off._tilt_lost()
+    assert off.stats.relocks == 0
