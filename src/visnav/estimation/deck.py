@@ -47,7 +47,8 @@ from itertools import permutations
 
 import numpy as np
 
-from visnav.geometry.rotations import cross, euler_rate_matrix, euler_to_dcm, euler_to_dcm_and_rate_matrix, skew
+from visnav.geometry.rotations import (cross, euler_rate_matrix, euler_to_dcm, euler_to_dcm3, euler_to_dcm_and_rate_matrix,
+                                       skew)
 
 N_STATE = 12
 POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -296,6 +297,13 @@ def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vect
     return np.arctan(u).reshape(len(sig), -1)  # eq. 2.25
 
 
+def deck_in_level(e: np.ndarray, roll: float, pitch: float) -> np.ndarray:
+    """The deck's attitude in the heading-free level frame, C_d^0 = C_h^0 C_d^h (deck axes -> level axes): C_h^0
+    from the autopilot's roll and pitch, C_d^h = euler_to_dcm(e)^T from the relative Euler angles (eq. 2.8-2.12).
+    Its last column is the deck's z axis: acos of its third entry is the deck's tilt from level."""
+    return euler_to_dcm3(float(roll), float(pitch), 0.0) @ euler_to_dcm(e).T
+
+
 def position_from_bearings(bearings: np.ndarray, idx: np.ndarray, e: np.ndarray, lights: np.ndarray,
                            cam: CameraGeometry, sigma: float) -> tuple[np.ndarray, np.ndarray]:
     """The deck's position r given the relative attitude ``e``: eq. 2.25-2.26 solved for r by least squares.
@@ -336,10 +344,10 @@ def locate_lights(bearings: np.ndarray, e: np.ndarray, lights: np.ndarray, cam: 
         r, C = position_from_bearings(b, idx, e, lights, cam, sigma)
         x = np.zeros(N_STATE)
         x[POS], x[ATT] = r, e
-        s, _, _ = light_vectors(x[None], lights[idx], cam)
-        if np.any(s[0, :, 2] <= 0.0):
+        vec = light_vectors(x[None], lights[idx], cam)
+        if np.any(vec[0][0, :, 2] <= 0.0):
             continue
-        rms = float(np.sqrt(np.mean((bearings_only(x[None], lights[idx], cam)[0] - b.ravel()) ** 2)))
+        rms = float(np.sqrt(np.mean((bearings_only(x[None], lights[idx], cam, vec)[0] - b.ravel()) ** 2)))
         if best is None or rms < best[3]:
             best = (idx, r, C, rms)
     return best

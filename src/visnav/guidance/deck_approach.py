@@ -29,7 +29,8 @@ import math
 
 import numpy as np
 
-from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm, euler_to_dcm3
+from visnav.estimation.deck import deck_in_level
+from visnav.geometry.rotations import cross3, dcm_to_euler, euler_to_dcm3
 from visnav.guidance.tau import duration_for_touchdown_acceleration, higher_order_tau
 
 G = 9.81
@@ -151,7 +152,7 @@ def level_deck_geometry(x: np.ndarray, gyro: np.ndarray, roll: float, pitch: flo
     r, e, v, wd = x[0:3], x[3:6], x[6:9], x[9:12]
     p = -Ch0 @ r
     vel = -Ch0 @ (v + cross3(gyro, r))
-    Cd0 = Ch0 @ euler_to_dcm(e).T
+    Cd0 = deck_in_level(e, roll, pitch)
     psi_d = float(dcm_to_euler(Cd0)[2])
     out = p, vel, Cd0, psi_d, wd
     _LEVEL_LAST[0] = (x, gyro, roll, pitch, out)

@@ -50,7 +50,7 @@ from visnav.estimation import kernels as ek
 from visnav.estimation.association import associate
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, horizontal_protection_level
 from visnav.estimation.ukf import UnscentedKalmanFilter
-from visnav.geometry.rotations import euler_to_dcm, euler_to_dcm3
+from visnav.geometry.rotations import euler_to_dcm3
 from visnav.measurements import AttitudeSample, Estimate, Frame, Health, ImuSample, NavInit
 from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
@@ -1169,10 +1169,7 @@ class DeckNavigator(CommandDispatch):
         if c.tilt_check_sigmas <= 0 or self._rp is None:
             return
         x, P = self.ukf.x, self.ukf.P
-        C = euler_to_dcm(x[dm.ATT])  # C_h^d: vehicle -> deck
-        Ch = euler_to_dcm(np.array([self._rp[0], self._rp[1], 0.0]))  # vehicle -> level
-        z = Ch @ C[2, :]  # the deck's z axis in the level frame
-        tilt = float(np.arccos(np.clip(z[2], -1.0, 1.0)))
+        tilt = float(np.arccos(np.clip(dm.deck_in_level(x[dm.ATT], *self._rp)[2, 2], -1.0, 1.0)))
         bound = float(np.sqrt(2.0 * (c.deck_prior_var[0] + c.deck_prior_var[1])))
         sig = float(np.sqrt(max(P[3, 3], P[4, 4])))
         if tilt <= bound + c.tilt_check_sigmas * sig:
