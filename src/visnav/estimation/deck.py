@@ -46,6 +46,7 @@ from dataclasses import dataclass
 from itertools import permutations
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from visnav.geometry.rotations import (cross, euler_rate_matrix, euler_to_dcm, euler_to_dcm3, euler_to_dcm_and_rate_matrix,
                                        skew)
@@ -342,15 +343,65 @@ def locate_lights(bearings: np.ndarray, e: np.ndarray, lights: np.ndarray, cam: 
     for perm in permutations(range(len(lights)), len(b)):
         idx = np.asarray(perm)
         r, C = position_from_bearings(b, idx, e, lights, cam, sigma)
-        x = np.zeros(N_STATE)
-        x[POS], x[ATT] = r, e
-        vec = light_vectors(x[None], lights[idx], cam)
-        if np.any(vec[0][0, :, 2] <= 0.0):
+        rms = _reprojection_rms(b, idx, r, e, lights, cam)
+        if rms is None:
             continue
-        rms = float(np.sqrt(np.mean((bearings_only(x[None], lights[idx], cam, vec)[0] - b.ravel()) ** 2)))
         if best is None or rms < best[3]:
             best = (idx, r, C, rms)
     return best
+
+
+def _reprojection_rms(b: np.ndarray, idx: np.ndarray, r: np.ndarray, e: np.ndarray, lights: np.ndarray,
+                      cam: CameraGeometry) -> float | None:
+    """RMS of the bearings (eq. 2.25) of lights ``idx`` at (r, e) against ``b`` [rad]; None when one lies behind
+    the camera."""
+    x = np.zeros(N_STATE)
+    x[POS], x[ATT] = r, e
+    vec = light_vectors(x[None], lights[idx], cam)
+    if np.any(vec[0][0, :, 2] <= 0.0):
+        return None
+    return float(np.sqrt(np.mean((bearings_only(x[None], lights[idx], cam, vec)[0] - b.ravel()) ** 2)))
+
+
+def locate_level_deck(bearings: np.ndarray, roll: float, pitch: float, lights: np.ndarray, cam: CameraGeometry,
+                      sigma: float, prior: tuple[float, float] | None = None, step_deg: float = 10.0):
+    """A level deck seen from an unknown relative yaw: its relative roll and pitch are the vehicle's own (the
+    level deck of ``deck_in_level``), so the lights fix (r, psi). ``locate_lights`` at every ``step_deg`` of psi;
+    the candidates compared by their cost sum(residual^2) / sigma^2 (eq. 2.25, ``sigma`` per bearing component)
+    plus, with a ``prior`` (psi0, sigma_psi), ((psi - psi0) / sigma_psi)^2: the maximum a posteriori yaw. The
+    best is refined within one step by a bounded scalar search with its assignment kept. The prior matters
+    because the layout of eq. 5.10 seen obliquely nearly repeats itself turned by 180 deg (the pair on the y axis
+    moved 7 cm along x): with a 1 cm survey and 1 deg of camera misalignment one frame can fit the turned pose
+    as well as the true one. Returns (psi, idx (M,), r (3,), r's covariance, RMS bearing residual [rad]) or None."""
+    b = np.asarray(bearings, float).reshape(-1, 2)
+
+    def cost(psi: float, rms: float) -> float:
+        c = b.size * (rms / sigma) ** 2
+        if prior is not None:
+            c += (float(np.mod(psi - prior[0] + np.pi, 2 * np.pi) - np.pi) / prior[1]) ** 2
+        return c
+
+    best = None
+    for psi in np.radians(np.arange(-180.0, 180.0, step_deg)):
+        found = locate_lights(b, np.array([roll, pitch, psi]), lights, cam, sigma)
+        if found is not None and (best is None or cost(psi, found[3]) < best[0]):
+            best = (cost(psi, found[3]), float(psi), *found)
+    if best is None:
+        return None
+    idx, h = best[2], np.radians(step_deg)
+
+    def refine(psi: float) -> float:
+        e = np.array([roll, pitch, psi])
+        r, _ = position_from_bearings(b, idx, e, lights, cam, sigma)
+        rms = _reprojection_rms(b, idx, r, e, lights, cam)
+        return np.inf if rms is None else cost(psi, rms)
+
+    res = minimize_scalar(refine, bounds=(best[1] - h, best[1] + h), method="bounded", options={"xatol": 1e-5})
+    psi = float(res.x) if res.success and res.fun < best[0] else best[1]
+    psi = float(np.mod(psi + np.pi, 2 * np.pi) - np.pi)
+    e = np.array([roll, pitch, psi])
+    r, C = position_from_bearings(b, idx, e, lights, cam, sigma)
+    return psi, idx, r, C, _reprojection_rms(b, idx, r, e, lights, cam)
 
 
 def wrap_state(sig: np.ndarray) -> np.ndarray:

@@ -67,6 +67,11 @@ BIAS_CLIP_SIGMAS = 4.0
 # a lock-out's frame gives the position (``_relocate``) when its best assignment reprojects within this many bearing
 # sigmas RMS (the re-tie's level-prior attitude off by the deck's tilt leaves about 1 deg at 1.5 m)
 RELOCATE_RMS_SIGMAS = 3.0
+#: the relative yaw's sigma at least after a re-lock took it from a frame (``_relocate_level``) [deg]
+RELOCATE_YAW_SIGMA_DEG = 5.0
+#: a re-lock's prior on the relative yaw around the lost filter's [deg] (``_relocate_level``): wide, the filter is
+#: lost, yet it keeps a turned twin of the layout (180 deg) that fits one frame as well from being taken
+RELOCK_YAW_PRIOR_DEG = 45.0
 
 
 @dataclass
@@ -88,7 +93,7 @@ class DeckNavStats:
     bias_steps: int = 0  # accelerometer-bias variance widened by the NIS test (``DeckNavigator._bias_test``)
     relocks: int = 0  # the filter lost on a wrong solution, started again from the deck's prior (``_relock``)
     range_relocks: int = 0  # ... of them by the range check (``_range_lost``), at the lights' position
-    relocations: int = 0  # lock-out re-ties that took the position from the frame (``_relocate``)
+    relocations: int = 0  # re-ties and re-locks that took the position from the frame (``_relocate``, ``_relocate_level``)
 
 
 @dataclass
@@ -366,6 +371,8 @@ class DeckNavigator(CommandDispatch):
         self._nis_failures: deque = deque()  # times the windowed NIS test started failing (``lost_nis_failures``)
         self._nis_failing = False
         self._range_off = 0  # frames in a row the range check failed (``_range_lost``)
+        self._blobs: np.ndarray | None = None  # the bearings of the frame being fused (``_relocate_level``)
+        self._acquiring = False  # a static start waiting for its first frame of every light (``_acquire_level``)
         self._tilt_off = 0  # frames in a row the tilt check failed (``_tilt_lost``)
 
     # --- the interface ---------------------------------------------------------------------
@@ -379,6 +386,7 @@ class DeckNavigator(CommandDispatch):
         else:
             x0, P0 = dm.initial_state_static()
             self._start(init.t, x0, P0, self.cfg.acquisition_sigmas, init.source)
+            self._acquiring = True  # (the first frame of every light places it: ``_acquire_level``)
 
     def update(self, m) -> None:
         if isinstance(m, ImuSample):
@@ -871,6 +879,10 @@ class DeckNavigator(CommandDispatch):
 
     def _correct_checked(self, b, r, n_ok: int, gyro, replay: bool = False) -> tuple[int, int]:
         st = self.stats if not replay else DeckNavStats()
+        if not replay:
+            self._blobs = b  # (a re-lock's frame: ``_relocate_level``)
+            if self._acquiring:
+                self._acquire_level(b)
         st.blobs += n_ok
         if len(b) == 0:
             st.empty_frames += 1
@@ -1028,6 +1040,7 @@ class DeckNavigator(CommandDispatch):
         bias back to zero at its prior sigma; the bias test rests ``bias_test_reacquire_rest_s``. Logged in
         ``nav_init``, counted in ``stats.relocks``."""
         x, P = self._retied()
+        moved = self._relocate_level(x, P, np.radians(RELOCK_YAW_PRIOR_DEG))
         if self._bias_on:
             i = np.arange(dm.BIAS.start, dm.BIAS.stop)
             x[i] = 0.0
@@ -1040,7 +1053,7 @@ class DeckNavigator(CommandDispatch):
         self._bias_rest_until = self._t + self.cfg.bias_test_reacquire_rest_s
         self.stats.relocks += 1
         if self.recorder is not None:
-            self._log_init(self._t, x, np.diag(P), f"{why}: lost, re-locked from the deck's sea-state prior")
+            self._log_init(self._t, x, np.diag(P), f"{why}: lost, re-locked from the deck's sea-state prior{moved}")
 
     def _level(self, rp) -> None:
         """A static, level deck (seed 003 §5.3.3; ``level_deck_sigma`` > 0): the deck frame is level, so the
@@ -1111,12 +1124,70 @@ class DeckNavigator(CommandDispatch):
         if found is None or found[3] > RELOCATE_RMS_SIGMAS * sig_b:
             return ""
         idx, r, _, rms = found
-        rng = float(np.linalg.norm(r))
+        self._place(x, P, r)
+        return f"; position from the frame's {len(idx)} lights ({np.degrees(rms):.2f} deg RMS)"
+
+    def _relocate_level(self, x, P, prior_sigma: float) -> str:
+        """A re-lock over a level deck (the level update and the range check on: a static deck) also takes the
+        relative yaw and the position from a frame of every light (``_blobs``): solved at every relative yaw with
+        the autopilot's roll and pitch (``locate_level_deck``), the yaw a posteriori with the filter's yaw as the
+        prior (sigma ``prior_sigma`` [rad]) and the bearings' sigma the tracking's with the survey's per light at
+        the filter's range (the misalignment turns every bearing alike: the position takes it up); kept when
+        they reproject within ``RELOCATE_RMS_SIGMAS`` bearing sigmas (tracking and calibration); the yaw's
+        sigma then at least ``RELOCATE_YAW_SIGMA_DEG``. A re-lock alone keeps the yaw it was lost on: static seed
+        20 started 46 deg off its eq. 5.12 prior (20 deg sigma), converged on the layout's fit from the other
+        side, 88 deg off with a 4 deg sigma, and re-locked there twice (NEES 388). ``x``, ``P`` are changed in
+        place; returns what the log says ('' when the frame gave none)."""
+        c, b = self.cfg, self._blobs
+        if (c.range_check_sigmas <= 0 or c.level_deck_sigma <= 0 or self._rp is None or b is None
+                or len(b) < len(self.lights)):
+            return ""
+        rng = float(np.linalg.norm(x[dm.POS]))
+        sig = float(np.hypot(c.tracking_sigmas[0], c.light_survey_sigma / max(rng, 0.1)))
+        found = dm.locate_level_deck(b, *self._rp, self.lights, self.cam, sig, prior=(float(x[5]), prior_sigma))
+        if found is None or found[4] > RELOCATE_RMS_SIGMAS * float(np.hypot(c.tracking_sigmas[0],
+                                                                            c.calibration_bearing_sigma)):
+            return ""
+        psi, idx, r, _, rms = found
+        turn = float(np.degrees(dm.residual_x(np.r_[np.zeros(5), psi], x[:6])[5]))
+        x[5] = psi
+        P[5, :], P[:, 5] = 0.0, 0.0
+        P[5, 5] = max(self.ukf.P[5, 5], np.radians(RELOCATE_YAW_SIGMA_DEG) ** 2)
+        self._place(x, P, r)
+        return (f"; relative yaw ({turn:+.0f} deg) and position from the frame's {len(idx)} lights "
+                f"({np.degrees(rms):.2f} deg RMS)")
+
+    def _acquire_level(self, b) -> None:
+        """The start of eq. 5.12-5.17 over a level deck placed by its first frame of every light: relative yaw and
+        position from ``_relocate_level``, roll and pitch the autopilot's, the rest of eq. 5.12-5.17 kept. The
+        thesis' prior holds the yaw at 0 with a 20 deg sigma while the pilot may hold the vehicle 45 deg off
+        the deck's heading (§5.3.3); from there the filter can converge on the layout's fit from the other
+        side (static seed 20: 88 deg off with a 4 deg sigma for 11 s), which the operator's restart with a
+        yaw (Fig. 5.7) was for. Off where ``_relocate_level`` is (a moving deck)."""
+        c = self.cfg
+        if c.range_check_sigmas <= 0 or c.level_deck_sigma <= 0:
+            self._acquiring = False
+            return
+        if self._rp is None or len(b) < len(self.lights):
+            return
+        self._acquiring = False
+        x, P = self.ukf.x.copy(), self.ukf.P.copy()
+        x[3:5] = self._rp
+        moved = self._relocate_level(x, P, float(np.sqrt(P[5, 5])))  # (eq. 5.17's yaw sigma: the prior)
+        if not moved:
+            return
+        self.ukf.x, self.ukf.P = x, P
+        if self.recorder is not None:
+            self._log_init(self._t, x, np.diag(P), f"acquisition over a level deck{moved}")
+
+    def _place(self, x, P, r) -> None:
+        """The deck's position ``r`` from a frame's lights into (x, P): the position sigma ``range_check_frac`` of
+        the range (the calibration's share of the scale) and the re-tie's, uncorrelated."""
+        c = self.cfg
         x[dm.POS] = r
         P[0:3, :], P[:, 0:3] = 0.0, 0.0
-        P[0:3, 0:3] = np.eye(3) * ((c.range_check_frac * rng) ** 2 + c.retie_sigmas[0] ** 2)
+        P[0:3, 0:3] = np.eye(3) * ((c.range_check_frac * float(np.linalg.norm(r))) ** 2 + c.retie_sigmas[0] ** 2)
         self.stats.relocations += 1
-        return f"; position from the frame's {len(idx)} lights ({np.degrees(rms):.2f} deg RMS)"
 
     def _range_lost(self, b, idx) -> bool:
         """The range check (issue 30, not in the thesis): with the filter's relative attitude, the frame's lights
