@@ -72,6 +72,9 @@ RELOCATE_YAW_SIGMA_DEG = 5.0
 #: a re-lock's prior on the relative yaw around the lost filter's [deg] (``_relocate_level``): wide, the filter is
 #: lost, yet it keeps a turned twin of the layout (180 deg) that fits one frame as well from being taken
 RELOCK_YAW_PRIOR_DEG = 45.0
+#: a re-lock takes the frame's yaw and position only when the yaw is this many of the filter's yaw sigmas (at least
+#: ``RELOCATE_YAW_SIGMA_DEG``) from the filter's
+RELOCK_MIN_TURN_SIGMAS = 3.0
 
 
 @dataclass
@@ -1040,7 +1043,7 @@ class DeckNavigator(CommandDispatch):
         bias back to zero at its prior sigma; the bias test rests ``bias_test_reacquire_rest_s``. Logged in
         ``nav_init``, counted in ``stats.relocks``."""
         x, P = self._retied()
-        moved = self._relocate_level(x, P, np.radians(RELOCK_YAW_PRIOR_DEG))
+        moved = self._relocate_level(x, P, np.radians(RELOCK_YAW_PRIOR_DEG), RELOCK_MIN_TURN_SIGMAS)
         if self._bias_on:
             i = np.arange(dm.BIAS.start, dm.BIAS.stop)
             x[i] = 0.0
@@ -1127,7 +1130,7 @@ class DeckNavigator(CommandDispatch):
         self._place(x, P, r)
         return f"; position from the frame's {len(idx)} lights ({np.degrees(rms):.2f} deg RMS)"
 
-    def _relocate_level(self, x, P, prior_sigma: float) -> str:
+    def _relocate_level(self, x, P, prior_sigma: float, min_turn_sigmas: float = 0.0) -> str:
         """A re-lock over a level deck (the level update and the range check on: a static deck) also takes the
         relative yaw and the position from a frame of every light (``_blobs``): solved at every relative yaw with
         the autopilot's roll and pitch (``locate_level_deck``), the yaw a posteriori with the filter's yaw as the
@@ -1136,8 +1139,11 @@ class DeckNavigator(CommandDispatch):
         they reproject within ``RELOCATE_RMS_SIGMAS`` bearing sigmas (tracking and calibration); the yaw's
         sigma then at least ``RELOCATE_YAW_SIGMA_DEG``. A re-lock alone keeps the yaw it was lost on: static seed
         20 started 46 deg off its eq. 5.12 prior (20 deg sigma), converged on the layout's fit from the other
-        side, 88 deg off with a 4 deg sigma, and re-locked there twice (NEES 388). ``x``, ``P`` are changed in
-        place; returns what the log says ('' when the frame gave none)."""
+        side, 88 deg off with a 4 deg sigma, and re-locked there twice (NEES 388). ``min_turn_sigmas``: the frame
+        is taken only when its yaw is that many of the filter's yaw sigmas (``x``'s) from the filter's; a re-lock
+        that keeps its yaw keeps its position too (taking the position at every re-lock put static black-out seed
+        4, re-locking every second in a hover oscillating at 1-2 m/s, onto the deck 2.5 m off instead of holding).
+        ``x``, ``P`` are changed in place; returns what the log says ('' when the frame gave none)."""
         c, b = self.cfg, self._blobs
         if (c.range_check_sigmas <= 0 or c.level_deck_sigma <= 0 or self._rp is None or b is None
                 or len(b) < len(self.lights)):
@@ -1150,6 +1156,8 @@ class DeckNavigator(CommandDispatch):
             return ""
         psi, idx, r, _, rms = found
         turn = float(np.degrees(dm.residual_x(np.r_[np.zeros(5), psi], x[:6])[5]))
+        if abs(turn) <= min_turn_sigmas * max(np.degrees(np.sqrt(P[5, 5])), RELOCATE_YAW_SIGMA_DEG):
+            return ""
         x[5] = psi
         P[5, :], P[:, 5] = 0.0, 0.0
         P[5, 5] = max(self.ukf.P[5, 5], np.radians(RELOCATE_YAW_SIGMA_DEG) ** 2)
