@@ -1130,7 +1130,7 @@ class DeckNavigator(CommandDispatch):
         self._place(x, P, r)
         return f"; position from the frame's {len(idx)} lights ({np.degrees(rms):.2f} deg RMS)"
 
-    def _relocate_level(self, x, P, prior_sigma: float, min_turn_sigmas: float = 0.0) -> str:
+    def _relocate_level(self, x, P, prior_sigma: float, min_turn_sigmas: float = 0.0, place: bool = True) -> str:
         """A re-lock over a level deck (the level update and the range check on: a static deck) also takes the
         relative yaw and the position from a frame of every light (``_blobs``): solved at every relative yaw with
         the autopilot's roll and pitch (``locate_level_deck``), the yaw a posteriori with the filter's yaw as the
@@ -1143,7 +1143,8 @@ class DeckNavigator(CommandDispatch):
         is taken only when its yaw is that many of the filter's yaw sigmas (``x``'s) from the filter's; a re-lock
         that keeps its yaw keeps its position too (taking the position at every re-lock put static black-out seed
         4, re-locking every second in a hover oscillating at 1-2 m/s, onto the deck 2.5 m off instead of holding).
-        ``x``, ``P`` are changed in place; returns what the log says ('' when the frame gave none)."""
+        ``place``: the position too. ``x``, ``P`` are changed in place; returns what the log says ('' when the frame
+        gave none)."""
         c, b = self.cfg, self._blobs
         if (c.range_check_sigmas <= 0 or c.level_deck_sigma <= 0 or self._rp is None or b is None
                 or len(b) < len(self.lights)):
@@ -1161,13 +1162,19 @@ class DeckNavigator(CommandDispatch):
         x[5] = psi
         P[5, :], P[:, 5] = 0.0, 0.0
         P[5, 5] = max(self.ukf.P[5, 5], np.radians(RELOCATE_YAW_SIGMA_DEG) ** 2)
-        self._place(x, P, r)
-        return (f"; relative yaw ({turn:+.0f} deg) and position from the frame's {len(idx)} lights "
-                f"({np.degrees(rms):.2f} deg RMS)")
+        if place:
+            self._place(x, P, r)
+        else:
+            self.stats.relocations += 1
+        return (f"; relative yaw ({turn:+.0f} deg){' and position' if place else ''} from the frame's {len(idx)} "
+                f"lights ({np.degrees(rms):.2f} deg RMS)")
 
     def _acquire_level(self, b) -> None:
-        """The start of eq. 5.12-5.17 over a level deck placed by its first frame of every light: relative yaw and
-        position from ``_relocate_level``, roll and pitch the autopilot's, the rest of eq. 5.12-5.17 kept. The
+        """The start of eq. 5.12-5.17 over a level deck turned by its first frame of every light: the relative yaw
+        from ``_relocate_level`` (the a posteriori yaw with eq. 5.17's prior) when it lies beyond the prior's sigma
+        from eq. 5.12's, roll and pitch the autopilot's; the rest of eq. 5.12-5.17 kept (a frame that confirms the
+        thesis' start leaves it as the thesis has it: placing every start also moved every flight, and two fault
+        runs that had held in an oscillating hover landed off the plate instead). The
         thesis' prior holds the yaw at 0 with a 20 deg sigma while the pilot may hold the vehicle 45 deg off
         the deck's heading (§5.3.3); from there the filter can converge on the layout's fit from the other
         side (static seed 20: 88 deg off with a 4 deg sigma for 11 s), which the operator's restart with a
@@ -1181,7 +1188,7 @@ class DeckNavigator(CommandDispatch):
         self._acquiring = False
         x, P = self.ukf.x.copy(), self.ukf.P.copy()
         x[3:5] = self._rp
-        moved = self._relocate_level(x, P, float(np.sqrt(P[5, 5])))  # (eq. 5.17's yaw sigma: the prior)
+        moved = self._relocate_level(x, P, float(np.sqrt(P[5, 5])), 1.0, place=False)  # (eq. 5.17's yaw prior)
         if not moved:
             return
         self.ukf.x, self.ukf.P = x, P
