@@ -109,6 +109,20 @@ def deck_prior_variance(sea_state: str, motion_scale: float = 1.0, attitude_nois
     return np.maximum(np.r_[att, rate], np.radians(floor_deg) ** 2)
 
 
+def sea_state_level_sigma(sea_state: str, motion_scale: float, attitude_noise_deg: float,
+                          frame_interval_s: float) -> float:
+    """The sigma per frame [rad] of the level pseudo-measurement over a moving deck (``DeckNavigator._level``): the
+    deck oscillates about level with the tilt sigma of ``deck_prior_variance`` per axis, and its tilt stays
+    correlated over 1 / w (w the sea state's slower roll / pitch frequency bound, as the prior's); fused on every
+    frame, the N = 1 / (w dt) frames of one correlation time together say what one look at that tilt says:
+    sigma sqrt(N). The Stewart preset at 30 frames/s: 6.4 deg x sqrt(30) = 35 deg."""
+    var = deck_prior_variance(sea_state, motion_scale, attitude_noise_deg)
+    _, W, _, sW = SEA_STATES[sea_state]
+    w = float(np.min(W[3:5] + 3.0 * sW[3:5]))
+    n = 1.0 / (w * frame_interval_s) if w > 0.0 and frame_interval_s > 0.0 else 1.0
+    return float(np.sqrt(max(var[0], var[1]) * max(n, 1.0)))
+
+
 def camera_rotation(depression: float, yaw: float) -> np.ndarray:
     """T_cam: body FRD -> OpenCV camera axes for an optical axis ``depression`` below x, turned by ``yaw``."""
     zc = np.array([np.cos(depression) * np.cos(yaw), np.cos(depression) * np.sin(yaw), np.sin(depression)])

@@ -181,8 +181,9 @@ class DeckNavConfig:
     # times within lost_window_s (a wrong solution fails it, passes for a second, fails again: deck-static blur
     # seed 2, 62 ok steps over the HPL, errors to 1.2 m) -> ``_relock``; 0: never
     lost_nis_failures: int = 0
-    # a static, level deck: the autopilot's roll and pitch fused as the relative ones after each frame, this sigma
-    # per axis [rad] (``_level``); 0: off (a moving deck, and the thesis' filter)
+    # the autopilot's roll and pitch fused as the relative ones after each frame, this sigma per axis [rad]
+    # (``_level``): a static, level deck's 2 deg; a moving deck's sea-state tilt spread over the frames of its
+    # correlation time (``estimation/deck.sea_state_level_sigma``); 0: off (the thesis' filter)
     level_deck_sigma: float = 0.0
 
     @classmethod
@@ -233,8 +234,10 @@ class DeckNavConfig:
                    range_check_frames=f.range_check_frames,
                    lost_nis_failures=(f.lost_nis_failures if f.lost_nis_failures is not None
                                       else 0 if sc.world.deck.motion == "moving" else 3),
-                   level_deck_sigma=np.radians(f.level_deck_sigma_deg if f.level_deck_sigma_deg is not None
-                                               else 0.0 if sc.world.deck.motion == "moving" else 2.0),
+                   level_deck_sigma=(np.radians(f.level_deck_sigma_deg) if f.level_deck_sigma_deg is not None
+                                     else np.radians(2.0) if sc.world.deck.motion != "moving"
+                                     else dm.sea_state_level_sigma(sea, f.motion_scale, imu.attitude_noise_deg,
+                                                                   frame_interval_s)),
                    reject_repeated_frames=f.reject_repeated_frames,
                    frame_interval_s=frame_interval_s if f.camera_clock_check else 0.0,
                    reacquire_after_s=f.integrity_stale_s if f.reacquire_after_outage else float("inf"),
@@ -1059,13 +1062,19 @@ class DeckNavigator(CommandDispatch):
             self._log_init(self._t, x, np.diag(P), f"{why}: lost, re-locked from the deck's sea-state prior{moved}")
 
     def _level(self, rp) -> None:
-        """A static, level deck (seed 003 §5.3.3; ``level_deck_sigma`` > 0): the deck frame is level, so the
-        relative roll and pitch (phi, theta) of C_h^d are the vehicle's own, which the autopilot measures. After a
-        frame's lights, z = (roll, pitch) is fused with h(x) = (phi, theta) and ``level_deck_sigma`` per axis (the
-        AHRS's error and the deck's departure from level), ungated: the autopilot outranks a fit of the lights.
-        Not in the thesis' filter: there the four near-coplanar lights alone fix the attitude, and after a
-        re-acquisition they also fit a second pose 10-20 deg off in pitch (static blur seed 4: the filter re-locked
-        every 3 s for 40 s and settled on it again each time, then landed 2 m off the plate)."""
+        """A level deck (``level_deck_sigma`` > 0): the deck frame is level, so the relative roll and pitch (phi,
+        theta) of C_h^d are the vehicle's own, which the autopilot measures. After a frame's lights, z = (roll,
+        pitch) is fused with h(x) = (phi, theta) and ``level_deck_sigma`` per axis, ungated: the autopilot
+        outranks a fit of the lights. Not in the thesis' filter: there the four near-coplanar lights alone fix the
+        attitude, and they also fit a second pose 10-40 deg off in pitch.
+        * A static deck (seed 003 §5.3.3): 2 deg (the AHRS's error and the deck's departure from level). After a
+          re-acquisition the thesis' filter took the second pose (static blur seed 4: re-locked every 3 s for 40 s,
+          settled on it again each time, then landed 2 m off the plate).
+        * A moving deck oscillates about level: its sea state's tilt sigma spread over the frames of one correlation
+          time (``estimation/deck.sea_state_level_sigma``, 35 deg per frame for the Stewart preset), a weak pull
+          towards level that the lights outweigh except along the second pose's valley (fault-free moving seed 19
+          drifted from its Vicon start to 31-43 deg off in relative pitch within 3 s of its hover, with a 10-20 deg
+          sigma: NEES 51)."""
         s = self.cfg.level_deck_sigma
         if s <= 0.0 or rp is None or self.ukf is None:
             return
