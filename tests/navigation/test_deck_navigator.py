@@ -534,14 +534,21 @@ def test_the_level_deck_update_is_the_linear_kalman_update_of_roll_and_pitch():
     np.testing.assert_array_equal(off.ukf.x, x0)
 
 
-def test_the_level_deck_update_is_on_over_a_static_deck_only():
+def test_the_level_deck_update_is_2_deg_over_a_static_deck_and_the_sea_states_tilt_over_a_moving_one():
+    """Static: 2 deg. Moving (Stewart preset): the tilt prior's sigma, sqrt((A + 3 sigma_A)^2 / 2 + AHRS noise^2) =
+    6.36 deg, times sqrt(N) with N = 1 / (w dt) the frames of one correlation time at the slower of roll's and
+    pitch's frequency bounds (0.7 + 3 x 0.1 = 1.0 rad/s), 30 at 30 frames/s: 34.9 deg; 60 frames/s: 24.6 deg."""
     from visnav.scenarios.schema import load_scenario
 
-    for name, want in (("deck-static", 2.0), ("deck-moving", 0.0)):
-        cfg = DeckNavConfig.from_mission(load_scenario(name, [], 1), 1 / 30)
-        assert cfg.level_deck_sigma == pytest.approx(np.radians(want))
-    cfg = DeckNavConfig.from_mission(load_scenario("deck-static", ["navigation.level_deck_sigma_deg=0"], 1), 1 / 30)
-    assert cfg.level_deck_sigma == 0.0
+    tilt = np.hypot((np.radians(6.0) + 3 * np.radians(1.0)) / np.sqrt(2.0), np.radians(0.1))
+    for name, dt, want in (("deck-static", 1 / 30, np.radians(2.0)), ("deck-moving", 1 / 30, tilt * np.sqrt(30.0)),
+                           ("deck-moving", 1 / 60, tilt * np.sqrt(60.0))):
+        cfg = DeckNavConfig.from_mission(load_scenario(name, [], 1), dt)
+        assert cfg.level_deck_sigma == pytest.approx(want, rel=1e-9)
+    assert np.degrees(tilt * np.sqrt(30.0)) == pytest.approx(34.9, abs=0.05)
+    for name in ("deck-static", "deck-moving"):
+        cfg = DeckNavConfig.from_mission(load_scenario(name, ["navigation.level_deck_sigma_deg=0"], 1), 1 / 30)
+        assert cfg.level_deck_sigma == 0.0
 
 
 def test_the_reported_covariance_holds_the_calibrations_range_share_as_opencv_pnp_measures_it():
