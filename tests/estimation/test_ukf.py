@@ -162,3 +162,24 @@ def test_consider_update_equals_the_schmidt_kalman_filter():
         np.testing.assert_allclose(ukf.P, P, atol=1e-10)
     assert ukf.x[2] == pytest.approx(0.0, abs=1e-12) and ukf.P[2, 2] == pytest.approx(0.09, abs=1e-12)
     assert ukf.P[0, 0] > opt.P[0, 0]
+
+
+@pytest.mark.parametrize("consider", [None, slice(5, 6)])
+def test_a_direct_measurement_of_states_equals_the_unscented_update_of_the_linear_h(consider):
+    """``update_states``: z = (x1, x3) + noise through the closed form equals ``update`` with h(x) = (x1, x3) (the
+    unscented transform of a linear h is exact) at 1e-10, with and without a consider state (its gain row zero,
+    its variance kept), and leaves the last update's S, y, NIS as they were."""
+    rng = np.random.default_rng(4)
+    A = rng.normal(size=(6, 6))
+    x, P = rng.normal(size=6), A @ A.T + np.eye(6)
+    z, R = rng.normal(size=2), np.diag([0.3, 0.5])
+    ref = UnscentedKalmanFilter(x, P, lambda s, dt: s, lambda s: s[:, [1, 3]], alpha=0.5)
+    lin = UnscentedKalmanFilter(x, P, lambda s, dt: s, lambda s: s[:, [1, 3]], alpha=0.5)
+    ref.update(z, R, consider=consider)
+    lin.S, lin.y, lin.nis = np.eye(3), np.ones(3), 5.0
+    lin.update_states(z, R, np.array([1, 3]), consider=consider)
+    np.testing.assert_allclose(lin.x, ref.x, atol=1e-10)
+    np.testing.assert_allclose(lin.P, ref.P, atol=1e-10)
+    assert lin.nis == 5.0 and (lin.y == 1.0).all()
+    if consider is not None:
+        assert lin.x[5] == x[5] and lin.P[5, 5] == pytest.approx(P[5, 5], rel=1e-12)

@@ -168,3 +168,21 @@ class UnscentedKalmanFilter:
         self.S, self.y = S, y
         self.nis = float(y @ sol[:, -1])  # normalised innovation squared (chi2 with y.size dof)
         return True
+
+    def update_states(self, z, R, idx, consider: slice | None = None) -> None:
+        """Correct with a direct measurement ``z`` of the states ``idx`` (h(x) = H x, H selecting them; noise
+        covariance ``R``): the Kalman filter's closed form, which the unscented transform of a linear h gives
+        exactly, without drawing the sigma points: Pxz = P H^T, S = H P H^T + R, K = Pxz S^-1,
+        x + K (z - H x), P - K Pxz^T - Pxz K^T + K S K^T (= P - K S K^T; with ``consider`` states' gain rows zero,
+        as ``update``). ``S``, ``y`` and ``nis`` stay those of the last ``update``."""
+        idx = np.asarray(idx)
+        Pxz = self.P[:, idx]
+        S = Pxz[idx] + np.asarray(R, dtype=float)
+        y = np.asarray(z, dtype=float).ravel() - self.x[idx]
+        K = np.linalg.solve(S, Pxz.T).T
+        if consider is not None:
+            K[consider] = 0.0
+        self.x = self.state_add(self.x[None, :], (K @ y)[None, :])[0]
+        KPzx = K @ Pxz.T
+        P = self.P - KPzx - KPzx.T + K @ S @ K.T
+        self.P = 0.5 * (P + P.T)

@@ -247,9 +247,9 @@ class DeckNavConfig:
                    retie_hold_s=f.retie_hold_s)
 
 
-def _roll_pitch(sig):
-    """h(x) of the level-deck update: the relative roll and pitch of the sigma points."""
-    return sig[:, 3:5]
+#: the states the level-deck update measures: the relative roll and pitch
+_ROLL_PITCH = np.array([3, 4])
+_ROLL_PITCH.flags.writeable = False
 
 
 @dataclass(frozen=True)
@@ -1078,10 +1078,8 @@ class DeckNavigator(CommandDispatch):
         s = self.cfg.level_deck_sigma
         if s <= 0.0 or rp is None or self.ukf is None:
             return
-        ukf = self.ukf
-        keep = ukf.S, ukf.y, ukf.nis  # (the lights' innovation stays the last one: the integrity windows read it)
-        ukf.update(np.asarray(rp, float), np.eye(2) * s * s, hx=_roll_pitch, consider=self._consider_slice)
-        ukf.S, ukf.y, ukf.nis = keep
+        # (linear: the closed form; the lights' innovation stays the last one, which the integrity windows read)
+        self.ukf.update_states(np.asarray(rp, float), np.eye(2) * s * s, _ROLL_PITCH, consider=self._consider_slice)
 
     def _lockout(self, b: np.ndarray, replay: bool) -> bool:
         """A frame with blobs ``b`` (bearings) had every light rejected. After ``retie_after_frames`` such frames in
