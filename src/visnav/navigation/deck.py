@@ -551,12 +551,14 @@ class DeckNavigator(CommandDispatch):
         at 1.5-2 m against a 2 cm sigma)."""
         c = self.cfg
         p = self.ukf.x[dm.POS]
-        r = float(np.linalg.norm(p))
-        if self._consider or r == 0.0:
+        r2 = float(p @ p)
+        if self._consider or r2 == 0.0:
             return np.zeros((3, 3))
-        u = p / r
-        along = r * r * (c.light_survey_sigma**2 / self._spread + c.camera_sigmas[1] ** 2)
-        return (self._survey_sigma_per_m() * r) ** 2 * np.diag([1.0, 1.0, 0.0]) + along * np.outer(u, u)
+        C = (c.light_survey_sigma**2 / self._spread + c.camera_sigmas[1] ** 2) * np.outer(p, p)  # r^2 (..) u u^T
+        side = self._survey_sigma_per_m() ** 2 * r2  # (s_m r)^2 diag(1, 1, 0)
+        C[0, 0] += side
+        C[1, 1] += side
+        return C
 
     def _attitude(self, m: AttitudeSample) -> None:
         rp = np.asarray(m.euler, float)[:2]
