@@ -151,7 +151,9 @@ class DeckContact:
         t, cmd = step.t, step.command
         ds = self.deck(t)
         x_true = self.world.relative(self.truth.latest, ds)
-        est = self.nav.estimate(t)
+        est = step.estimate  # the loop's estimate of this step (the mission's and the controller's)
+        if est is None or est.t != t:
+            est = self.nav.estimate(t)
         x, P = est.state, est.covariance
         err = dm.residual_x(x_true[None, :], x[None, :])[0]
         try:
