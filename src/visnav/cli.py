@@ -282,6 +282,9 @@ def montecarlo(
     for k, v in summary.get("rates", {}).items():
         table.add_row(k, f"rate {v['rate']:.0%}", f"{v['count']} of {v['n']}", "", "", "", v.get("published", ""))
     console.print(table)
+    for k, v in summary["metrics"].items():
+        if "in_band" in v:
+            console.print(f"{k}: {v['in_band']} of {v['n']} runs inside {v['band'][0]:g}-{v['band'][1]:g}")
     from visnav.analysis.outcome import outcome_text
 
     if outcome_text(summary.get("outcomes", {})):

@@ -119,6 +119,19 @@ def test_summary_has_rates_of_boolean_metrics_and_the_thesis_figures():
     assert s["metrics"]["touchdown_error_m"]["published"] == "0.5 m" and "landed" not in s["metrics"]
 
 
+def test_summary_counts_the_runs_inside_a_published_band():
+    """A metric whose thesis figure is a band (the deck NEES's 95 % chi2(12) band 4.40-23.34): how many runs lie
+    inside it, ends included, of those with a number."""
+    from visnav.app.montecarlo import summarize
+
+    rows = [{"seed": str(s), "status": "ok", "error": "", "nees_mean": str(v)}
+            for s, v in enumerate((3.0, 4.404, 11.0, 23.337, 23.4, "nan"), 1)]
+    s = summarize(rows, [], {}, {"nees_mean": (4.404, 23.337)})
+    assert s["metrics"]["nees_mean"]["in_band"] == 3 and s["metrics"]["nees_mean"]["n"] == 5
+    assert s["metrics"]["nees_mean"]["band"] == [4.404, 23.337]
+    assert "in_band" not in summarize(rows, [])["metrics"]["nees_mean"]
+
+
 def test_campaign_summary_json_carries_rates_and_source(tmp_path):
     out = tmp_path / "c"
     assert _mc(out).exit_code == 0

@@ -54,6 +54,8 @@ def write_campaign_report(out: Path, rows: list[dict], summary: dict, grid_keys:
     rates = "".join(f"<tr><td>{html.escape(k)}</td><td>{v['rate']:.1%}</td><td>{v['count']} of {v['n']}</td>"
                     f"<td>{html.escape(str(v.get('published', '')))}</td></tr>"
                     for k, v in summary.get("rates", {}).items())
+    bands = "".join(f"<p>{html.escape(k)}: {v['in_band']} of {v['n']} runs inside {v['band'][0]:g}-{v['band'][1]:g}</p>"
+                    for k, v in summary.get("metrics", {}).items() if "in_band" in v)
     fails = "".join(f"<li>seed {html.escape(str(r.get('seed')))}: {html.escape(str(r.get('error')))}</li>"
                     for r in rows if r.get("status") != "ok")
     doc = f"""<!doctype html><html><head><meta charset="utf-8"><title>campaign {html.escape(scenario)}</title>
@@ -62,7 +64,7 @@ def write_campaign_report(out: Path, rows: list[dict], summary: dict, grid_keys:
 <p>{summary['count']} runs, {summary['failed']} failed.
 Grid: {html.escape(', '.join(grid_keys) or 'none')}.</p>
 <table><tr><th>metric</th><th>mean</th><th>median</th><th>p95</th><th>min</th><th>max</th><th>n</th>
-<th>{html.escape(summary.get('published_source', 'thesis'))}</th></tr>{table}</table>
+<th>{html.escape(summary.get('published_source', 'thesis'))}</th></tr>{table}</table>{bands}
 {('<h2>Rates</h2><table><tr><th>metric</th><th>rate</th><th>runs</th><th>thesis</th></tr>' + rates + '</table>') if rates else ''}
 {('<h2>Failed runs</h2><ul>' + fails + '</ul>') if fails else ''}<h2>Plots</h2>{''.join(imgs)}</body></html>"""
     (out / "report.html").write_text(doc)

@@ -139,6 +139,11 @@ def published_figures(sc) -> tuple[dict, str]:
     return {p.metric: p.figure for p in figs}, source
 
 
+def published_bands(sc) -> dict[str, tuple[float, float]]:
+    """metric -> the band its thesis figure is met inside (e.g. the deck NEES's 95 % chi2(12) band)."""
+    return {p.metric: p.band for p in published(sc)[0] if p.band is not None}
+
+
 def run_notes(result) -> list[str]:
     """Lines below the metrics table: what a run cannot measure, and what its log shows beyond the metrics."""
     mod = _report_module(result.scenario)

@@ -32,7 +32,7 @@ from visnav.app.runs import OutputDirError, prepare_out_dir
 from visnav.io.provenance import provenance
 from visnav.scenarios.schema import load_scenario, _parse_value, ScenarioError, scenario_hash
 import multiprocessing
-from visnav.analysis.report import published_figures
+from visnav.analysis.report import published_bands, published_figures
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
 TIMING_KEYS = ("wall_time_s", "real_time_factor")
@@ -181,11 +181,14 @@ def outcome_counts(rows: list[dict]) -> dict[str, int]:
     return out | ({"hpl_violated_while_ok": n} if n else {})
 
 
-def summarize(rows: list[dict], grid_keys: list[str], published: dict | None = None) -> dict:
+def summarize(rows: list[dict], grid_keys: list[str], published: dict | None = None,
+              bands: dict | None = None) -> dict:
     """count, failures, and mean / median / p95 / min / max of every numeric metric, the rate of
     every boolean one (landed, aborted, returned_home, ...), overall and per grid point; with
-    ``published`` (metric -> the thesis' figure) that figure beside each metric that has one."""
-    published = published or {}
+    ``published`` (metric -> the thesis' figure) that figure beside each metric that has one; with ``bands``
+    (metric -> (lo, hi)) how many runs lie inside each band (``in_band`` of ``n``, and the ``band``): a filter
+    consistent in the 95 % chi2 band of its NEES puts 95 % of its runs there."""
+    published, bands = published or {}, bands or {}
 
     def stats(rs: list[dict]) -> tuple[dict, dict]:
         out, rates = {}, {}
@@ -207,6 +210,9 @@ def summarize(rows: list[dict], grid_keys: list[str], published: dict | None = N
                           "max": float(vals.max()), "n": int(vals.size)}
                 if k in published:
                     out[k]["published"] = published[k]
+                if k in bands:
+                    lo, hi = bands[k]
+                    out[k]["in_band"], out[k]["band"] = int(((vals >= lo) & (vals <= hi)).sum()), [lo, hi]
         return out, rates
 
     metrics, rates = stats(rows)
@@ -243,11 +249,11 @@ def config_diff(old: dict, new: dict, limit: int = 8) -> str:
     return "; ".join(diffs[:limit]) + more
 
 
-def _published(sc) -> tuple[dict, str]:
+def _published(sc) -> tuple[dict, str, dict]:
     try:
-        return published_figures(sc)
+        return (*published_figures(sc), published_bands(sc))
     except Exception:  # noqa: BLE001 - the figures are a comment beside the numbers, never a reason to stop
-        return {}, ""
+        return {}, "", {}
 
 
 # --------------------------------------------------------------------------------------- runner
@@ -358,8 +364,8 @@ class Campaign:
             if progress is not None:
                 progress(i, total, row)
         rows = _read_csv(self.runs_csv)
-        published, source = getattr(self, "_published", ({}, ""))
-        summary = summarize(rows, list(self.grid), published)
+        published, source, bands = getattr(self, "_published", ({}, "", {}))
+        summary = summarize(rows, list(self.grid), published, bands)
         if published:
             summary["published_source"] = source
 
