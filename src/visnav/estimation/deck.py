@@ -49,7 +49,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from visnav.geometry.rotations import (cross, euler_rate_matrix, euler_to_dcm, euler_to_dcm3, euler_to_dcm_and_rate_matrix,
-                                       skew)
+                                       skew, wrap_angle)
 
 N_STATE = 12
 POS, ATT, VEL, RATE = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -391,15 +391,15 @@ def locate_level_deck(bearings: np.ndarray, roll: float, pitch: float, lights: n
 
     def cost(psi: float, rms: float) -> float:
         c = b.size * (rms / sigma) ** 2
-        if prior is not None:
-            c += (float(np.mod(psi - prior[0] + np.pi, 2 * np.pi) - np.pi) / prior[1]) ** 2
-        return c
+        return c if prior is None else c + (wrap_angle(psi - prior[0]) / prior[1]) ** 2
 
     best = None
-    for psi in np.radians(np.arange(-180.0, 180.0, step_deg)):
+    for psi in np.radians(np.arange(-180.0, 180.0, step_deg)).tolist():
         found = locate_lights(b, np.array([roll, pitch, psi]), lights, cam, sigma)
-        if found is not None and (best is None or cost(psi, found[3]) < best[0]):
-            best = (cost(psi, found[3]), float(psi), *found)
+        if found is not None:
+            c = cost(psi, found[3])
+            if best is None or c < best[0]:
+                best = (c, psi, *found)
     if best is None:
         return None
     idx, h = best[2], np.radians(step_deg)
@@ -411,8 +411,7 @@ def locate_level_deck(bearings: np.ndarray, roll: float, pitch: float, lights: n
         return np.inf if rms is None else cost(psi, rms)
 
     res = minimize_scalar(refine, bounds=(best[1] - h, best[1] + h), method="bounded", options={"xatol": 1e-5})
-    psi = float(res.x) if res.success and res.fun < best[0] else best[1]
-    psi = float(np.mod(psi + np.pi, 2 * np.pi) - np.pi)
+    psi = wrap_angle(float(res.x) if res.success and res.fun < best[0] else best[1])
     e = np.array([roll, pitch, psi])
     r, C = position_from_bearings(b, idx, e, lights, cam, sigma)
     return psi, idx, r, C, _reprojection_rms(b, idx, r, e, lights, cam)

@@ -50,7 +50,7 @@ from visnav.estimation import kernels as ek
 from visnav.estimation.association import associate
 from visnav.estimation.integrity import IntegrityConfig, IntegrityMonitor, horizontal_protection_level
 from visnav.estimation.ukf import UnscentedKalmanFilter
-from visnav.geometry.rotations import euler_to_dcm3
+from visnav.geometry.rotations import euler_to_dcm3, wrap_angle
 from visnav.measurements import AttitudeSample, Estimate, Frame, Health, ImuSample, NavInit
 from visnav.navigation.base import CommandDispatch, FrozenFrameCheck
 from visnav.vision.blobs import BearingTracker, find_blobs
@@ -1137,6 +1137,7 @@ class DeckNavigator(CommandDispatch):
             return ""
         idx, r, _, rms = found
         self._place(x, P, r)
+        self.stats.relocations += 1
         return f"; position from the frame's {len(idx)} lights ({np.degrees(rms):.2f} deg RMS)"
 
     def _relocate_level(self, x, P, prior_sigma: float, min_turn_sigmas: float = 0.0, place: bool = True) -> str:
@@ -1165,7 +1166,7 @@ class DeckNavigator(CommandDispatch):
                                                                             c.calibration_bearing_sigma)):
             return ""
         psi, idx, r, _, rms = found
-        turn = float(np.degrees(dm.residual_x(np.r_[np.zeros(5), psi], x[:6])[5]))
+        turn = float(np.degrees(wrap_angle(psi - float(x[5]))))
         if abs(turn) <= min_turn_sigmas * max(np.degrees(np.sqrt(P[5, 5])), RELOCATE_YAW_SIGMA_DEG):
             return ""
         x[5] = psi
@@ -1173,21 +1174,21 @@ class DeckNavigator(CommandDispatch):
         P[5, 5] = max(self.ukf.P[5, 5], np.radians(RELOCATE_YAW_SIGMA_DEG) ** 2)
         if place:
             self._place(x, P, r)
-        else:
-            self.stats.relocations += 1
+        self.stats.relocations += 1
         return (f"; relative yaw ({turn:+.0f} deg){' and position' if place else ''} from the frame's {len(idx)} "
                 f"lights ({np.degrees(rms):.2f} deg RMS)")
 
     def _acquire_level(self, b) -> None:
-        """The start of eq. 5.12-5.17 over a level deck turned by its first frame of every light: the relative yaw
+        """The start of eq. 5.12-5.17 over a level deck, turned by its first frame of every light: the relative yaw
         from ``_relocate_level`` (the a posteriori yaw with eq. 5.17's prior) when it lies beyond the prior's sigma
-        from eq. 5.12's, roll and pitch the autopilot's; the rest of eq. 5.12-5.17 kept (a frame that confirms the
-        thesis' start leaves it as the thesis has it: placing every start also moved every flight, and two fault
-        runs that had held in an oscillating hover landed off the plate instead). The
-        thesis' prior holds the yaw at 0 with a 20 deg sigma while the pilot may hold the vehicle 45 deg off
-        the deck's heading (§5.3.3); from there the filter can converge on the layout's fit from the other
-        side (static seed 20: 88 deg off with a 4 deg sigma for 11 s), which the operator's restart with a
-        yaw (Fig. 5.7) was for. Off where ``_relocate_level`` is (a moving deck)."""
+        from eq. 5.12's, roll and pitch the autopilot's, the rest of eq. 5.12-5.17 kept.
+
+        The thesis' prior holds the yaw at 0 with a 20 deg sigma while the pilot may hold the vehicle 45 deg off
+        the deck's heading (§5.3.3); from there the filter can converge on the layout's fit from the other side
+        (static seed 20: 88 deg off with a 4 deg sigma for 11 s), which the operator's restart with a yaw (Fig.
+        5.7) was for. A frame that confirms the thesis' start leaves it as it is (placing every start moved every
+        flight, and two fault runs that had held in an oscillating hover landed off the plate instead). Off where
+        ``_relocate_level`` is (a moving deck)."""
         c = self.cfg
         if c.range_check_sigmas <= 0 or c.level_deck_sigma <= 0:
             self._acquiring = False
@@ -1211,7 +1212,6 @@ class DeckNavigator(CommandDispatch):
         x[dm.POS] = r
         P[0:3, :], P[:, 0:3] = 0.0, 0.0
         P[0:3, 0:3] = np.eye(3) * ((c.range_check_frac * float(np.linalg.norm(r))) ** 2 + c.retie_sigmas[0] ** 2)
-        self.stats.relocations += 1
 
     def _range_lost(self, b, idx) -> bool:
         """The range check (issue 30, not in the thesis): with the filter's relative attitude, the frame's lights
