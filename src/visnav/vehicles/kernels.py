@@ -162,12 +162,14 @@ def _axpy8(x, h, d):
 
 
 def _rmax(k, y, a0, ah, a1, wind, dt):
-    """``RmaxModel.step``'s classic RK4 of :func:`_rmax_eval` over ``dt``, the attitude at t, t + dt/2 and t + dt."""
+    """``RmaxModel.step``'s classic RK4 of :func:`_rmax_eval` over ``dt``, the attitude at t, t + dt/2 and t + dt; and
+    the specific force at the new state (what the step reports: one call instead of a second one for it)."""
     k1 = _rmax_eval(k, y, a0, wind)[0]
     k2 = _rmax_eval(k, _axpy8(y, 0.5 * dt, k1), ah, wind)[0]
     k3 = _rmax_eval(k, _axpy8(y, 0.5 * dt, k2), ah, wind)[0]
     k4 = _rmax_eval(k, _axpy8(y, dt, k3), a1, wind)[0]
-    return _axpy8(y, dt / 6.0, _axpy8(_axpy8(_axpy8(k1, 2.0, k2), 2.0, k3), 1.0, k4))  # y + dt/6 (k1 + 2k2 + 2k3 + k4)
+    y1 = _axpy8(y, dt / 6.0, _axpy8(_axpy8(_axpy8(k1, 2.0, k2), 2.0, k3), 1.0, k4))  # y + dt/6 (k1 + 2k2 + 2k3 + k4)
+    return y1, _rmax_eval(k, y1, a1, wind)[1]
 
 
 # compiled once per installation (numba's cache, visnav.jit); the same functions on floats otherwise
@@ -182,6 +184,8 @@ def rmax_derivatives(P, y, att, wind, force: bool = False):
     return (list(dy), f) if force else list(dy)
 
 
-def rmax_rk4(P, y, a0, ah, a1, wind, dt: float) -> list[float]:
-    """``RmaxModel.step``'s RK4 of eq. 3.9 (:func:`_rmax`) with the attitude at t, t + dt/2 and t + dt."""
-    return list(_rmax(rmax_constants(P), _floats(y), _floats(a0), _floats(ah), _floats(a1), _floats(wind), float(dt)))
+def rmax_rk4(P, y, a0, ah, a1, wind, dt: float) -> tuple[list[float], tuple]:
+    """``RmaxModel.step``'s RK4 of eq. 3.9 (:func:`_rmax`) with the attitude at t, t + dt/2 and t + dt: the new
+    state (8 floats) and the specific force at it (``rmax_derivatives(P, y1, a1, wind, True)[1]``)."""
+    y1, f = _rmax(rmax_constants(P), _floats(y), _floats(a0), _floats(ah), _floats(a1), _floats(wind), float(dt))
+    return list(y1), f

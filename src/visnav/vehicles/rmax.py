@@ -288,33 +288,32 @@ class RmaxModel:
         x0 = self._x
         xh, x1 = Ah @ x0 + Bh @ u, Ad @ x0 + Bd @ u  # exact TF states at t, t + dt/2, t + dt
         a0, ah, a1 = self._attitudes(x0, xh, x1)
-        y = self._y
+        y, f1 = self._y, None
         if self.on_ground and self._down_accel(y, a0, w) < 0.0:  # net upward force: lift off
             self.on_ground = False
         if self.on_ground:  # skids hold the position; attitude still follows eq. 3.4
             y1 = y.copy()
             y1[6] += dt * (_psi_rate(a0) + 4 * _psi_rate(ah) + _psi_rate(a1)) / 6.0
         elif self.kernel:  # the same RK4, compiled (vehicles/kernels, held to _deriv by tests/vehicles/test_kernels)
-            y1 = np.array(rmax_rk4(self.params, y.tolist(), a0, ah, a1, w.tolist(), dt))
-            vd = float(euler_to_dcm3(a1[0], a1[1], y1[6])[2] @ y1[0:3])
-            if y1[5] >= 0.0 and vd > 0.0:
-                self.touchdown_speed = float(vd)
-                self.on_ground = True
+            y1, f1 = rmax_rk4(self.params, y.tolist(), a0, ah, a1, w.tolist(), dt)  # and the force at y1
+            y1 = np.array(y1)
         else:  # RK4, the attitude at t, t + dt/2 and t + dt from the exact TF states
             k1 = self._deriv(y, a0, w)[0]
             k2 = self._deriv(y + 0.5 * dt * k1, ah, w)[0]
             k3 = self._deriv(y + 0.5 * dt * k2, ah, w)[0]
             k4 = self._deriv(y + dt * k3, a1, w)[0]
             y1 = y + dt * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
-            vd = float(euler_to_dcm3(a1[0], a1[1], y1[6])[2] @ y1[0:3])  # NED down speed
+        C1 = euler_to_dcm3(a1[0], a1[1], y1[6])  # C_bn at t + dt, eq. 3.2
+        if not self.on_ground:
+            vd = float(C1[2] @ y1[0:3])  # NED down speed
             if y1[5] >= 0.0 and vd > 0.0:  # touchdown
-                self.touchdown_speed = float(vd)
+                self.touchdown_speed = vd
                 self.on_ground = True
         if self.on_ground:
             y1[0] = y1[1] = y1[2] = y1[5] = y1[7] = 0.0
         self._x, self._y, self.last_input = x1, y1, u
         self.t = round(self.t + dt, 12)  # no float drift over long runs
-        self.state = self._make_state(w, a1)
+        self.state = self._make_state(w, a1, C1, None if self.on_ground or f1 is None else np.array(f1))
         return self.state
 
     def _down_accel(self, y: np.ndarray, att: tuple, wind: np.ndarray) -> float:
@@ -324,17 +323,20 @@ class RmaxModel:
         d, _ = self._deriv(y0, att, wind)
         return float(euler_to_dcm3(att[0], att[1], y[6])[2] @ d[0:3])
 
-    def _make_state(self, wind, att: tuple | None = None) -> VehicleState:
+    def _make_state(self, wind, att: tuple | None = None, C: np.ndarray | None = None,
+                    f: np.ndarray | None = None) -> VehicleState:
+        """The reported state at ``self.t``; ``C`` (C_bn) and ``f`` (the specific force) where the step has them."""
         if att is None:
             att = self._attitude(self._x)
         phi, theta, p, q, r, _ = att
         y = self._y
-        C = euler_to_dcm3(phi, theta, y[6])
-        if self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
+        if C is None:
+            C = euler_to_dcm3(phi, theta, y[6])
+        if f is None and self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
             f = -self.params.g * C[2]
-        elif self.kernel:  # the same, compiled (vehicles/kernels)
+        elif f is None and self.kernel:  # the same, compiled (vehicles/kernels)
             f = np.array(rmax_derivatives(self.params, y.tolist(), att, np.asarray(wind, float).tolist(), True)[1])
-        else:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
+        elif f is None:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
             f = self._deriv(y, att, np.asarray(wind, float))[1]
         psi = (y[6] + math.pi) % (2 * math.pi) - math.pi
         return VehicleState(t=self.t, position=y[3:6].copy(), velocity=C @ y[0:3],
