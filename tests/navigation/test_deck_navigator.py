@@ -534,14 +534,21 @@ def test_the_level_deck_update_is_the_linear_kalman_update_of_roll_and_pitch():
     np.testing.assert_array_equal(off.ukf.x, x0)
 
 
-def test_the_level_deck_update_is_2_deg_over_a_static_deck_and_the_sea_states_tilt_over_a_moving_one():
-    """Static: 2 deg. Moving (Stewart preset): the tilt prior's sigma, sqrt((A + 3 sigma_A)^2 / 2 + AHRS noise^2) =
+def test_the_level_deck_update_is_the_specified_level_over_a_static_deck_and_the_sea_states_tilt_over_a_moving_one():
+    """Static: the AHRS's 0.1 deg of noise, the 0.05 m/s^2 accelerometer bias it levels on (0.05 / 9.81 rad) and the
+    deck's 1 deg departure from level in quadrature: 1.047 deg (0.1 and 1 deg without the leveling). Moving
+    (Stewart preset): the tilt prior's sigma, sqrt((A + 3 sigma_A)^2 / 2 + AHRS noise^2) =
     6.36 deg, times sqrt(N) with N = 1 / (w dt) the frames of one correlation time at the slower of roll's and
     pitch's frequency bounds (0.7 + 3 x 0.1 = 1.0 rad/s), 30 at 30 frames/s: 34.9 deg; 60 frames/s: 24.6 deg."""
     from visnav.scenarios.schema import load_scenario
 
+    static = np.sqrt(np.radians(0.1) ** 2 + (0.05 / 9.81) ** 2 + np.radians(1.0) ** 2)
+    assert np.degrees(static) == pytest.approx(1.047, abs=0.001)
+    unleveled = DeckNavConfig.from_mission(load_scenario("deck-static", ["sensors.imu.ahrs_leveled_on_accel=false"]),
+                                           1 / 30)
+    assert unleveled.level_deck_sigma == pytest.approx(np.hypot(np.radians(0.1), np.radians(1.0)), rel=1e-9)
     tilt = np.hypot((np.radians(6.0) + 3 * np.radians(1.0)) / np.sqrt(2.0), np.radians(0.1))
-    for name, dt, want in (("deck-static", 1 / 30, np.radians(2.0)), ("deck-moving", 1 / 30, tilt * np.sqrt(30.0)),
+    for name, dt, want in (("deck-static", 1 / 30, static), ("deck-moving", 1 / 30, tilt * np.sqrt(30.0)),
                            ("deck-moving", 1 / 60, tilt * np.sqrt(60.0))):
         cfg = DeckNavConfig.from_mission(load_scenario(name, [], 1), dt)
         assert cfg.level_deck_sigma == pytest.approx(want, rel=1e-9)
@@ -716,3 +723,25 @@ def test_a_re_lock_over_a_level_deck_takes_the_relative_yaw_from_the_frame():
     (yaw, sig), (yaw0, _) = yaws
     assert abs(yaw + 44.0) < 0.5 and sig >= 5.0 - 1e-9
     assert yaw0 == pytest.approx(44.0)
+
+
+def test_the_camera_imu_time_offset_widens_r_by_the_bearing_rates_and_the_angular_acceleration():
+    """Inflate model: a frame stamped dt off shows b - b' dt and b' - b'' dt: R gains sigma_dt^2 b'^2 per bearing
+    component (the gyro's |w| where a light has no rate) and sigma_dt^2 |w'|^2 per rate component; nothing without
+    an offset or with the consider model (its offset parameter carries it)."""
+    from visnav.scenarios.schema import load_scenario
+
+    sc = load_scenario("deck-static", ["sensors.camera.time_offset_s=0.02"], 1)
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc, 1 / 30))
+    nav._gyro_dot = np.array([3.0, -4.0, 0.0])  # |w'| = 5 rad/s^2
+    rates = np.array([[0.2, -0.1], [np.nan, np.nan]])
+    gyro = np.array([0.0, 0.6, 0.8])  # |w| = 1 rad/s
+    b, r = nav._time_offset_var(rates, gyro)
+    np.testing.assert_allclose(b, (0.02 * np.array([0.2, -0.1, 1.0, 1.0])) ** 2, rtol=1e-12)
+    assert r == pytest.approx((0.02 * 5.0) ** 2, rel=1e-12)
+    off = DeckNavigator(DeckNavConfig.from_mission(load_scenario("deck-static", ["sensors.camera.time_offset_s=0"], 1),
+                                                   1 / 30))
+    assert off._time_offset_var(rates, gyro) == (0.0, 0.0)
+    consider = DeckNavigator(DeckNavConfig.from_mission(
+        load_scenario("deck-static", ["navigation.calibration_model=\"consider\""], 1), 1 / 30))
+    assert consider._time_offset_var(rates, gyro) == (0.0, 0.0)

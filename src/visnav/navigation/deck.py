@@ -37,7 +37,6 @@ Tuning comes from :class:`DeckNavConfig` alone: the ship process noise from ``fi
 from __future__ import annotations
 
 import math
-import os
 from collections import deque
 from functools import partial
 from dataclasses import dataclass, field, replace
@@ -828,6 +827,20 @@ class DeckNavigator(CommandDispatch):
         blocks = S.reshape(L, 2, L, 2)[j, :, j, :]  # the 2x2 diagonal blocks (L, 2, 2), a fresh array
         return zp.reshape(L, 2), blocks, sig, vec
 
+    def _time_offset_var(self, rates: np.ndarray, gyro) -> tuple[np.ndarray | float, float]:
+        """The camera/IMU time offset's share of R (the inflate model; the consider model carries the offset as a
+        parameter): a frame whose stamp is off by dt shows each bearing where it was dt earlier, b - b' dt, and
+        each bearing rate as b' - b'' dt. So sigma_dt^2 b'^2 per bearing component (its measured rate; the gyro's
+        |w| for a light without one) and sigma_dt^2 |w'|^2 per rate component (b'' = w' x b + ..., the angular
+        acceleration's part, the IMU's ``gyro_dot``). Measured: without it the rate NIS failed its window test
+        whenever the vehicle swung (10 ms offset, |w'| 5 rad/s^2: 0.05 rad/s against the rates' 0.03 sigma), which
+        degraded the fix and held the hover level on the IMU, swinging more (deck-static black-out seed 5)."""
+        s = self.cfg.time_offset_sigma
+        if s == 0.0 or self._consider:
+            return 0.0, 0.0
+        rb = np.where(np.isfinite(rates), rates, float(np.linalg.norm(gyro)))
+        return (s * rb).ravel() ** 2, s * s * float(self._gyro_dot @ self._gyro_dot)
+
     def _calibration_var(self, vec) -> np.ndarray | float:
         """The calibration's variance of each light's bearings (L,) at the mean (sigma point 0 of ``vec``):
         sigma_cam^2 + (sigma_survey / range)^2 (0.0 with an ideal calibration)."""
@@ -846,18 +859,13 @@ class DeckNavigator(CommandDispatch):
         covariance of its own beside P) and not in the filter's gain. 0 with the consider model (P has it) or
         an ideal survey. Measured: the 1 cm survey's draws put the fault-free horizontal error at up to 14 % of
         the range (deck-moving seeds 5 and 8), 4-5x the covariance's HPL at 1.2 m; 0.071 per m here, x 3.7 at 99.9 %.
-
-        With the level update (``_level``, the autopilot's roll and pitch at ``level_deck_sigma``) the deck plane's
-        tilt is not the fit's alone: the two are fused, 1 / s^2 = 1 / s_fit^2 + 1 / s_level^2 (a static deck's 1.05
-        deg: 0.018 per m; a moving deck's 35 deg per frame leaves the fit's). Measured: the static deck's
-        horizontal sigma was 0.09-0.12 m against 0.01-0.02 m of error (seeds 6, 9: NEES below its band)."""
+        Not fused with the level update's tilt (which would give 0.018 per m over a static deck): the NEES of the
+        static deck came nearer 12, but its fault campaign went 0.2-0.5 % over the HPL while ok (accelerometer bias,
+        IMU drops; issue 30, round 16)."""
         c = self.cfg
         if self._consider or c.light_survey_sigma == 0.0:
             return 0.0
-        s_fit = c.light_survey_sigma * math.sqrt(2.0 / self._spread)
-        if c.level_deck_sigma <= 0.0 or self._rp is None or os.environ.get("NOFUSE"):
-            return s_fit
-        return 1.0 / math.sqrt(1.0 / s_fit**2 + 1.0 / c.level_deck_sigma**2)
+        return c.light_survey_sigma * math.sqrt(2.0 / self._spread)
 
     def _calibration_floor(self) -> None:
         """Keep the position and attitude variances at least at the calibration's share (a constant error that
@@ -941,7 +949,9 @@ class DeckNavigator(CommandDispatch):
         self._calibration_rms = float(np.sqrt(np.mean(cal)))  # (the hand-over check's allowance)
         if self._consider:  # the consider parameters carry the calibration's share of S
             cal = np.zeros_like(cal)
-        R = np.diag(np.concatenate([np.repeat(self.bearing_var + cal, 2), np.full(2 * ridx.size, self.rate_var)]))
+        b_dt, r_dt = self._time_offset_var(r[m], gyro)
+        R = np.diag(np.concatenate([np.repeat(self.bearing_var + cal, 2) + b_dt,
+                                    np.full(2 * ridx.size, self.rate_var + r_dt)]))
         applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
                                   consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
         nis_whole = (self.ukf.nis, int(z.size))  # the whole frame's, applied or not (the bias test's)
