@@ -22,8 +22,8 @@ else:  # pragma: no cover
 REJECTED = [  # (scenario, override, what the one line must say)
     ("deck-static", "sensors.imu.delay_s=0.1",
      "scenario deck-static: sensors.imu.delay_s does not apply to mission.type 'deck' (sensors.imu is kind "
-     "'multirotor-imu'; allowed keys here: accel_noise_mps2, gyro_noise_rad_s, attitude_noise_deg, rate_hz, "
-     "accel_bias_mps2, gyro_bias_deg_s, accel_bias_walk_mps2_sqrt_s, gyro_bias_walk_deg_s_sqrt_s)"),
+     "'multirotor-imu'; allowed keys here: accel_noise_mps2, gyro_noise_rad_s, attitude_noise_deg, "
+     "ahrs_leveled_on_accel, rate_hz, accel_bias_mps2, gyro_bias_deg_s, accel_bias_walk_mps2_sqrt_s, gyro_bias_walk_deg_s_sqrt_s)"),
     ("deck-moving", "world.wind_speed_mps=8", "world.wind_speed_mps does not apply to mission.type 'deck'"),
     ("deck-static", "vehicle.yaw_deg=30", "(vehicle is kind 'multirotor'"),
     ("deck-static", "navigation.accel_noise=1", "(navigation is kind 'deck'"),

@@ -716,3 +716,25 @@ def test_a_re_lock_over_a_level_deck_takes_the_relative_yaw_from_the_frame():
     (yaw, sig), (yaw0, _) = yaws
     assert abs(yaw + 44.0) < 0.5 and sig >= 5.0 - 1e-9
     assert yaw0 == pytest.approx(44.0)
+
+
+def test_the_camera_imu_time_offset_widens_r_by_the_bearing_rates_and_the_angular_acceleration():
+    """Inflate model with ``navigation.time_offset_in_r``: a frame stamped dt off shows b - b' dt and b' - b'' dt: R gains sigma_dt^2 b'^2 per bearing
+    component (the gyro's |w| where a light has no rate) and sigma_dt^2 |w'|^2 per rate component; nothing without
+    an offset or with the consider model (its offset parameter carries it)."""
+    from visnav.scenarios.schema import load_scenario
+
+    sc = load_scenario("deck-static", ["sensors.camera.time_offset_s=0.02", "navigation.time_offset_in_r=true"], 1)
+    nav = DeckNavigator(DeckNavConfig.from_mission(sc, 1 / 30))
+    nav._gyro_dot = np.array([3.0, -4.0, 0.0])  # |w'| = 5 rad/s^2
+    rates = np.array([[0.2, -0.1], [np.nan, np.nan]])
+    gyro = np.array([0.0, 0.6, 0.8])  # |w| = 1 rad/s
+    b, r = nav._time_offset_var(rates, gyro)
+    np.testing.assert_allclose(b, (0.02 * np.array([0.2, -0.1, 1.0, 1.0])) ** 2, rtol=1e-12)
+    assert r == pytest.approx((0.02 * 5.0) ** 2, rel=1e-12)
+    for sets in (["sensors.camera.time_offset_s=0", "navigation.time_offset_in_r=true"],  # no offset
+                 ["navigation.calibration_model=\"consider\"", "navigation.time_offset_in_r=true"],  # a parameter
+                 []):  # the default: off
+        other = DeckNavigator(DeckNavConfig.from_mission(load_scenario("deck-static", sets, 1), 1 / 30))
+        other._gyro_dot = nav._gyro_dot
+        assert other._time_offset_var(rates, gyro) == (0.0, 0.0), sets

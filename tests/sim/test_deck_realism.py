@@ -6,8 +6,9 @@ import pytest
 from visnav.navigation.deck import DeckNavConfig
 from visnav.scenarios.config_deck import IDEAL_DECK_SENSORS
 from visnav.scenarios.schema import load_scenario
-from visnav.sensors.imu import AccelGyro
+from visnav.sensors.imu import AccelGyro, RollPitchAhrs
 from visnav.app.deck_parts import TrueCalibration
+from visnav.app.missions import make_simulation
 
 
 def _draws(n, *sets):
@@ -45,6 +46,42 @@ def test_default_errors_have_their_configured_spread():
         assert np.std(x) == pytest.approx(sigma, rel=0.15)
         assert abs(np.mean(x)) < 4 * sigma / np.sqrt(x.size)
     assert all(t.camera.fx == pytest.approx(t.camera.fy, rel=1e-12) for t in ts)  # one focal factor
+
+
+def test_the_deck_departs_from_level_by_its_configured_sigma_and_its_own_draw():
+    """world.deck.level_error_deg = 1: roll and pitch of 1 deg per axis over 150 seeds (sample sigma within 15 %),
+    from a generator of its own (turning it off, the default, leaves every other draw)."""
+    tilt = np.degrees([t.deck_tilt for t in _draws(150, "world.deck.level_error_deg=1")]).ravel()
+    assert np.std(tilt) == pytest.approx(1.0, rel=0.15)
+    assert abs(np.mean(tilt)) < 4 * 1.0 / np.sqrt(tilt.size)
+    a = TrueCalibration.draw(load_scenario("deck-static", ["world.deck.level_error_deg=1"], seed=7))
+    b = TrueCalibration.draw(load_scenario("deck-static", seed=7))
+    assert b.deck_tilt == (0.0, 0.0) and a.deck_tilt != (0.0, 0.0)
+    np.testing.assert_array_equal(a.lights, b.lights)
+    np.testing.assert_array_equal(a.accel_bias, b.accel_bias)
+    assert a.camera == b.camera and np.array_equal(a.T_cam, b.T_cam)
+
+
+def test_the_ahrs_leveled_on_a_biased_accelerometer_makes_the_biased_force_look_like_gravity():
+    """At rest, tilted by (phi, theta), the autopilot that levels on f + b reads the attitude whose gravity is the
+    biased force: phi' = atan2(-(f_y + b_y), -(f_z + b_z)), theta' = atan2(f_x + b_x, |(f_y, f_z) + (b_y, b_z)|), to
+    first order in b (within 5e-5 rad level, 3e-3 at 0.3 rad of tilt, for 0.1 m/s^2 of bias; a sign error is
+    1e-2); without the leveling it reads the truth."""
+    g, b = 9.81, np.array([0.08, -0.06, 0.03])
+    imu = AccelGyro(np.random.default_rng(0), 0.0, 0.0, accel_bias=b)
+    for phi, theta in ((0.0, 0.0), (0.2, -0.1), (-0.3, 0.25)):
+        truth = _Truth()
+        truth.euler = np.array([phi, theta, 0.4])
+        f = g * np.array([np.sin(theta), -np.sin(phi) * np.cos(theta), -np.cos(phi) * np.cos(theta)])
+        fb = f + b
+        want = (np.arctan2(-fb[1], -fb[2]), np.arctan2(fb[0], np.hypot(fb[1], fb[2])))
+        ahrs = RollPitchAhrs(np.random.default_rng(1), 0.0, leveled_on=imu, g=g)
+        got = ahrs.sample(0.0, truth).euler
+        np.testing.assert_allclose(got[:2], want, atol=5e-5 if phi == 0.0 else 3e-3)
+        np.testing.assert_allclose(RollPitchAhrs(np.random.default_rng(1), 0.0).sample(0.0, truth).euler[:2],
+                                   [phi, theta], atol=0)
+    np.testing.assert_allclose(RollPitchAhrs(np.random.default_rng(1), 0.0, leveled_on=imu, g=g).tilt_error(),
+                               [0.06 / g, 0.08 / g], rtol=1e-12)
 
 
 def test_one_error_off_leaves_the_others_draws():
@@ -114,3 +151,21 @@ def test_the_filter_estimates_the_accelerometer_bias_of_the_imu_specification():
     off = DeckNavConfig.from_mission(load_scenario("deck-static", ["navigation.estimate_accel_bias=false",
                                                                    "navigation.accel_bias_test_alpha=0"]), 1 / 30)
     assert off.accel_bias_sigma == 0.0 and off.bias_test_frames == 0
+
+
+def test_the_opt_in_realism_flies_a_tilted_deck_with_a_leveled_autopilot():
+    """deck-static seed 3 with the deck 1 deg off level, the autopilot leveled on its biased accelerometer, the level
+    update at their specified 1.05 deg and the time offset in R (docs/results-deck.md, issue 30 round 16): the logged
+    deck attitude is the drawn tilt, the autopilot's roll and pitch carry the bias's (-b_y, b_x) / g, and it lands."""
+    sets = ["world.deck.level_error_deg=1", "sensors.imu.ahrs_leveled_on_accel=true",
+            "navigation.level_deck_sigma_deg=1.05", "navigation.time_offset_in_r=true"]
+    sc = load_scenario("deck-static", sets, seed=3)
+    true = TrueCalibration.draw(sc)
+    sim = make_simulation(sc)
+    res = sim.run()
+    assert res.error is None and res.metrics["outcome"] == "safe", res.metrics.get("outcome_reason")
+    deck = sim.log.get("deck")["euler"]
+    np.testing.assert_allclose(deck[:, :2], np.broadcast_to(true.deck_tilt, (len(deck), 2)), atol=1e-15)
+    assert np.degrees(np.hypot(*true.deck_tilt)) > 0.3  # a tilt the landing had to meet
+    ahrs = sim.parts.sensors["ahrs"]
+    np.testing.assert_allclose(ahrs.tilt_error(), np.array([-1.0, 1.0]) * ahrs.leveled_on.accel_bias[[1, 0]] / 9.81)

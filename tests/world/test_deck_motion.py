@@ -83,3 +83,20 @@ def test_state_equals_its_array_form_bit_for_bit():
             s = m.state(t)
             for got, want in zip((s.position, s.velocity, s.euler, s.body_rates, s.C), reference(m, t)):
                 assert np.array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def test_a_tilted_deck_is_its_motion_about_the_list_and_trim():
+    """``tilt``: the deck's roll and pitch are the motion's plus the tilt (static: exactly the tilt, the normal
+    turned by it), the body rates still dC/dt = C skew(w) of the tilted attitude."""
+    tilt = (np.radians(1.5), np.radians(-0.7))
+    s = DeckMotion.static(tilt=tilt).state(4.0)
+    np.testing.assert_allclose(s.euler, [tilt[0], tilt[1], 0.0], atol=1e-15)
+    assert np.degrees(np.arccos(s.C[2, 2])) == pytest.approx(np.degrees(np.arccos(np.cos(tilt[0]) * np.cos(tilt[1]))))
+    assert not s.body_rates.any() and not s.velocity.any()
+    a = DeckMotion.from_sea_state("stewart", np.random.default_rng(3), heading=0.2)
+    b = DeckMotion.from_sea_state("stewart", np.random.default_rng(3), heading=0.2, tilt=tilt)
+    t, h = 2.3, 1e-6
+    np.testing.assert_allclose(b.state(t).euler - a.state(t).euler, [tilt[0], tilt[1], 0.0], atol=1e-14)
+    np.testing.assert_allclose(b.state(t).position, a.state(t).position)
+    W = b.state(t).C.T @ (b.state(t + h).C - b.state(t - h).C) / (2 * h)
+    np.testing.assert_allclose([W[2, 1], W[0, 2], W[1, 0]], b.state(t).body_rates, atol=1e-6)

@@ -59,6 +59,7 @@ class TrueCalibration:
     accel_bias: np.ndarray
     gyro_bias: np.ndarray
     rng: np.random.Generator  # the bias random walk's steps
+    deck_tilt: tuple = (0.0, 0.0)  # the deck's departure from level, roll and pitch [rad]
 
     @classmethod
     def draw(cls, sc) -> "TrueCalibration":
@@ -72,8 +73,10 @@ class TrueCalibration:
         camera = replace(nominal, fx=f, fy=f * nominal.fy / nominal.fx, cx=nominal.cx + pp[0], cy=nominal.cy + pp[1])
         # the camera turned by a small rotation of its own axes: T_cam,true = R(delta) T_cam
         T_cam = Rotation.from_rotvec(np.radians(c.misalignment_deg) * n[1]).as_matrix() @ c.rotation()
+        tilt_n = np.random.default_rng([int(sc.run.seed), 3005]).standard_normal(2)  # its own: the others unchanged
+        tilt = np.radians(sc.world.deck.level_error_deg) * tilt_n
         return cls(lights, camera, T_cam, imu.accel_bias_mps2 * n[2], np.radians(imu.gyro_bias_deg_s) * n[3],
-                   np.random.default_rng([int(sc.run.seed), 3004]))
+                   np.random.default_rng([int(sc.run.seed), 3004]), tuple(tilt.tolist()))
 
 
 @dataclass(frozen=True)
@@ -179,9 +182,9 @@ def build(ctx) -> MissionParts:
     dt = sc.run.dt_s
     rng = ctx.rng  # 8 generators of the run's seed (as the R-MAX loop's)
     d, c = sc.world.deck, sc.sensors.camera
-    motion = (DeckMotion.static() if d.motion == "static"
-              else DeckMotion.from_sea_state(d.sea_state, rng[0], d.sinusoids, d.motion_scale))
     true = TrueCalibration.draw(sc)  # the filter keeps the nominal calibration (DeckNavConfig.from_mission)
+    motion = (DeckMotion.static(tilt=true.deck_tilt) if d.motion == "static"
+              else DeckMotion.from_sea_state(d.sea_state, rng[0], d.sinusoids, d.motion_scale, tilt=true.deck_tilt))
     world = DeckWorld(motion, true.lights, d.size_m, c.extra_blobs_deck_m, c.hide_light, c.hide_after_s)
     world.wind = Wind(SteadyWind(0.0, 0.0))  # still air (a wind_gust fault adds its gust)
 
@@ -204,11 +207,13 @@ def build(ctx) -> MissionParts:
 
     # sensors, in the order they are sampled at one instant (attitude before the IMU sample it rotates)
     imu = sc.sensors.imu
-    sensors = {"ahrs": RollPitchAhrs(rng[5], imu.attitude_noise_deg, rate_hz=imu.rate_hz),
-               "imu": AccelGyro(rng[4], imu.accel_noise_mps2, imu.gyro_noise_rad_s, rate_hz=imu.rate_hz,
-                                accel_bias=true.accel_bias, gyro_bias=true.gyro_bias,
-                                accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s,
-                                gyro_bias_walk=np.radians(imu.gyro_bias_walk_deg_s_sqrt_s), bias_rng=true.rng),
+    accel_gyro = AccelGyro(rng[4], imu.accel_noise_mps2, imu.gyro_noise_rad_s, rate_hz=imu.rate_hz,
+                           accel_bias=true.accel_bias, gyro_bias=true.gyro_bias,
+                           accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s,
+                           gyro_bias_walk=np.radians(imu.gyro_bias_walk_deg_s_sqrt_s), bias_rng=true.rng)
+    sensors = {"ahrs": RollPitchAhrs(rng[5], imu.attitude_noise_deg, rate_hz=imu.rate_hz,
+                                     leveled_on=accel_gyro if imu.ahrs_leveled_on_accel else None),
+               "imu": accel_gyro,
                "camera": LedCamera(true.camera, true.T_cam, np.asarray(c.position_m, float), rng[2],
                                    noise_gray=c.noise_gray, centroid_noise_px=c.centroid_noise_px, jitter_rng=rng[6],
                                    rate_hz=c.rate_hz, time_offset_s=c.time_offset_s)}

@@ -77,14 +77,26 @@ class AccelGyro:
 
 
 class RollPitchAhrs:
-    """The autopilot's roll and pitch (white noise of ``attitude_noise_deg``); no heading: yaw is NaN."""
+    """The autopilot's roll and pitch; no heading: yaw is NaN. White noise of ``attitude_noise_deg``, and, with
+    ``leveled_on`` (the ``AccelGyro`` whose accelerometers the autopilot levels on), the tilt that accelerometer's
+    bias b (body FRD) gives it: the attitude that makes the measured specific force f + b at rest look like gravity,
+    f_b = (g sin theta, -g sin phi cos theta, -g cos phi cos theta), is off by (-b_y / g, +b_x / g) to first order
+    (issue 30: a real autopilot's roll and pitch are as good as its accelerometers)."""
 
     def __init__(self, rng: np.random.Generator, attitude_noise_deg: float, rate_hz: float = 100.0,
-                 latency_s: float = 0.0):
+                 latency_s: float = 0.0, leveled_on: AccelGyro | None = None, g: float = 9.81):
         self.rng, self.rate_hz, self.latency_s = rng, rate_hz, latency_s
         self.sigma = np.radians(attitude_noise_deg)
+        self.leveled_on, self.g = leveled_on, float(g)
+
+    def tilt_error(self) -> np.ndarray:
+        """(roll, pitch) error [rad] of the leveling on the accelerometer's present bias (zero without one)."""
+        if self.leveled_on is None:
+            return np.zeros(2)
+        b = self.leveled_on.accel_bias
+        return np.array([-b[1], b[0]]) / self.g
 
     def sample(self, t: float, truth_at: TruthAt, world=None) -> AttitudeSample:
         s = truth_at(t)
-        rp = s.euler[:2] + self.sigma * self.rng.standard_normal(2)
+        rp = s.euler[:2] + self.tilt_error() + self.sigma * self.rng.standard_normal(2)
         return AttitudeSample(t=t, euler=np.array([rp[0], rp[1], np.nan]))

@@ -59,7 +59,7 @@ class DeckState:
 class DeckMotion:
     """Sum-of-sinusoids motion of eq. 5.11 around a nominal position and heading."""
 
-    def __init__(self, amplitude, omega, phase, position=(0.0, 0.0, 0.0), heading: float = 0.0):
+    def __init__(self, amplitude, omega, phase, position=(0.0, 0.0, 0.0), heading: float = 0.0, tilt=(0.0, 0.0)):
         self.a = np.atleast_2d(np.asarray(amplitude, float))  # (6, N)
         self.w = np.atleast_2d(np.asarray(omega, float))
         self.ph = np.atleast_2d(np.asarray(phase, float))
@@ -69,18 +69,21 @@ class DeckMotion:
             raise ValueError("the deck motion takes at most 3 sinusoids per axis (eq. 5.11)")
         self.p0 = np.asarray(position, float)
         self.heading = float(heading)
+        self.tilt = tuple(float(v) for v in tilt)  # the mean roll and pitch the motion is about (list, trim) [rad]
         c, s = np.cos(heading), np.sin(heading)
         self._Rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
     @classmethod
-    def static(cls, position=(0.0, 0.0, 0.0), heading: float = 0.0) -> "DeckMotion":
+    def static(cls, position=(0.0, 0.0, 0.0), heading: float = 0.0, tilt=(0.0, 0.0)) -> "DeckMotion":
+        """A deck at rest, ``tilt`` (roll, pitch) [rad] off level."""
         z = np.zeros((6, 1))
-        return cls(z, z, z, position, heading)
+        return cls(z, z, z, position, heading, tilt)
 
     @classmethod
     def from_sea_state(cls, name: str, rng: np.random.Generator, n_sinusoids: int = 1, scale: float = 1.0,
-                       position=(0.0, 0.0, 0.0), heading: float = 0.0) -> "DeckMotion":
-        """Draw amplitudes and frequencies around the preset's nominal values, phases uniform."""
+                       position=(0.0, 0.0, 0.0), heading: float = 0.0, tilt=(0.0, 0.0)) -> "DeckMotion":
+        """Draw amplitudes and frequencies around the preset's nominal values, phases uniform; the motion is about
+        ``tilt`` (the ship's list and trim, roll and pitch [rad])."""
         if name not in SEA_STATES:
             raise ValueError(f"unknown sea state {name!r}; known: {', '.join(SEA_STATES)}")
         if not 1 <= n_sinusoids <= 3:
@@ -90,7 +93,7 @@ class DeckMotion:
         amp = np.abs(A[:, None] + sA[:, None] * rng.standard_normal((6, n))) * scale / n
         om = np.abs(W[:, None] + sW[:, None] * rng.standard_normal((6, n)))
         ph = rng.uniform(0.0, 2 * np.pi, (6, n))
-        return cls(amp, om, ph, position, heading)
+        return cls(amp, om, ph, position, heading, tilt)
 
     def displacement(self, t: float):
         """(d, d_dot) of the six axes at time t (eq. 5.11 and its derivative)."""
@@ -109,7 +112,7 @@ class DeckMotion:
         pos = self.p0 + self._Rz @ d[:3]
         vel = self._Rz @ dd[:3]
         roll, pitch, yaw = d[3:].tolist()
-        yaw = self.heading + yaw
+        roll, pitch, yaw = roll + self.tilt[0], pitch + self.tilt[1], self.heading + yaw
         euler = np.array([roll, pitch, yaw])
         rates = np.asarray(euler_rates_to_body_rates(euler, dd[3:]))
         C = euler_to_dcm3(roll, pitch, yaw)  # (euler_to_dcm(euler)'s one-vector path, from the floats)
