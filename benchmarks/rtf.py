@@ -6,8 +6,8 @@ Prints one JSON line: simulated time, wall and CPU time of ``run()`` (process CP
 thread counts), main-thread CPU and the real-time factors. ``--warm`` first flies seed N + 1 of the same scenario
 in the same process, untimed, so that the timed run is what every further run of a campaign worker costs: the
 one-off costs of a process (importing, loading numba's cached kernels, first-call allocations) are then reported
-apart, as ``first_run_wall_s`` (issue #31: a compiled kernel's load is measured against a campaign). Run it with another checkout's
-``PYTHONPATH`` to compare commits (``benchmarks/compare.py`` interleaves two).
+apart, as ``first_run_wall_s`` (issue #31: a compiled kernel's load is measured against a campaign). Run it with
+another checkout's ``PYTHONPATH`` to compare commits (``benchmarks/compare.py`` interleaves two).
 """
 
 from __future__ import annotations

@@ -332,12 +332,13 @@ class RmaxModel:
         y = self._y
         if C is None:
             C = euler_to_dcm3(phi, theta, y[6])
-        if f is None and self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
-            f = -self.params.g * C[2]
-        elif f is None and self.kernel:  # the same, compiled (vehicles/kernels)
-            f = np.array(rmax_derivatives(self.params, y.tolist(), att, np.asarray(wind, float).tolist(), True)[1])
-        elif f is None:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
-            f = self._deriv(y, att, np.asarray(wind, float))[1]
+        if f is None:
+            if self.on_ground:  # the ground carries the weight: f = -C_nb (0, 0, g)
+                f = -self.params.g * C[2]
+            elif self.kernel:  # the same, compiled (vehicles/kernels)
+                f = np.array(rmax_derivatives(self.params, y.tolist(), att, np.asarray(wind, float).tolist(), True)[1])
+            else:  # f_b = a_b − C_nb g_n = air-relative drag + thrust (eq. 3.9)
+                f = self._deriv(y, att, np.asarray(wind, float))[1]
         psi = (y[6] + math.pi) % (2 * math.pi) - math.pi
         return VehicleState(t=self.t, position=y[3:6].copy(), velocity=C @ y[0:3],
                             euler=np.array([phi, theta, psi]), body_rates=np.array([p, q, r]),
