@@ -738,3 +738,33 @@ def test_the_camera_imu_time_offset_widens_r_by_the_bearing_rates_and_the_angula
         other = DeckNavigator(DeckNavConfig.from_mission(load_scenario("deck-static", sets, 1), 1 / 30))
         other._gyro_dot = nav._gyro_dot
         assert other._time_offset_var(rates, gyro) == (0.0, 0.0), sets
+
+
+@pytest.mark.parametrize("level_deg", [0.0, 2.0])
+def test_the_reported_attitude_holds_the_surveys_share_with_the_level_update_as_one_more_look(level_deg):
+    """After a frame of every light the estimate's covariance holds the survey's share of the attitude
+    (``survey_pose_covariance``'s attitude block, with the level update's roll and pitch added as information):
+    reported, not in P (no gain: P is the same as without a survey). With no level update it is the fit's share;
+    a static deck's 2 deg holds the roll and pitch below 2 deg."""
+    sig, lvl = 0.01, np.radians(level_deg)
+    nav, truth = _tied_nav(light_survey_sigma=sig, level_deck_sigma=lvl)
+    b, r = dm.bearings_and_rates(truth[None], LEDS_EQ_5_10, CAM, np.zeros(3))
+    nav.update(ImuSample(0.01, ACC, np.zeros(3)))
+    assert nav.fuse_bearings(b[0], r[0]) == 4
+    S = dm.survey_pose_covariance(nav.x[:12], np.asarray(LEDS_EQ_5_10, float), CAM, np.arange(4), sig)[3:6, 3:6]
+    info = np.linalg.inv(S)
+    if lvl > 0.0:
+        info[0:2, 0:2] += np.eye(2) / lvl**2
+    share = np.linalg.inv(info)
+    att = nav.covariance()[3:6, 3:6]
+    assert np.linalg.eigvalsh(att - share).min() > -1e-12  # it holds the share ...
+    assert np.linalg.eigvalsh(att - nav.P[3:6, 3:6]).min() > -1e-12  # ... and what P has
+    if lvl > 0.0:
+        assert np.sqrt(share[0, 0]) < lvl and np.sqrt(share[1, 1]) < lvl
+    else:
+        np.testing.assert_allclose(share, S, rtol=1e-9)
+        assert np.sqrt(att[0, 0]) > np.sqrt(nav.P[3, 3]) + np.radians(1)  # the roll: the survey's share the larger
+    ideal, _ = _tied_nav(light_survey_sigma=0.0, level_deck_sigma=lvl)
+    ideal.update(ImuSample(0.01, ACC, np.zeros(3)))
+    ideal.fuse_bearings(b[0], r[0])
+    np.testing.assert_allclose(ideal.covariance()[3:6, 3:6], ideal.P[3:6, 3:6], atol=1e-15)  # no survey, no share

@@ -312,6 +312,35 @@ def bearings_only(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, vect
     return np.arctan(u).reshape(len(sig), -1)  # eq. 2.25
 
 
+def survey_pose_covariance(x: np.ndarray, lights: np.ndarray, cam: CameraGeometry, idx: np.ndarray,
+                           sigma_survey: float, step: float = 1e-6) -> np.ndarray | None:
+    """The error in the pose (r, e) that a constant survey error of ``sigma_survey`` per axis of each light
+    ``idx`` leaves in a least-squares fit of their bearings: the consider covariance of the fit, linearised at the
+    state ``x`` (eq. 2.25-2.26),
+
+        Sigma = sigma_s^2 A G G^T A^T,   A = (H^T H)^-1 H^T,   H = dz / d(r, e),   G = dz / db,
+
+    where a light moved by db_i moves its bearings as the deck moved by C_d^h db_i, so dz_i/db_i = (dz_i/dr) C_d^h
+    and, the survey isotropic, G G^T = blockdiag((dz_i/dr) (dz_i/dr)^T). It depends on where the lights are seen
+    from: at 1.4 m, 45 deg down, the 1 cm survey of eq. 5.10's layout tilts the fit by 6 deg per axis, at 1 m by
+    10-17 deg, where the plane through the lights (sqrt(2 / S) sigma_s) gives 4 deg. H by central differences.
+    Returns (6, 6), or None when the lights do not fix the pose (fewer than 3)."""
+    idx = np.asarray(idx)
+    if idx.size < 3:
+        return None
+    d = np.zeros((12, len(x)))
+    d[np.arange(6), np.arange(6)] = step
+    d[6 + np.arange(6), np.arange(6)] = -step
+    z = bearings_only(x[None] + d, np.asarray(lights, float)[idx], cam)
+    H = (z[:6] - z[6:]).T / (2.0 * step)  # (2M, 6)
+    M = H[:, :3].reshape(idx.size, 2, 3)  # dz_i / dr
+    GGt = np.zeros((2 * idx.size, 2 * idx.size))
+    for i in range(idx.size):
+        GGt[2 * i:2 * i + 2, 2 * i:2 * i + 2] = M[i] @ M[i].T
+    A = np.linalg.lstsq(H, np.eye(len(H)), rcond=None)[0]  # (H^T H)^-1 H^T
+    return sigma_survey**2 * A @ GGt @ A.T
+
+
 def deck_in_level(e: np.ndarray, roll: float, pitch: float) -> np.ndarray:
     """The deck's attitude in the heading-free level frame, C_d^0 = C_h^0 C_d^h (deck axes -> level axes): C_h^0
     from the autopilot's roll and pitch, C_d^h = euler_to_dcm(e)^T from the relative Euler angles (eq. 2.8-2.12).
