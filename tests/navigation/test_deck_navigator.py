@@ -692,6 +692,9 @@ def test_a_static_start_takes_its_relative_yaw_from_the_first_frame_of_every_lig
     level = {"level_deck_sigma": np.radians(2.0), "range_check_sigmas": 3.3}
     err, three, turned = start(-80.0, **level)
     assert abs(err) < 1.0 and three == [] and len(turned) == 1
+    # the same with the consider model (the UKF's states carry the calibration; the frame's solve has 12)
+    errc, _, turnedc = start(-80.0, calibration_model="consider", light_survey_sigma=1e-4, **level)
+    assert abs(errc) < 1.0 and len(turnedc) == 1
     assert start(10.0, **level)[2] == []  # within the prior's sigma: the thesis' start
     err0, _, turned0 = start(-80.0)
     assert abs(err0) > 40 and turned0 == []  # the prior's fit, far off

@@ -325,7 +325,7 @@ class DeckNavigator(CommandDispatch):
         b = self.lights - self.lights.mean(axis=0)
         self._spread = float((b * b).sum())  # S = sum |b_i - b_mean|^2 of the layout (the survey's tilt, 1 / S)
         self._survey_att = np.zeros((3, 3))  # the survey's share of the attitude's error (``_survey_attitude``)
-        self.cam = config.cam
+        self.cam = config.cam  # (with consider parameters below: the UKF's; the geometric solvers take cfg.cam, 12 states)
         c = config
         self._bias_on = c.accel_bias_sigma > 0.0
         # the calibration's consider parameters (Schmidt-Kalman) after the 12 states and the bias
@@ -1181,7 +1181,7 @@ class DeckNavigator(CommandDispatch):
             return ""
         c = self.cfg
         sig_b = float(np.hypot(c.tracking_sigmas[0], c.calibration_bearing_sigma))
-        found = dm.locate_lights(b, x[dm.ATT], self.lights, self.cam, float(c.tracking_sigmas[0]))
+        found = dm.locate_lights(b, x[dm.ATT], self.lights, self.cfg.cam, float(c.tracking_sigmas[0]))
         if found is None or found[3] > RELOCATE_RMS_SIGMAS * sig_b:
             return ""
         idx, r, _, rms = found
@@ -1210,7 +1210,7 @@ class DeckNavigator(CommandDispatch):
             return ""
         rng = float(np.linalg.norm(x[dm.POS]))
         sig = float(np.hypot(c.tracking_sigmas[0], c.light_survey_sigma / max(rng, 0.1)))
-        found = dm.locate_level_deck(b, *self._rp, self.lights, self.cam, sig, prior=(float(x[5]), prior_sigma))
+        found = dm.locate_level_deck(b, *self._rp, self.lights, self.cfg.cam, sig, prior=(float(x[5]), prior_sigma))
         if found is None or found[4] > RELOCATE_RMS_SIGMAS * float(np.hypot(c.tracking_sigmas[0],
                                                                             c.calibration_bearing_sigma)):
             return ""
@@ -1278,7 +1278,7 @@ class DeckNavigator(CommandDispatch):
         # the tracking bearing sigma (the acquisition's is widened on purpose); the calibration's share of the
         # scale (the survey's, the focal length's) is range_check_frac: its misalignment turns every bearing alike
         sig_b = float(c.tracking_sigmas[0])
-        r_ls, C_ls = dm.position_from_bearings(b, idx, x[dm.ATT], self.lights, self.cam, sig_b)
+        r_ls, C_ls = dm.position_from_bearings(b, idx, x[dm.ATT], self.lights, self.cfg.cam, sig_b)
         rng = float(np.linalg.norm(x[dm.POS]))
         u = x[dm.POS] / max(rng, 1e-6)
         var = float(u @ (C_ls + P[0:3, 0:3]) @ u) + (c.range_check_frac * rng) ** 2
@@ -1293,7 +1293,7 @@ class DeckNavigator(CommandDispatch):
         self._relock(f"range check: the lights put the deck {off:+.2f} m from the filter's {rng:.2f} m "
                      f"(sigma {np.sqrt(var):.2f} m) on {c.range_check_frames} frames")
         xr, Pr = self.ukf.x.copy(), self.ukf.P.copy()
-        xr[dm.POS], _ = dm.position_from_bearings(b, idx, xr[dm.ATT], self.lights, self.cam, sig_b)
+        xr[dm.POS], _ = dm.position_from_bearings(b, idx, xr[dm.ATT], self.lights, self.cfg.cam, sig_b)
         Pr[0:3, :], Pr[:, 0:3] = 0.0, 0.0
         Pr[0:3, 0:3] = np.eye(3) * (c.range_check_frac * rng) ** 2 + np.eye(3) * c.retie_sigmas[0] ** 2
         self.ukf.x, self.ukf.P = xr, Pr
