@@ -151,8 +151,9 @@ class DeckFilterConfig(_M):
                                                               "Kalman consider parameters for each light's survey "
                                                               "error, the camera's misalignment, focal, principal "
                                                               "point and time-offset errors at their specified "
-                                                              "sigmas; experimental: consistent before the hand-over "
-                                                              "but it lost the lights after it, deck-static seed 4)")
+                                                              "sigmas; experimental: consistent before the hand-over, "
+                                                              "then the vehicle swings: deck-static seed 4 lands off "
+                                                              "the plate; docs/results-deck.md round 17)")
     time_offset_in_r: bool = Field(False, description="the inflate model: the camera/IMU time offset's share of R "
                                    "(sensors.camera.time_offset_s x each bearing's rate, x the angular acceleration "
                                    "for the rates); measured: NEES in band 39 of 40 runs (35 without), one moving "
