@@ -335,11 +335,9 @@ def survey_pose_covariance(x: np.ndarray, lights: np.ndarray, cam: CameraGeometr
     z = bearings_only(x[None] + d, np.asarray(lights, float)[idx], cam)
     H = (z[:6] - z[6:]).T / (2.0 * step)  # (2M, 6)
     M = H[:, :3].reshape(idx.size, 2, 3)  # dz_i / dr
-    GGt = np.zeros((2 * idx.size, 2 * idx.size))
-    for i in range(idx.size):
-        GGt[2 * i:2 * i + 2, 2 * i:2 * i + 2] = M[i] @ M[i].T
-    A = np.linalg.lstsq(H, np.eye(len(H)), rcond=None)[0]  # (H^T H)^-1 H^T
-    return sigma_survey**2 * A @ GGt @ A.T
+    AT = np.linalg.solve(H.T @ H, H.T).T.reshape(idx.size, 2, 6)  # A = (H^T H)^-1 H^T, per light
+    AM = np.einsum("ijk,ijl->ikl", AT, M)  # A_i (dz_i / dr): (M, 6, 3)
+    return sigma_survey**2 * np.einsum("ikl,ijl->kj", AM, AM)  # sum_i A_i G_i G_i^T A_i^T
 
 
 def deck_in_level(e: np.ndarray, roll: float, pitch: float) -> np.ndarray:

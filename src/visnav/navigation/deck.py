@@ -249,6 +249,8 @@ class DeckNavConfig:
                    retie_hold_s=f.retie_hold_s)
 
 
+#: the survey's attitude share is computed anew at most this often while the same lights are in view [s]
+SURVEY_SHARE_EVERY_S = 0.1
 #: the states the level-deck update measures: the relative roll and pitch
 _ROLL_PITCH = np.array([3, 4])
 _ROLL_PITCH.flags.writeable = False
@@ -325,6 +327,8 @@ class DeckNavigator(CommandDispatch):
         b = self.lights - self.lights.mean(axis=0)
         self._spread = float((b * b).sum())  # S = sum |b_i - b_mean|^2 of the layout (the survey's tilt, 1 / S)
         self._survey_att = np.zeros((3, 3))  # the survey's share of the attitude's error (``_survey_attitude``)
+        self._survey_att_add = np.zeros((3, 3))  # what it adds to P's attitude block in ``covariance``
+        self._survey_key: tuple = ((), -np.inf)  # (lights, time) the share was last computed for
         self.cam = config.cam  # (with consider parameters below: the UKF's; the geometric solvers take cfg.cam, 12 states)
         c = config
         self._bias_on = c.accel_bias_sigma > 0.0
@@ -536,10 +540,7 @@ class DeckNavigator(CommandDispatch):
         P = self.ukf.P.copy()
         P[6:9, 6:9] += S @ self.imu_cov[3:6, 3:6] @ S.T
         P[0:3, 0:3] += self._calibration_position_cov()
-        D = self._survey_att - P[3:6, 3:6]  # the survey's attitude share where P holds less (its positive part)
-        lam, V = np.linalg.eigh(D)
-        if lam[-1] > 0.0:
-            P[3:6, 3:6] += (V * np.maximum(lam, 0.0)) @ V.T
+        P[3:6, 3:6] += self._survey_att_add
         return P
 
     def _survey_attitude(self, idx) -> None:
@@ -556,13 +557,22 @@ class DeckNavigator(CommandDispatch):
         c = self.cfg
         if self._consider or c.light_survey_sigma == 0.0:
             return
-        S = dm.survey_pose_covariance(self.ukf.x[:dm.N_STATE], self.lights, self.cam, idx, c.light_survey_sigma)
-        if S is None:
-            return
-        info = np.linalg.inv(S[3:6, 3:6])
-        if c.level_deck_sigma > 0.0:
-            info[0:2, 0:2] += np.eye(2) / c.level_deck_sigma**2
-        self._survey_att = np.linalg.inv(info)
+        # the geometry moves little in a tenth of a second: the share anew when the lights in view change or 0.1 s on
+        key = tuple(int(i) for i in idx)
+        if key == self._survey_key[0] and self._t - self._survey_key[1] < SURVEY_SHARE_EVERY_S:
+            S = None
+        else:
+            S = dm.survey_pose_covariance(self.ukf.x[:dm.N_STATE], self.lights, self.cam, idx, c.light_survey_sigma)
+            self._survey_key = (key, self._t)
+        if S is not None:
+            info = np.linalg.inv(S[3:6, 3:6])
+            if c.level_deck_sigma > 0.0:
+                info[0:2, 0:2] += np.eye(2) / c.level_deck_sigma**2
+            self._survey_att = np.linalg.inv(info)
+        # what the share adds to P's attitude block: the positive part of share - P at this frame, reported until
+        # the next one (P only grows in between: then a little more than the share, never less)
+        lam, V = np.linalg.eigh(self._survey_att - self.ukf.P[3:6, 3:6])
+        self._survey_att_add = (V * np.maximum(lam, 0.0)) @ V.T
 
     def _calibration_position_cov(self) -> np.ndarray:
         """The calibration's constant share of the relative position's error that the filter's P leaves out (the
