@@ -559,16 +559,14 @@ class DeckNavigator(CommandDispatch):
             return
         # the geometry moves little in a tenth of a second: the share anew when the lights in view change or 0.1 s on
         key = tuple(int(i) for i in idx)
-        if key == self._survey_key[0] and self._t - self._survey_key[1] < SURVEY_SHARE_EVERY_S:
-            S = None
-        else:
-            S = dm.survey_pose_covariance(self.ukf.x[:dm.N_STATE], self.lights, self.cam, idx, c.light_survey_sigma)
+        if key != self._survey_key[0] or self._t - self._survey_key[1] >= SURVEY_SHARE_EVERY_S:
             self._survey_key = (key, self._t)
-        if S is not None:
-            info = np.linalg.inv(S[3:6, 3:6])
-            if c.level_deck_sigma > 0.0:
-                info[0:2, 0:2] += np.eye(2) / c.level_deck_sigma**2
-            self._survey_att = np.linalg.inv(info)
+            S = dm.survey_pose_covariance(self.ukf.x[:dm.N_STATE], self.lights, self.cam, idx, c.light_survey_sigma)
+            if S is not None:  # (fewer than three lights fix no pose: the last share stands)
+                info = np.linalg.inv(S[3:6, 3:6])
+                if c.level_deck_sigma > 0.0:
+                    info[0:2, 0:2] += np.eye(2) / c.level_deck_sigma**2
+                self._survey_att = np.linalg.inv(info)
         # what the share adds to P's attitude block: the positive part of share - P at this frame, reported until
         # the next one (P only grows in between: then a little more than the share, never less)
         lam, V = np.linalg.eigh(self._survey_att - self.ukf.P[3:6, 3:6])
@@ -861,8 +859,9 @@ class DeckNavigator(CommandDispatch):
         acceleration's part, the IMU's ``gyro_dot``). Only with ``time_offset_in_r`` (``navigation.time_offset_in_r``).
         Measured (docs/results-deck.md, issue 30 round 16): without it the rate NIS fails its window test whenever
         the vehicle swings (10 ms offset, |w'| 5 rad/s^2: 0.05 rad/s against the rates' 0.03 sigma); with it the
-        deck NEES was inside its band in 39 of 40 runs (35 without), but one moving fault run of 100 landed off the
-        plate (brightness seed 7, 0.61 m), so it is not the default."""
+        deck NEES was inside its band in 39 of 40 runs (35 without; 36 and 34 once the survey's attitude share was
+        reported, round 17), but one moving fault run of 100 landed off the plate (brightness seed 7, 0.61 m), so it
+        is not the default."""
         s = self.cfg.time_offset_sigma
         if s == 0.0 or self._consider or not self.cfg.time_offset_in_r:
             return 0.0, 0.0

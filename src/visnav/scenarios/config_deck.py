@@ -33,8 +33,9 @@ class DeckWorldConfig(_M):
     level_error_deg: float = Field(0.0, ge=0, le=10, description="1-sigma per axis of the deck's departure from level "
                                    "(roll and pitch), drawn once per run: a landing pad on the ground, a moored "
                                    "ship's list and trim (1 deg is typical); a moving deck oscillates about it. 0: a "
-                                   "level deck, the default (with 1 deg, docs/results-deck.md round 16: NEES 38 of "
-                                   "40 runs in band, one moving fault run of 100 unsafe)")
+                                   "level deck, the default (with 1 deg, the leveled AHRS and the time offset in R, "
+                                   "docs/results-deck.md rounds 16-17: NEES 38 of 40 runs in band, 34 once the "
+                                   "survey's attitude share was reported; one moving fault run of 100 unsafe)")
 
     @field_validator("lights_m")
     @classmethod
@@ -156,8 +157,9 @@ class DeckFilterConfig(_M):
                                                               "the plate; docs/results-deck.md round 17)")
     time_offset_in_r: bool = Field(False, description="the inflate model: the camera/IMU time offset's share of R "
                                    "(sensors.camera.time_offset_s x each bearing's rate, x the angular acceleration "
-                                   "for the rates); measured: NEES in band 39 of 40 runs (35 without), one moving "
-                                   "fault run of 100 off the plate (docs/results-deck.md, issue 30 round 16)")
+                                   "for the rates); measured: NEES in band 39 of 40 runs (35 without; 36 and 34 once the "
+                                   "survey's attitude share was reported), one moving fault run of 100 off the plate "
+                                   "(docs/results-deck.md, issue 30 rounds 16-17)")
     estimate_accel_bias: bool = Field(True, description="the accelerometer bias as three more filter states "
                                       "(random walk; prior and walk from sensors.imu's accel_bias_mps2 and "
                                       "accel_bias_walk_mps2_sqrt_s; none when accel_bias_mps2 = 0; issue 30)")
