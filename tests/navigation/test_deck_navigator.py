@@ -737,7 +737,7 @@ def test_the_camera_imu_time_offset_widens_r_by_the_bearing_rates_and_the_angula
     assert r == pytest.approx((0.02 * 5.0) ** 2, rel=1e-12)
     for sets in (["sensors.camera.time_offset_s=0", "navigation.time_offset_in_r=true"],  # no offset
                  ["navigation.calibration_model=\"consider\"", "navigation.time_offset_in_r=true"],  # a parameter
-                 []):  # the default: off
+                 ["navigation.time_offset_in_r=false"]):  # off (on by default since round 18)
         other = DeckNavigator(DeckNavConfig.from_mission(load_scenario("deck-static", sets, 1), 1 / 30))
         other._gyro_dot = nav._gyro_dot
         assert other._time_offset_var(rates, gyro) == (0.0, 0.0), sets
@@ -771,3 +771,30 @@ def test_the_reported_attitude_holds_the_surveys_share_with_the_level_update_as_
     ideal.update(ImuSample(0.01, ACC, np.zeros(3)))
     ideal.fuse_bearings(b[0], r[0])
     np.testing.assert_allclose(ideal.covariance()[3:6, 3:6], ideal.P[3:6, 3:6], atol=1e-15)  # no survey, no share
+
+
+def test_the_rates_of_a_frame_take_the_gyros_mean_over_its_interval_and_its_midpoint():
+    """``_rate_gyro``: the trapezoidal mean of the gyro samples over [t0, t], for a rate ramping linearly the rate
+    of the covered interval's midpoint; a frame's update predicts its rates half an interval back with it
+    (``rates_at_midpoint``, the default), or at the frame with the newest sample (off)."""
+    nav = _nav()
+    w = lambda t: np.array([0.2, -1.0, 0.5]) * (1.0 + 4.0 * t)  # noqa: E731
+    for t in np.arange(0.0, 0.2001, 0.01):
+        nav.update(ImuSample(float(t), ACC, w(t)))
+    np.testing.assert_allclose(nav._rate_gyro(0.1, 0.2), w(0.15), rtol=1e-12)
+    np.testing.assert_allclose(nav._rate_gyro(0.095, 0.2), w(0.15), rtol=1e-12)  # (samples from 0.10 on)
+    np.testing.assert_array_equal(nav._rate_gyro(0.1995, 0.2), nav.last_gyro)  # one sample: the newest
+    seen = []
+    for mid in (True, False):
+        nav = _nav(rates_at_midpoint=mid)
+        nav._correct = lambda b, r, gyro, replay=False, rp=None, lag=0.0: seen.append((gyro.copy(), lag)) or (0, 0)
+        for t in np.arange(0.0, 0.1001, 0.01):
+            nav.update(ImuSample(float(t), ACC, w(t)))
+        img = np.zeros((480, 752), np.uint8)
+        nav.update(Frame(t=1 / 30, image=img, index=0))
+        nav.update(Frame(t=2 / 30, image=img, index=1))
+    (g0, lag0), (g1, lag1), (g2, lag2), (g3, lag3) = seen
+    assert lag0 == 0.0 and lag2 == 0.0  # the first frame: no interval yet
+    assert lag1 == pytest.approx(1 / 60) and lag3 == 0.0
+    np.testing.assert_allclose(g1, w(0.05), rtol=1e-12)  # samples 0.04-0.06 cover [1/30, 2/30]: their midpoint
+    np.testing.assert_array_equal(g3, w(0.1))  # off: the newest sample

@@ -297,10 +297,15 @@ def bearings_and_rates(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry,
 
 
 def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, gyro: np.ndarray,
-                      idx: np.ndarray, rate_idx: np.ndarray, vectors=None) -> np.ndarray:
+                      idx: np.ndarray, rate_idx: np.ndarray, vectors=None, rates_at=None) -> np.ndarray:
     """Stacked measurement (eq. 3.10): bearings of lights ``idx``, then rates of lights ``rate_idx``
-    (``vectors``: ``light_vectors(sig, lights, cam)`` when the caller has it already)."""
+    (``vectors``: ``light_vectors(sig, lights, cam)`` when the caller has it already). ``rates_at``: the states
+    the rates are seen at, from the sigma points (``sig -> sig'``), when not the bearings' own: a tracker's
+    rates are backward differences over the frame interval, the rates of its midpoint (``DeckNavigator``), with
+    ``gyro`` the vehicle's rate there."""
     bear, rate = bearings_and_rates(sig, lights, cam, gyro, vectors)
+    if rates_at is not None and np.size(rate_idx):
+        rate = bearings_and_rates(rates_at(sig), lights, cam, gyro)[1]
     return np.concatenate([bear[:, idx, :].reshape(len(sig), -1), rate[:, rate_idx, :].reshape(len(sig), -1)], axis=1)
 
 

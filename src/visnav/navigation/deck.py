@@ -160,6 +160,7 @@ class DeckNavConfig:
     camera_sigmas: tuple[float, float, float] = (0.0, 0.0, 0.0)
     time_offset_sigma: float = 0.0  # [s] the camera/IMU time offset's, a consider parameter too
     time_offset_in_r: bool = False  # the inflate model: its share of R (``DeckNavigator._time_offset_var``)
+    rates_at_midpoint: bool = False  # the bearing rates predicted at their frame interval's midpoint (``_rate_gyro``)
     # the accelerometer bias as three more states (issue 30; 0: the thesis' 12 states): its prior sigma per axis
     # [m/s^2] and its random walk [m/s^2/sqrt(s)], from the IMU's specification
     accel_bias_sigma: float = 0.0
@@ -219,7 +220,7 @@ class DeckNavConfig:
                    bias_test_frames=6 if f.accel_bias_test_alpha > 0 else 0,
                    bias_test_alpha=f.accel_bias_test_alpha or 1e-5, bias_step_sigma=f.accel_bias_step_mps2,
                    calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s,
-                   time_offset_in_r=f.time_offset_in_r,
+                   time_offset_in_r=f.time_offset_in_r, rates_at_midpoint=f.rates_at_midpoint,
                    accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
                    lights=np.asarray(sc.world.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
@@ -364,6 +365,7 @@ class DeckNavigator(CommandDispatch):
         self._accel = np.zeros(3)
         self._rp: np.ndarray | None = None  # roll, pitch of the newest AttitudeSample
         self.last_gyro = np.zeros(3)
+        self._gyro_log: deque = deque(maxlen=64)  # (t, gyro) of the newest IMU samples (``_rate_gyro``)
         self.last_nis, self.last_dof = float("nan"), 0
         self.last_bearing_rms = float("nan")  # RMS bearing innovation of the last update [rad]
         self._calibration_rms = 0.0  # the calibration's RMS share of the last update's bearings [rad]
@@ -616,6 +618,7 @@ class DeckNavigator(CommandDispatch):
             return self._drop_imu("no attitude yet", t)
         if self._t_imu is None:
             self._t_imu, self._gyro, self.last_gyro, self._accel = t, gyro, gyro, accel
+            self._gyro_log.append((t, gyro))
             self.stats.imu_samples += 1
             return None
         dt_imu = t - self._t_imu
@@ -628,6 +631,7 @@ class DeckNavigator(CommandDispatch):
         u = dm.ImuInput(accel=accel, gyro=gyro, gyro_dot=self._gyro_dot, gravity_body=gb)
         prev_accel, prev_gyro = self._accel, self._gyro
         self._t_imu, self._gyro, self.last_gyro, self._accel, self._u = t, gyro, gyro, accel, u
+        self._gyro_log.append((t, gyro))
         self.stats.imu_samples += 1
         if self.ukf is None:
             return None
@@ -699,6 +703,10 @@ class DeckNavigator(CommandDispatch):
             self.integrity.record(t, "bearing", float("nan"), 0, False)
             return
         uv = find_blobs(f.image, self.tracker.threshold)
+        gyro, lag = self.last_gyro, 0.0  # (the thesis: the rates are the frame's own, w_h the newest gyro sample)
+        t0 = self.tracker.previous_time
+        if self.cfg.rates_at_midpoint and t0 is not None and t > t0:  # the rates are differences over [t0, t]
+            gyro, lag = self._rate_gyro(t0, t), 0.5 * (t - t0)
         bf = self.tracker.from_pixels(t, uv)
         if (self._t_fused is not None and t - max(self._t_fused, self._t_reacq) > self.cfg.reacquire_after_s
                 and np.isfinite(bf.bearings).all(axis=1).any()):
@@ -709,13 +717,13 @@ class DeckNavigator(CommandDispatch):
                 self._predict(t - self._t, self._u)
                 self._t = t
                 self._hist.append(_Step(t, self.ukf.x.copy(), self.ukf.P.copy(), self._u))
-            used, rejected = self._correct(bf.bearings, bf.rates, self.last_gyro, rp=self._rp)
+            used, rejected = self._correct(bf.bearings, bf.rates, gyro, rp=self._rp, lag=lag)
             last = self._hist[-1] if self._hist else None
             if last is not None and abs(last.t - self._t) < 1e-12:
                 last.x, last.P = self.ukf.x.copy(), self.ukf.P.copy()
-                last.fused.append((bf.bearings, bf.rates, self.last_gyro, self._rp))
+                last.fused.append((bf.bearings, bf.rates, gyro, self._rp, lag))
         else:
-            res = self._fuse_late(t, bf)
+            res = self._fuse_late(t, bf, gyro, lag)
             if res is None:
                 self.stats.frames_dropped += 1
                 used, rejected = 0, 0
@@ -794,7 +802,22 @@ class DeckNavigator(CommandDispatch):
                            f"re-acquisition after {t - self._t_fused:.2f} s without a fused frame: "
                            "deck attitude and rates from the sea-state prior")
 
-    def _fuse_late(self, t: float, bf):
+    def _rate_gyro(self, t0: float, t: float) -> np.ndarray:
+        """The vehicle's rotation rate at the midpoint of the frame interval [t0, t] (the gyro's trapezoidal mean
+        over it): the tracker's bearing rates are backward differences over that interval
+        (``vision/blobs.BearingTracker``), the rates of its midpoint, half an interval (17 ms at 30 frames/s) before
+        the frame. So the rates are predicted there: eq. 2.27-2.29 at the state taken back half an interval by the
+        process model (``_correct_checked``'s ``rates_at``) with this rate as w_h. Predicted at the frame with its
+        newest gyro sample they are 0.08 rad/s off in a 5 rad/s^2 swing (the rates' sigma: 0.03), at the midpoint
+        2 mrad/s (test). The newest sample when fewer than two samples cover the interval."""
+        ts = [s for s in self._gyro_log if t0 - 1e-9 <= s[0] <= t + 1e-9]
+        if len(ts) < 2:
+            return self.last_gyro
+        tt = np.array([s[0] for s in ts])
+        g = np.array([s[1] for s in ts])
+        return (0.5 * (g[1:] + g[:-1]) * np.diff(tt)[:, None]).sum(axis=0) / (tt[-1] - tt[0])
+
+    def _fuse_late(self, t: float, bf, gyro=None, lag: float = 0.0):
         """Rewind to the stored step before ``t``, fuse there, replay the IMU inputs since. None: too old."""
         steps = list(self._hist)
         j = max((i for i, s in enumerate(steps) if s.t <= t + 1e-12), default=None)
@@ -806,19 +829,20 @@ class DeckNavigator(CommandDispatch):
         u = later[0].u if later else self._u
         if t > base.t + 1e-12 and u is not None:
             self._predict(t - base.t, u)
-        gyro = u.gyro if u is not None else self.last_gyro
-        res = self._correct(bf.bearings, bf.rates, gyro, rp=self._rp)
+        if gyro is None:
+            gyro = u.gyro if u is not None else self.last_gyro
+        res = self._correct(bf.bearings, bf.rates, gyro, rp=self._rp, lag=lag)
         t_prev = max(t, base.t)
         new = steps[:j]
         if t > base.t + 1e-12:
-            new += [base, _Step(t, self.ukf.x.copy(), self.ukf.P.copy(), u, [(bf.bearings, bf.rates, gyro, self._rp)])]
+            new += [base, _Step(t, self.ukf.x.copy(), self.ukf.P.copy(), u, [(bf.bearings, bf.rates, gyro, self._rp, lag)])]
         else:
             new.append(_Step(base.t, self.ukf.x.copy(), self.ukf.P.copy(), base.u,
-                             base.fused + [(bf.bearings, bf.rates, gyro, self._rp)]))
+                             base.fused + [(bf.bearings, bf.rates, gyro, self._rp, lag)]))
         for s in later:  # replay the IMU inputs and the frames fused since
             self._predict(s.t - t_prev, s.u)
             for fb in s.fused:
-                self._correct(*fb[:3], replay=True, rp=fb[3])
+                self._correct(*fb[:3], replay=True, rp=fb[3], lag=fb[4])
             t_prev = s.t
             new.append(_Step(s.t, self.ukf.x.copy(), self.ukf.P.copy(), s.u, s.fused))
         self._hist = deque(new, maxlen=self._hist.maxlen)
@@ -857,11 +881,11 @@ class DeckNavigator(CommandDispatch):
         each bearing rate as b' - b'' dt. So sigma_dt^2 b'^2 per bearing component (its measured rate; the gyro's
         |w| for a light without one) and sigma_dt^2 |w'|^2 per rate component (b'' = w' x b + ..., the angular
         acceleration's part, the IMU's ``gyro_dot``). Only with ``time_offset_in_r`` (``navigation.time_offset_in_r``).
-        Measured (docs/results-deck.md, issue 30 round 16): without it the rate NIS fails its window test whenever
-        the vehicle swings (10 ms offset, |w'| 5 rad/s^2: 0.05 rad/s against the rates' 0.03 sigma); with it the
-        deck NEES was inside its band in 39 of 40 runs (35 without; 36 and 34 once the survey's attitude share was
-        reported, round 17), but one moving fault run of 100 landed off the plate (brightness seed 7, 0.61 m), so it
-        is not the default."""
+        Measured (docs/results-deck.md, issue 30 rounds 16-18): without it the rate NIS fails its window test
+        whenever the vehicle swings (10 ms offset, |w'| 5 rad/s^2: 0.05 rad/s against the rates' 0.03 sigma). With
+        the rates predicted at the frame it cost one moving fault run of 100 (brightness seed 7, 0.61 m off the
+        plate); with them at their interval's midpoint (``_rate_gyro``, round 18) no fault run is unsafe, and it is
+        on by default (``navigation.time_offset_in_r``)."""
         s = self.cfg.time_offset_sigma
         if s == 0.0 or self._consider or not self.cfg.time_offset_in_r:
             return 0.0, 0.0
@@ -920,7 +944,7 @@ class DeckNavigator(CommandDispatch):
         after finding the blobs; this entry is for bearings from elsewhere (tests, other trackers)."""
         return self._correct(bearings, rates, self.last_gyro)[0]
 
-    def _correct(self, bearings, rates, gyro, replay: bool = False, rp=None) -> tuple[int, int]:
+    def _correct(self, bearings, rates, gyro, replay: bool = False, rp=None, lag: float = 0.0) -> tuple[int, int]:
         """Associate and correct; returns (lights used, blobs rejected). ``replay``: re-fusing after a late
         frame (counters and integrity already have it). ``rp``: the autopilot's roll and pitch at the frame (the
         level-deck update, ``_level``)."""
@@ -931,7 +955,7 @@ class DeckNavigator(CommandDispatch):
         ok = np.isfinite(b).all(axis=1)
         b, r = b[ok], r[ok]
         try:
-            used = self._correct_checked(b, r, int(ok.sum()), gyro, replay)
+            used = self._correct_checked(b, r, int(ok.sum()), gyro, replay, lag)
             if used[0]:
                 self._level(rp)
             return used
@@ -942,7 +966,7 @@ class DeckNavigator(CommandDispatch):
                 self.integrity.record(self._t, "bearing", float("nan"), 0, False)
             return 0, 0
 
-    def _correct_checked(self, b, r, n_ok: int, gyro, replay: bool = False) -> tuple[int, int]:
+    def _correct_checked(self, b, r, n_ok: int, gyro, replay: bool = False, lag: float = 0.0) -> tuple[int, int]:
         st = self.stats if not replay else DeckNavStats()
         if not replay:
             self._blobs = b  # (a re-lock's frame: ``_relocate_level``)
@@ -959,7 +983,7 @@ class DeckNavigator(CommandDispatch):
         st.blobs_rejected += rejected
         m = (assign >= 0).nonzero()[0]
         if m.size == 0 and self._lockout(b, replay):
-            return self._refuse(b, r, n_ok, gyro)
+            return self._refuse(b, r, n_ok, gyro, lag)
         if m.size == 0:
             st.lights_used_last = 0
             if not replay:
@@ -968,7 +992,7 @@ class DeckNavigator(CommandDispatch):
         m = m[assign[m].argsort()]
         idx = assign[m]
         if not replay and not self._retying and self._range_lost(b[m], idx):
-            return self._refuse(b, r, n_ok, gyro)
+            return self._refuse(b, r, n_ok, gyro, lag)
         has_rate = np.isfinite(r[m]).all(axis=1)
         ridx = idx[has_rate]
         z = np.concatenate([b[m].ravel(), r[m][has_rate].ravel()])
@@ -979,8 +1003,11 @@ class DeckNavigator(CommandDispatch):
         b_dt, r_dt = self._time_offset_var(r[m], gyro)
         R = np.diag(np.concatenate([np.repeat(self.bearing_var + cal, 2) + b_dt,
                                     np.full(2 * ridx.size, self.rate_var + r_dt)]))
+        back = (partial(self._process_model, dt=-lag, u=self._u, bias=self._bias_on)
+                if lag > 0.0 and self._u is not None and ridx.size else None)  # the rates' midpoint (``_rate_gyro``)
         applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
-                                  consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx, rate_idx=ridx, vectors=vec)
+                                  consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
+                                  rate_idx=ridx, vectors=vec, rates_at=back)
         nis_whole = (self.ukf.nis, int(z.size))  # the whole frame's, applied or not (the bias test's)
         if not applied and ridx.size:  # the rates (frame-to-frame blob matches) are the fragile part: try without
             nb = 2 * idx.size
@@ -990,7 +1017,7 @@ class DeckNavigator(CommandDispatch):
             ridx = ridx[:0]
             z = z[:nb]
         if not applied and self._lockout(b, replay):
-            return self._refuse(b, r, n_ok, gyro)
+            return self._refuse(b, r, n_ok, gyro, lag)
         if not applied:  # the whole frame disagrees with the filter beyond its gate: not fused
             st.lights_used_last = 0
             st.updates_gated += 1
@@ -1336,10 +1363,10 @@ class DeckNavigator(CommandDispatch):
             self._relock(f"tilt check: the deck {np.degrees(tilt):.0f} deg from level, its sea state bounds "
                          f"{np.degrees(bound):.0f} deg (+{c.tilt_check_sigmas:g} x {np.degrees(sig):.1f} deg)")
 
-    def _refuse(self, b, r, n_ok, gyro) -> tuple[int, int]:
+    def _refuse(self, b, r, n_ok, gyro, lag: float = 0.0) -> tuple[int, int]:
         """Fuse a locked-out frame again after the re-tie (once)."""
         self._retying = True
         try:
-            return self._correct_checked(b, r, n_ok, gyro)
+            return self._correct_checked(b, r, n_ok, gyro, lag=lag)
         finally:
             self._retying = False

@@ -155,11 +155,18 @@ class DeckFilterConfig(_M):
                                                               "sigmas; experimental: consistent before the hand-over, "
                                                               "then the vehicle swings: deck-static seed 4 lands off "
                                                               "the plate; docs/results-deck.md round 17)")
-    time_offset_in_r: bool = Field(False, description="the inflate model: the camera/IMU time offset's share of R "
+    time_offset_in_r: bool = Field(True, description="the inflate model: the camera/IMU time offset's share of R "
                                    "(sensors.camera.time_offset_s x each bearing's rate, x the angular acceleration "
-                                   "for the rates); measured: NEES in band 39 of 40 runs (35 without; 36 and 34 once the "
-                                   "survey's attitude share was reported), one moving fault run of 100 off the plate "
-                                   "(docs/results-deck.md, issue 30 rounds 16-17)")
+                                   "for the rates); the default since the rates are predicted at their midpoint "
+                                   "(round 18: 0 unsafe of 200 deck fault runs and 80 fault-free; before, one moving "
+                                   "fault run of 100 landed off the plate; docs/results-deck.md, issue 30 rounds 16-18)")
+    rates_at_midpoint: bool = Field(True, description="the bearing rates, backward differences over the frame "
+                                    "interval, predicted at the interval's midpoint (the state taken back half an "
+                                    "interval by the process model, the gyro's mean over the interval) instead of at "
+                                    "the frame with the newest gyro sample (the thesis' eq. 2.27 at the frame: 0.08 "
+                                    "rad/s off in a 5 rad/s^2 swing); measured with time_offset_in_r: moving-deck "
+                                    "velocity errors 27-47 % smaller, the navigator's alarms outside a fault 84 -> 2 "
+                                    "(docs/results-deck.md, issue 30 round 18)")
     estimate_accel_bias: bool = Field(True, description="the accelerometer bias as three more filter states "
                                       "(random walk; prior and walk from sensors.imu's accel_bias_mps2 and "
                                       "accel_bias_walk_mps2_sqrt_s; none when accel_bias_mps2 = 0; issue 30)")

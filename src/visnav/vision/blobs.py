@@ -77,6 +77,11 @@ class BearingTracker:
         self.threshold = threshold
         self._prev: tuple[float, np.ndarray, np.ndarray] | None = None
 
+    @property
+    def previous_time(self) -> float | None:
+        """The time of the frame the next frame's rates will be differenced against (None before the first)."""
+        return None if self._prev is None else self._prev[0]
+
     def process(self, t: float, image: np.ndarray) -> BearingFrame:
         uv = find_blobs(image, self.threshold)
         return self.from_pixels(t, uv)
