@@ -246,6 +246,31 @@ def test_deck_end_without_contact_with_a_fix_goes_around_as_before():
     assert m.mode == "hover" and "trajectory ended without contact: go-around 1" in log.get("mode")["reason"][-1]
 
 
+def test_deck_descent_that_loses_its_fix_finishes_blind_then_climbs_away():
+    """An approach that ends without contact with a fix descends on the estimate (the go-arounds used up); when the
+    navigator then stays unusable (no frame fused) the descent goes on as a blind end does: level, on the IMU, for
+    at most blind_land_s, then a blind go-around that climbs. Descending on the last estimate instead, a static
+    deck's IMU-drop run hovered 28 s without contact and flew off at 8 m/s (issue 30 round 18)."""
+    m, cfg, log, t = _deck_in_approach()
+    g = cfg.guidance
+    g.go_arounds = 0
+    t = _to_the_end(m, cfg, t, "ok")
+    assert m.mode == "descend" and log.get("mode")["reason"][-1] == "trajectory ended without contact"
+    t = _run(m, t, 0.02, 5, "ok")
+    ref, _ = m.step(t, _est(), DeckHealth(converged=True, integrity="ok", hpl_m=HPL_OK))
+    assert ref.kind == "descend" and ref.vertical_accel is None  # on the estimate while the fix holds
+    n_unusable = int(np.ceil(g.integrity_unusable_s / 0.02)) + 1
+    out, t = _fly_vertical(m, t, 0.02, n_unusable, DeckHealth(converged=True, integrity="unusable", hpl_m=0.5),
+                           p=(0.2, 0.1, 0.2))
+    assert out[-1][0].vertical_accel is not None and m.mode == "descend"  # blind: level, on the IMU
+    assert log.get("integrity_reaction")["action"][-1] == "land on"
+    assert "in the descent" in log.get("integrity_reaction")["reason"][-1]
+    out, t = _fly_vertical(m, t, 0.02, int(g.blind_land_s / 0.02) + 40,
+                           DeckHealth(converged=True, integrity="unusable", hpl_m=0.5), p=(0.2, 0.1, 0.2))
+    assert m.mode == "hover" and "blind descent without contact" in log.get("mode")["reason"][-1]
+    assert out[-1][1] > 0.3  # climbing
+
+
 def test_deck_blind_end_can_be_turned_off():
     m, cfg, log, t = _deck_in_approach()
     cfg.guidance.blind_end = "go-around"

@@ -150,3 +150,17 @@ def test_static_deck_level_update_keeps_the_pose_through_blur():
     plate with no ``ok`` step over the HPL."""
     sim, res = _static_seed5('kind = "camera_blur", start_s = 9.0, duration_s = 3.0, blur_px = 9', seed=4)
     _on_the_plate(res)
+
+
+def test_static_deck_descent_without_a_fix_does_not_fly_away():
+    """deck-static seed 3, half the IMU samples lost for 3 s from 9 s, the deck 1 deg off level and the level
+    update at 1 deg: the trajectory ends without contact and no frame is fused from 17 s on. Descending on the last
+    estimate the vehicle hovered 28 s and flew 11 m off at 8 m/s (issue 30 round 18); now the descent goes on
+    blind for ``blind_land_s`` and climbs away: no touchdown off the plate, and it stays near the deck."""
+    sim, res = _static_seed5('kind = "imu_drop", start_s = 9.0, duration_s = 3.0, drop_probability = 0.5', seed=3,
+                             sets=("world.deck.level_error_deg=1", "navigation.level_deck_sigma_deg=1.0"))
+    assert res.metrics["outcome"] == "safe", res.metrics["outcome_reason"]
+    reasons = [str(r) for r in sim.log.get("integrity_reaction")["reason"]]
+    assert any("in the descent" in r for r in reasons)
+    v = sim.log.get("vehicle")
+    assert np.abs(np.asarray(v["position"])[:, :2]).max() < 3.0

@@ -22,7 +22,8 @@
   first-order filter); a moving-deck trajectory ends with the flare (``control/deck.flare``); one that
   ends without contact goes around (back to ``hover``) up to ``guidance.go_arounds`` times;
 * ``descend`` - past the trajectory's end without contact: thrust along the estimated deck normal,
-  sink at ``final_descent_mps`` (not in the thesis, whose runs end at the trajectory's end);
+  sink at ``final_descent_mps`` (not in the thesis, whose runs end at the trajectory's end); the navigator
+  unusable for ``guidance.integrity_unusable_s`` in it, the descent goes on blind as a blind end's (below);
 * ``landed`` / ``missed`` - ``on_touchdown``: the gear met the deck on / off the plate.
 
 Integrity (issue #18, ``mission/integrity.IntegrityWatch``; not in the thesis, whose safety pilot took
@@ -216,6 +217,14 @@ class DeckMission:
                     self._set_mode(t, "descend", "trajectory ended without contact")
             return ref, self.mode
         # descend
+        blind = self._no_commit(t, hpl=False) if self._blind_land_t is None else ""
+        if blind:
+            # the fix lost in the descent (no frame fused: the lights leave the view near the deck): finish it on the
+            # IMU as a blind end does, for at most blind_land_s, then climb away. Descending on the last estimate
+            # instead, a static deck's IMU-drop run hovered 28 s without contact and flew off at 8 m/s (round 18)
+            self._blind_land_t = t
+            self._v_land = self._v_up if self._v_up is not None else 0.0
+            self.watch.react(t, "land on", f"{blind} in the descent: on the IMU for at most {g.blind_land_s:g} s")
         if self._blind_land_t is not None and t - self._blind_land_t >= g.blind_land_s:
             # the blind end found no deck within blind_land_s: its height estimate is off, climb away
             self._blind_land_t = None
