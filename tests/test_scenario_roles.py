@@ -20,6 +20,22 @@ except ImportError:  # pragma: no cover
 KEYS_BEFORE = json.loads((Path(__file__).parent / "data" / "keys_before_roles.json").read_text())
 #: built-in scenarios added after the snapshots were taken (nothing to compare them with)
 ADDED_SINCE = {"mav-geolocation-pingwing"}
+#: the built-ins' own settings changed after the snapshots were taken, as ``--set`` overrides on a snapshot
+CHANGED_SINCE = {
+    # issue 30 round 18: a deck at rest is level to 1 deg, the level update's sigma hypot(1, 0.1 AHRS)
+    "deck-static": {"world.deck.level_error_deg": 1.0, "navigation.level_deck_sigma_deg": 1.0},
+}
+
+
+def with_changes_since(sc, name: str):
+    """``sc`` (a snapshot's scenario) with the settings its built-in changed since (``CHANGED_SINCE``)."""
+    for key, value in CHANGED_SINCE.get(name, {}).items():
+        *path, leaf = key.split(".")
+        obj = sc
+        for p in path:
+            obj = obj[p] if isinstance(obj, dict) else getattr(obj, p)
+        setattr(obj, leaf, value)
+    return sc
 
 
 def _leaves(sc):
@@ -141,7 +157,7 @@ RESOLVED_BEFORE = json.loads((Path(__file__).parent / "data" / "resolved_before_
 def test_old_run_folder_scenario_gives_the_same_scenario(name):
     """`visnav metrics RUN_DIR` of a run made before the role layout reads the same configuration."""
     assert roles.is_legacy(RESOLVED_BEFORE[name])
-    assert validate(RESOLVED_BEFORE[name]) == load_scenario(name)
+    assert with_changes_since(validate(RESOLVED_BEFORE[name]), name) == load_scenario(name)
 
 
 def test_the_snapshots_cover_every_builtin_but_the_ones_added_since():

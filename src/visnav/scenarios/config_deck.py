@@ -33,9 +33,9 @@ class DeckWorldConfig(_M):
     level_error_deg: float = Field(0.0, ge=0, le=10, description="1-sigma per axis of the deck's departure from level "
                                    "(roll and pitch), drawn once per run: a landing pad on the ground, a moored "
                                    "ship's list and trim (1 deg is typical); a moving deck oscillates about it. 0: a "
-                                   "level deck, the default (with 1 deg, the leveled AHRS and the time offset in R, "
-                                   "docs/results-deck.md rounds 16-17: NEES 38 of 40 runs in band, 34 once the "
-                                   "survey's attitude share was reported; one moving fault run of 100 unsafe)")
+                                   "level deck, the default; deck-static sets 1 deg (with the level update at 1 deg: "
+                                   "NEES 19 of 20 static runs in band, 0 unsafe of 100 fault runs; on the moving "
+                                   "deck it cost 2 of 60 fault-free landings, docs/results-deck.md round 18)")
 
     @field_validator("lights_m")
     @classmethod
