@@ -1003,8 +1003,10 @@ class DeckNavigator(CommandDispatch):
         b_dt, r_dt = self._time_offset_var(r[m], gyro)
         R = np.diag(np.concatenate([np.repeat(self.bearing_var + cal, 2) + b_dt,
                                     np.full(2 * ridx.size, self.rate_var + r_dt)]))
+        # the rates' midpoint (``_rate_gyro``): half an interval back on the newest IMU input (a late frame's replay
+        # too: the input of a tenth of a second later differs from its own by less than the rates' noise)
         back = (partial(self._process_model, dt=-lag, u=self._u, bias=self._bias_on)
-                if lag > 0.0 and self._u is not None and ridx.size else None)  # the rates' midpoint (``_rate_gyro``)
+                if lag > 0.0 and self._u is not None and ridx.size else None)
         applied = self.ukf.update(z, R, hx=dm.measurement_model, max_nis=self._max_nis(z.size), sigmas=sig,
                                   consider=self._consider_slice, lights=self.lights, cam=self.cam, gyro=gyro, idx=idx,
                                   rate_idx=ridx, vectors=vec, rates_at=back)

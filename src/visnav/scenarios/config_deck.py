@@ -35,7 +35,7 @@ class DeckWorldConfig(_M):
                                    "ship's list and trim (1 deg is typical); a moving deck oscillates about it. 0: a "
                                    "level deck, the default; deck-static sets 1 deg (with the level update at 1 deg: "
                                    "NEES 19 of 20 static runs in band, 0 unsafe of 100 fault runs; on the moving "
-                                   "deck it cost 2 of 60 fault-free landings, docs/results-deck.md round 18)")
+                                   "deck it cost 1 of 60 fault-free landings, docs/results-deck.md round 18)")
 
     @field_validator("lights_m")
     @classmethod
@@ -165,7 +165,7 @@ class DeckFilterConfig(_M):
                                     "interval by the process model, the gyro's mean over the interval) instead of at "
                                     "the frame with the newest gyro sample (the thesis' eq. 2.27 at the frame: 0.08 "
                                     "rad/s off in a 5 rad/s^2 swing); measured with time_offset_in_r: moving-deck "
-                                    "velocity errors 24-50 % smaller, the navigator's alarms outside a fault 84 -> 2 "
+                                    "velocity errors 24-50 % smaller, the navigator's alarms outside a fault 82 -> 2 "
                                     "(docs/results-deck.md, issue 30 round 18)")
     estimate_accel_bias: bool = Field(True, description="the accelerometer bias as three more filter states "
                                       "(random walk; prior and walk from sensors.imu's accel_bias_mps2 and "
