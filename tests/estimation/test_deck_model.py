@@ -313,3 +313,28 @@ def test_rates_predicted_at_the_frame_intervals_midpoint_match_the_backward_diff
     # the bearings are the frame's either way
     np.testing.assert_array_equal(dm.measurement_model(x, lights, CAM, omega(t1), idx, idx[:0])[0],
                                   dm.measurement_model(x, lights, CAM, omega(t1), idx, idx[:0], rates_at=np.negative)[0])
+
+
+def test_the_deck_oscillator_pulls_the_rates_towards_level_by_its_frequency_squared():
+    """``process_model``'s ``deck_omega2``: over a deck rolled 4 deg and pitched -3 deg (the vehicle level: gravity
+    straight down in its frame) one step changes p_d, q_d by -Omega^2 phi_d dt, -Omega^2 theta_d dt and leaves r_d and
+    every other state as the constant-rate model has them; ``ship_oscillator`` gives the Stewart preset's roll and
+    pitch frequencies squared (0.9^2, 0.7^2) and their restoring term's bound ((w + 3 sigma_w)^2 - w^2)(A + 3 sigma_A)
+    as eq. 3.7's white acceleration (yaw: eq. 3.7's own)."""
+    phi, theta = np.radians(4.0), np.radians(-3.0)
+    C_hd = Rotation.from_euler("ZYX", [0.0, theta, phi]).as_matrix()  # the deck's attitude, the vehicle level
+    x = np.r_[1.0, 0.0, 1.2, dcm_to_euler(C_hd.T), 0.1, -0.05, 0.02, 0.03, -0.02, 0.01][None]
+    u = dm.ImuInput(accel=np.array([0.0, 0.0, -9.81]), gyro=np.array([0.02, -0.01, 0.03]), gyro_dot=np.zeros(3),
+                    gravity_body=np.array([0.0, 0.0, 9.81]))
+    w2 = np.array([0.81, 0.49, 0.0])
+    dt = 0.01
+    a, b = dm.process_model(x, dt, u), dm.process_model(x, dt, u, deck_omega2=w2)
+    np.testing.assert_allclose(b[0, 9:12] - a[0, 9:12], -dt * w2 * [phi, theta, 0.0], rtol=1e-9, atol=1e-15)
+    np.testing.assert_array_equal(a[0, :9], b[0, :9])
+    omega2, var = dm.ship_oscillator("stewart", 1.0, dt)
+    np.testing.assert_allclose(omega2, [0.81, 0.49, 0.0], rtol=1e-12)
+    A, W, sA, sW = dm.SEA_STATES["stewart"]
+    roll = ((W[3] + 3 * sW[3]) ** 2 - W[3] ** 2) * (A[3] + 3 * sA[3])
+    assert var[0] == pytest.approx(roll**2 / W[3] / dt, rel=1e-12)
+    assert var[2] == pytest.approx(dm.ship_process_noise("stewart", 1.0, 1.0, dt)[5], rel=1e-12)
+    assert roll < dm.ship_acceleration_bound(A[3], W[3], sA[3], sW[3]) / 2  # (5.7 against 13 deg/s^2)

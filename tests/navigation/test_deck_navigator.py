@@ -802,3 +802,24 @@ def test_the_rates_of_a_frame_take_the_gyros_mean_over_its_interval_and_its_midp
     assert lag1 == pytest.approx(1 / 60) and lag3 == 0.0
     np.testing.assert_allclose(g1, w(0.05), rtol=1e-12)  # samples 0.04-0.06 cover [1/30, 2/30]: their midpoint
     np.testing.assert_array_equal(g3, w(0.1))  # off: the newest sample
+
+
+def test_the_deck_oscillator_option_takes_the_sea_states_frequencies_and_the_readable_model():
+    """``navigation.deck_oscillator``: over a moving deck the filter's deck_omega2 and the angular part of its ship Q
+    are ``ship_oscillator``'s, and its prediction is the readable ``process_model`` with them; a static deck (a calm
+    sea state) has no oscillator; off by default."""
+    from visnav.scenarios.schema import load_scenario
+
+    sc = load_scenario("deck-moving", ["navigation.deck_oscillator=true"], 1)
+    cfg = DeckNavConfig.from_mission(sc, 1 / 30)
+    w2, var = dm.ship_oscillator("stewart", 1.0, cfg.imu_period_s)
+    np.testing.assert_allclose(cfg.deck_omega2, w2)
+    np.testing.assert_allclose(np.diag(cfg.ship_cov)[3:6], var)
+    nav = DeckNavigator(cfg)
+    x = np.r_[1.0, 0.0, 1.2, 0.1, -0.05, 0.3, np.zeros(6)][None]
+    u = dm.ImuInput(accel=ACC, gyro=np.zeros(3), gyro_dot=np.zeros(3), gravity_body=-ACC)
+    np.testing.assert_array_equal(nav._process_model(x, 0.01, u, bias=False),
+                                  dm.process_model(x, 0.01, u, bias=False, deck_omega2=w2))
+    assert DeckNavConfig.from_mission(load_scenario("deck-static", ["navigation.deck_oscillator=true"], 1),
+                                      1 / 30).deck_omega2 is None
+    assert DeckNavConfig.from_mission(load_scenario("deck-moving", [], 1), 1 / 30).deck_omega2 is None

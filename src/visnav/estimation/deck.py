@@ -88,6 +88,20 @@ def ship_process_noise(sea_state: str, motion_scale: float = 1.0, accel_scale: f
     return np.maximum(var, 1e-4)
 
 
+def ship_oscillator(sea_state: str, motion_scale: float = 1.0, dt: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+    """The deck's roll and pitch as oscillators about level (``process_model``'s ``deck_omega2``): their nominal
+    frequencies squared (3,; yaw 0: it keeps the constant rate) and the per-step variances (3,) of the angular
+    accelerations the oscillator leaves out, sized as eq. 3.7 sizes the whole: the frequency's +3 sigma bound, the
+    restoring term's error ((w + 3 sigma_w)^2 - w^2) (A + 3 sigma_A), as white accelerations over 1 / w (yaw: eq.
+    3.7's own bound)."""
+    A, W, sA, sW = SEA_STATES[sea_state]
+    a, w, sa, sw = A[3:6] * motion_scale, W[3:6], sA[3:6] * motion_scale, sW[3:6]
+    bound = ship_acceleration_bound(a, w, sa, sw)
+    bound[:2] = ((w[:2] + 3.0 * sw[:2]) ** 2 - w[:2] ** 2) * (a[:2] + 3.0 * sa[:2])
+    var = np.where(w > 0, bound**2 / np.maximum(w, 1e-6) / dt, 0.0)
+    return np.r_[w[:2] ** 2, 0.0], np.maximum(var, 1e-4)
+
+
 def deck_prior_variance(sea_state: str, motion_scale: float = 1.0, attitude_noise_deg: float = 0.0,
                         floor_deg: float = 1.0) -> np.ndarray:
     """Prior variances (5,) of the relative roll and pitch of a level-mean deck and of the deck's three body
@@ -147,11 +161,15 @@ class ImuInput:
     gravity_body: np.ndarray
 
 
-def process_model(sig: np.ndarray, dt: float, u: ImuInput, bias: bool | None = None) -> np.ndarray:
+def process_model(sig: np.ndarray, dt: float, u: ImuInput, bias: bool | None = None,
+                  deck_omega2: np.ndarray | None = None) -> np.ndarray:
     """Discrete eq. 3.1-3.5 for a batch of states (N, 12) or (N, 15) (with the accelerometer bias b_a, a random
     walk: kept): one explicit step of length ``dt``, every sigma point in one array expression (row vectors:
     ``x @ M.T`` is ``M x`` for each row). ``bias``: states 12-14 are the bias (None: when there are 15 states);
-    any further states (consider parameters) are constant."""
+    any further states (consider parameters) are constant. ``deck_omega2`` (3,): the deck's roll and pitch as
+    oscillators about level (the second-order ship of ch. 2 that the thesis' filter leaves out):
+    dp_d/dt = -Omega_x^2 phi_d, dq_d/dt = -Omega_y^2 theta_d, the deck's tilt from gravity seen in the deck frame
+    (C_h^d T_g g, the autopilot's roll and pitch); None: constant rates (eq. 3.1)."""
     r, e, v, wd = sig[:, POS], sig[:, ATT], sig[:, VEL], sig[:, RATE]
     W, Wdot = skew(u.gyro), skew(u.gyro_dot)
     aug = sig.shape[1] == N_AUGMENTED if bias is None else bias
@@ -161,7 +179,13 @@ def process_model(sig: np.ndarray, dt: float, u: ImuInput, bias: bool | None = N
     C, E = euler_dcm_batch(e, rate=True)  # C_h^d, E(e)
     w_rel = u.gyro - np.einsum("nji,nj->ni", C, wd)  # w_h - C_d^h w_d (eq. 2.14)
     edot = np.einsum("nij,nj->ni", E, w_rel)  # eq. 3.2
-    parts = [r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd]
+    wd_next = wd
+    if deck_omega2 is not None:
+        g_d = np.einsum("nij,j->ni", C, u.gravity_body)  # gravity in the deck frame
+        tilt = np.stack([np.arctan2(g_d[:, 1], g_d[:, 2]),
+                         np.arctan2(-g_d[:, 0], np.hypot(g_d[:, 1], g_d[:, 2])), np.zeros(len(sig))], axis=1)
+        wd_next = wd - dt * tilt * deck_omega2
+    parts = [r + v * dt + 0.5 * vdot * dt * dt, e + edot * dt, v + vdot * dt, wd_next]
     return np.concatenate(parts + [sig[:, N_STATE:]] if sig.shape[1] > N_STATE else parts, axis=1)
 
 

@@ -161,6 +161,7 @@ class DeckNavConfig:
     time_offset_sigma: float = 0.0  # [s] the camera/IMU time offset's, a consider parameter too
     time_offset_in_r: bool = False  # the inflate model: its share of R (``DeckNavigator._time_offset_var``)
     rates_at_midpoint: bool = False  # the bearing rates predicted at their frame interval's midpoint (``_rate_gyro``)
+    deck_omega2: np.ndarray | None = None  # the deck's roll and pitch as oscillators (``process_model``); None: off
     # the accelerometer bias as three more states (issue 30; 0: the thesis' 12 states): its prior sigma per axis
     # [m/s^2] and its random walk [m/s^2/sqrt(s)], from the IMU's specification
     accel_bias_sigma: float = 0.0
@@ -201,6 +202,10 @@ class DeckNavConfig:
         period = 1.0 / imu.rate_hz
         sea = f.sea_state if f.sea_state is not None else "calm"
         ship_var = dm.ship_process_noise(sea, f.motion_scale, f.ship_accel_scale, period)
+        omega2 = None
+        if f.deck_oscillator and sea != "calm":
+            omega2, ang_var = dm.ship_oscillator(sea, f.motion_scale, period)
+            ship_var = np.r_[ship_var[:3], ang_var * f.ship_accel_scale**2]
         imu_cov = np.diag([imu.accel_noise_mps2**2] * 3 + [imu.gyro_noise_rad_s**2] * 3) * f.imu_noise_scale**2
         imu_cov = imu_cov + np.diag([(G * np.radians(imu.attitude_noise_deg)) ** 2] * 3 + [0.0] * 3)
         sig_b = (np.radians(f.bearing_noise_deg) if f.bearing_noise_deg is not None
@@ -220,7 +225,7 @@ class DeckNavConfig:
                    bias_test_frames=6 if f.accel_bias_test_alpha > 0 else 0,
                    bias_test_alpha=f.accel_bias_test_alpha or 1e-5, bias_step_sigma=f.accel_bias_step_mps2,
                    calibration_model=f.calibration_model, camera_sigmas=cam_sig, time_offset_sigma=c.time_offset_s,
-                   time_offset_in_r=f.time_offset_in_r, rates_at_midpoint=f.rates_at_midpoint,
+                   time_offset_in_r=f.time_offset_in_r, rates_at_midpoint=f.rates_at_midpoint, deck_omega2=omega2,
                    accel_bias_sigma=bias, accel_bias_walk=imu.accel_bias_walk_mps2_sqrt_s if bias > 0 else 0.0,
                    lights=np.asarray(sc.world.deck.lights_m, float),
                    cam=dm.CameraGeometry(rho=np.asarray(c.position_m, float), T_cam=c.rotation()),
@@ -349,6 +354,8 @@ class DeckNavigator(CommandDispatch):
         self.imu_cov, self.ship_cov = config.imu_cov, config.ship_cov
         self._compiled = self.kernel and ek.njit is not None
         self._process_model = ek.deck_process_model if self._compiled else dm.process_model
+        if config.deck_omega2 is not None:  # (the readable model: the kernel has no oscillator)
+            self._process_model = partial(dm.process_model, deck_omega2=np.asarray(config.deck_omega2, float))
         self.gate = config.gate
         self.tracker = BearingTracker(config.camera, threshold=config.blob_threshold)
         self.recorder = recorder

@@ -188,6 +188,10 @@ class DeckFilterConfig(_M):
                                             description="relative yaws the filter restarts from, in turn, while "
                                                         "it has not converged (manual flight)")
     ship_accel_scale: float = Field(1.0, ge=0, le=100, description="multiplies the eq. 3.7 bound in Q")
+    deck_oscillator: bool = Field(False, description="the deck's roll and pitch as oscillators about level at the "
+                                  "sea state's frequencies (estimation/deck.ship_oscillator), Q their frequencies' "
+                                  "spread; off: the thesis' constant rates driven by eq. 3.7's bound (experimental, "
+                                  "docs/results-deck.md round 18)")
     sea_state: Literal["calm", "stewart", "ship_ss4"] | None = Field(
         None, description="sea state the filter's ship process noise (eq. 3.7-3.8) is tuned for; None: the "
         "nominal one of the scenario's deck (world.deck.sea_state for a moving deck, calm for a static one). The "
