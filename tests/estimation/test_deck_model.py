@@ -331,7 +331,7 @@ def test_the_deck_oscillator_pulls_the_rates_towards_level_by_its_frequency_squa
     a, b = dm.process_model(x, dt, u), dm.process_model(x, dt, u, deck_omega2=w2)
     np.testing.assert_allclose(b[0, 9:12] - a[0, 9:12], -dt * w2 * [phi, theta, 0.0], rtol=1e-9, atol=1e-15)
     np.testing.assert_array_equal(a[0, :9], b[0, :9])
-    omega2, var = dm.ship_oscillator("stewart", 1.0, dt)
+    omega2, var = dm.ship_oscillator("stewart", 1.0, 1.0, dt)
     np.testing.assert_allclose(omega2, [0.81, 0.49, 0.0], rtol=1e-12)
     A, W, sA, sW = dm.SEA_STATES["stewart"]
     roll = ((W[3] + 3 * sW[3]) ** 2 - W[3] ** 2) * (A[3] + 3 * sA[3])

@@ -812,7 +812,7 @@ def test_the_deck_oscillator_option_takes_the_sea_states_frequencies_and_the_rea
 
     sc = load_scenario("deck-moving", ["navigation.deck_oscillator=true"], 1)
     cfg = DeckNavConfig.from_mission(sc, 1 / 30)
-    w2, var = dm.ship_oscillator("stewart", 1.0, cfg.imu_period_s)
+    w2, var = dm.ship_oscillator("stewart", 1.0, 1.0, cfg.imu_period_s)
     np.testing.assert_allclose(cfg.deck_omega2, w2)
     np.testing.assert_allclose(np.diag(cfg.ship_cov)[3:6], var)
     nav = DeckNavigator(cfg)

@@ -88,16 +88,18 @@ def ship_process_noise(sea_state: str, motion_scale: float = 1.0, accel_scale: f
     return np.maximum(var, 1e-4)
 
 
-def ship_oscillator(sea_state: str, motion_scale: float = 1.0, dt: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+def ship_oscillator(sea_state: str, motion_scale: float = 1.0, accel_scale: float = 1.0,
+                    dt: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
     """The deck's roll and pitch as oscillators about level (``process_model``'s ``deck_omega2``): their nominal
     frequencies squared (3,; yaw 0: it keeps the constant rate) and the per-step variances (3,) of the angular
     accelerations the oscillator leaves out, sized as eq. 3.7 sizes the whole: the frequency's +3 sigma bound, the
     restoring term's error ((w + 3 sigma_w)^2 - w^2) (A + 3 sigma_A), as white accelerations over 1 / w (yaw: eq.
-    3.7's own bound)."""
+    3.7's own bound), times ``accel_scale`` as ``ship_process_noise``'s."""
     A, W, sA, sW = SEA_STATES[sea_state]
     a, w, sa, sw = A[3:6] * motion_scale, W[3:6], sA[3:6] * motion_scale, sW[3:6]
     bound = ship_acceleration_bound(a, w, sa, sw)
     bound[:2] = ((w[:2] + 3.0 * sw[:2]) ** 2 - w[:2] ** 2) * (a[:2] + 3.0 * sa[:2])
+    bound = bound * accel_scale
     var = np.where(w > 0, bound**2 / np.maximum(w, 1e-6) / dt, 0.0)
     return np.r_[w[:2] ** 2, 0.0], np.maximum(var, 1e-4)
 

@@ -204,8 +204,8 @@ class DeckNavConfig:
         ship_var = dm.ship_process_noise(sea, f.motion_scale, f.ship_accel_scale, period)
         omega2 = None
         if f.deck_oscillator and sea != "calm":
-            omega2, ang_var = dm.ship_oscillator(sea, f.motion_scale, period)
-            ship_var = np.r_[ship_var[:3], ang_var * f.ship_accel_scale**2]
+            omega2, ang_var = dm.ship_oscillator(sea, f.motion_scale, f.ship_accel_scale, period)
+            ship_var = np.r_[ship_var[:3], ang_var]
         imu_cov = np.diag([imu.accel_noise_mps2**2] * 3 + [imu.gyro_noise_rad_s**2] * 3) * f.imu_noise_scale**2
         imu_cov = imu_cov + np.diag([(G * np.radians(imu.attitude_noise_deg)) ** 2] * 3 + [0.0] * 3)
         sig_b = (np.radians(f.bearing_noise_deg) if f.bearing_noise_deg is not None
