@@ -84,7 +84,13 @@ def ship_process_noise(sea_state: str, motion_scale: float = 1.0, accel_scale: f
         raise ValueError(f"unknown sea state {sea_state!r}; known: {', '.join(SEA_STATES)}")
     A, W, sA, sW = SEA_STATES[sea_state]
     bound = ship_acceleration_bound(A * motion_scale, W, sA * motion_scale, sW) * accel_scale
-    var = np.where(W > 0, bound**2 / np.maximum(W, 1e-6) / dt, 0.0)
+    return _white_acceleration_var(bound, W, dt)
+
+
+def _white_acceleration_var(bound: np.ndarray, omega: np.ndarray, dt: float) -> np.ndarray:
+    """Per-step variances of accelerations bounded by ``bound``, white over the correlation time 1 / ``omega``,
+    discretised at ``dt``: bound^2 / (omega dt), floored at 1e-4 (calm: no deck motion)."""
+    var = np.where(omega > 0, bound**2 / np.maximum(omega, 1e-6) / dt, 0.0)
     return np.maximum(var, 1e-4)
 
 
@@ -99,9 +105,7 @@ def ship_oscillator(sea_state: str, motion_scale: float = 1.0, accel_scale: floa
     a, w, sa, sw = A[3:6] * motion_scale, W[3:6], sA[3:6] * motion_scale, sW[3:6]
     bound = ship_acceleration_bound(a, w, sa, sw)
     bound[:2] = ((w[:2] + 3.0 * sw[:2]) ** 2 - w[:2] ** 2) * (a[:2] + 3.0 * sa[:2])
-    bound = bound * accel_scale
-    var = np.where(w > 0, bound**2 / np.maximum(w, 1e-6) / dt, 0.0)
-    return np.r_[w[:2] ** 2, 0.0], np.maximum(var, 1e-4)
+    return np.r_[w[:2] ** 2, 0.0], _white_acceleration_var(bound * accel_scale, w, dt)
 
 
 def deck_prior_variance(sea_state: str, motion_scale: float = 1.0, attitude_noise_deg: float = 0.0,
@@ -329,9 +333,14 @@ def measurement_model(sig: np.ndarray, lights: np.ndarray, cam: CameraGeometry, 
     the rates are seen at, from the sigma points (``sig -> sig'``), when not the bearings' own: a tracker's
     rates are backward differences over the frame interval, the rates of its midpoint (``DeckNavigator``), with
     ``gyro`` the vehicle's rate there."""
-    bear, rate = bearings_and_rates(sig, lights, cam, gyro, vectors)
-    if rates_at is not None and np.size(rate_idx):
+    if rates_at is not None and np.size(rate_idx) and cam.consider is None:
+        # (the frame's bearings alone: its rates would be thrown away; the consider model's time offset needs them)
+        bear = bearings_only(sig, lights, cam, vectors).reshape(len(sig), -1, 2)
         rate = bearings_and_rates(rates_at(sig), lights, cam, gyro)[1]
+    else:
+        bear, rate = bearings_and_rates(sig, lights, cam, gyro, vectors)
+        if rates_at is not None and np.size(rate_idx):
+            rate = bearings_and_rates(rates_at(sig), lights, cam, gyro)[1]
     return np.concatenate([bear[:, idx, :].reshape(len(sig), -1), rate[:, rate_idx, :].reshape(len(sig), -1)], axis=1)
 
 
